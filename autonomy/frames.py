@@ -1,0 +1,103 @@
+"""Reference frames and rotations (pure numpy).
+
+Conventions used throughout auvsim:
+
+* World frame: **NED** (x north, y east, z down), metres. The MuJoCo world *is* the
+  NED frame, so positions read from MuJoCo are ``pos_ned`` without conversion.
+* Body frame: **FRD** (x forward, y starboard, z down), Fossen's convention.
+* Euler angles: roll-pitch-yaw ``(phi, theta, psi)`` in radians, ZYX order, so
+  ``R_nb = Rz(psi) @ Ry(theta) @ Rx(phi)`` maps body vectors into NED.
+* Quaternions: scalar-first ``(w, x, y, z)``, as MuJoCo stores them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+FloatArray = NDArray[np.float64]
+
+
+def skew(v: ArrayLike) -> FloatArray:
+    """Skew-symmetric matrix S(v) with S(v) @ w == cross(v, w). Shape (3, 3)."""
+    x, y, z = np.asarray(v, dtype=float)
+    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+
+
+def rot_x(angle_rad: float) -> FloatArray:
+    c, s = np.cos(angle_rad), np.sin(angle_rad)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+
+
+def rot_y(angle_rad: float) -> FloatArray:
+    c, s = np.cos(angle_rad), np.sin(angle_rad)
+    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+
+
+def rot_z(angle_rad: float) -> FloatArray:
+    c, s = np.cos(angle_rad), np.sin(angle_rad)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def rot_from_euler(roll_rad: float, pitch_rad: float, yaw_rad: float) -> FloatArray:
+    """Body(FRD)->NED rotation ``R_nb`` from ZYX Euler angles. Shape (3, 3)."""
+    return rot_z(yaw_rad) @ rot_y(pitch_rad) @ rot_x(roll_rad)
+
+
+def euler_from_rot(R_nb: ArrayLike) -> FloatArray:
+    """ZYX Euler angles ``[roll, pitch, yaw]`` (rad) of a body->NED rotation."""
+    R = np.asarray(R_nb, dtype=float)
+    pitch = -np.arcsin(np.clip(R[2, 0], -1.0, 1.0))
+    roll = np.arctan2(R[2, 1], R[2, 2])
+    yaw = np.arctan2(R[1, 0], R[0, 0])
+    return np.array([roll, pitch, yaw])
+
+
+def quat_from_rot(R: ArrayLike) -> FloatArray:
+    """Unit quaternion ``(w, x, y, z)`` of a rotation matrix."""
+    R = np.asarray(R, dtype=float)
+    tr = np.trace(R)
+    if tr > 0.0:
+        s = 2.0 * np.sqrt(tr + 1.0)
+        q = [0.25 * s, (R[2, 1] - R[1, 2]) / s, (R[0, 2] - R[2, 0]) / s, (R[1, 0] - R[0, 1]) / s]
+    elif R[0, 0] > R[1, 1] and R[0, 0] > R[2, 2]:
+        s = 2.0 * np.sqrt(1.0 + R[0, 0] - R[1, 1] - R[2, 2])
+        q = [(R[2, 1] - R[1, 2]) / s, 0.25 * s, (R[0, 1] + R[1, 0]) / s, (R[0, 2] + R[2, 0]) / s]
+    elif R[1, 1] > R[2, 2]:
+        s = 2.0 * np.sqrt(1.0 + R[1, 1] - R[0, 0] - R[2, 2])
+        q = [(R[0, 2] - R[2, 0]) / s, (R[0, 1] + R[1, 0]) / s, 0.25 * s, (R[1, 2] + R[2, 1]) / s]
+    else:
+        s = 2.0 * np.sqrt(1.0 + R[2, 2] - R[0, 0] - R[1, 1])
+        q = [(R[1, 0] - R[0, 1]) / s, (R[0, 2] + R[2, 0]) / s, (R[1, 2] + R[2, 1]) / s, 0.25 * s]
+    q = np.asarray(q)
+    return q / np.linalg.norm(q) * (1.0 if q[0] >= 0.0 else -1.0)
+
+
+def rot_from_quat(q: ArrayLike) -> FloatArray:
+    """Rotation matrix of a quaternion ``(w, x, y, z)`` (normalised first)."""
+    w, x, y, z = np.asarray(q, dtype=float) / np.linalg.norm(q)
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def quat_from_euler(roll_rad: float, pitch_rad: float, yaw_rad: float) -> FloatArray:
+    return quat_from_rot(rot_from_euler(roll_rad, pitch_rad, yaw_rad))
+
+
+def wrap_angle(angle_rad: ArrayLike) -> FloatArray | float:
+    """Wrap angle(s) to [-pi, pi)."""
+    return (np.asarray(angle_rad) + np.pi) % (2.0 * np.pi) - np.pi
+
+
+def euler_rate_matrix(roll_rad: float, pitch_rad: float) -> FloatArray:
+    """T(Theta) mapping body rates [p, q, r] to Euler rates (Fossen eq. 2.41). (3, 3)."""
+    cphi, sphi = np.cos(roll_rad), np.sin(roll_rad)
+    cth, tth = np.cos(pitch_rad), np.tan(pitch_rad)
+    return np.array(
+        [[1.0, sphi * tth, cphi * tth], [0.0, cphi, -sphi], [0.0, sphi / cth, cphi / cth]]
+    )

@@ -1,0 +1,113 @@
+"""Sensor and autonomy messages exchanged between the simulator and the onboard stack.
+
+Frames: positions in NED (m), body quantities in FRD, angles in radians, times in
+seconds of mission time. Every message is an immutable dataclass.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from autonomy.sonar_geometry import FanGeometry
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True, slots=True)
+class ImuMsg:
+    """AHRS/IMU output: attitude, body rates and specific force."""
+
+    t_s: float
+    rpy_rad: FloatArray  # (3,) roll, pitch, yaw (yaw from FOG when fitted)
+    rate_body_radps: FloatArray  # (3,) p, q, r
+    accel_body_mps2: FloatArray  # (3,) specific force in FRD (reads -g at rest: [0, 0, -9.81])
+
+
+@dataclass(frozen=True, slots=True)
+class DvlMsg:
+    """Doppler velocity log: bottom-track velocity in the body frame."""
+
+    t_s: float
+    vel_body_mps: FloatArray  # (3,) FRD; NaN when not valid
+    valid: bool  # bottom lock
+    altitude_m: float  # mean beam altitude, NaN when not valid
+    beam_ranges_m: FloatArray = field(default_factory=lambda: np.full(4, np.nan))  # (4,)
+
+
+@dataclass(frozen=True, slots=True)
+class DepthMsg:
+    t_s: float
+    depth_m: float
+
+
+@dataclass(frozen=True, slots=True)
+class AltimeterMsg:
+    t_s: float
+    altitude_m: float  # NaN when out of range
+    valid: bool
+
+
+@dataclass(frozen=True, slots=True)
+class GpsMsg:
+    """GPS fix, only produced with the antenna at the surface."""
+
+    t_s: float
+    pos_ne_m: FloatArray  # (2,) north, east in the mission NED frame
+    valid: bool
+
+
+@dataclass(frozen=True, slots=True)
+class UsblMsg:
+    """USBL fix of a transponder, in the vehicle frame (range, bearing, elevation)."""
+
+    t_s: float
+    range_m: float
+    bearing_rad: float
+    elevation_rad: float
+
+
+@dataclass(frozen=True, slots=True)
+class FlsFrame:
+    """One forward-looking-sonar frame as the vehicle sees it (no ground truth).
+
+    ``polar`` is (n_beams, n_bins) uint8, beam 0 at the most port azimuth; ``fan`` is the
+    Cartesian fan image (height_px, width_px) uint8 made from it. ``geometry`` maps fan
+    pixels to (range, azimuth) and back. ``mount_*`` give the sonar's fixed extrinsics on
+    the hull.
+    """
+
+    t_s: float
+    polar: NDArray[np.uint8]
+    fan: NDArray[np.uint8]
+    geometry: FanGeometry
+    mount_pos_body_m: FloatArray  # (3,) FRD offset of the sonar head from the body origin
+    mount_rpy_rad: FloatArray  # (3,) sonar frame w.r.t. body (tilt is the pitch, down > 0)
+
+
+@dataclass(frozen=True, slots=True)
+class Detection:
+    """An ATR detection on one FLS frame."""
+
+    t_s: float
+    class_name: str
+    score: float  # in [0, 1]
+    box_xyxy_px: FloatArray  # (4,) x0, y0, x1, y1 in the fan image
+    range_m: float  # range of the box's reference point
+    azimuth_rad: float  # azimuth of the box's reference point (starboard > 0)
+
+
+@dataclass(frozen=True, slots=True)
+class NavEstimate:
+    """Navigation filter output."""
+
+    t_s: float
+    pos_ned: FloatArray  # (3,)
+    rpy_rad: FloatArray  # (3,)
+    vel_body_mps: FloatArray  # (3,)
+    rate_body_radps: FloatArray  # (3,)
+    cov_pos_ned: FloatArray  # (3, 3) position covariance, m^2
+    cov_yaw_rad2: float = 0.0
+    altitude_m: float = float("nan")

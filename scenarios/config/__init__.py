@@ -1,0 +1,1 @@
+"""Typed sub-configs, one module per component area; composed in :mod:`scenarios.schema`."""

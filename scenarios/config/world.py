@@ -1,0 +1,89 @@
+"""World config: seabed, basin walls, targets and water current."""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import Field, model_validator
+
+from scenarios.config.base import NonNegFloat, PositiveFloat, Probability, StrictModel, Vec2, Vec3
+
+
+class SeabedConfig(StrictModel):
+    """Seabed surface. ``plane`` and ``slope`` are MuJoCo planes; ``rough`` and ``ripple``
+    are trimesh triangle meshes (never height fields: their ray casts are ~10x slower)."""
+
+    kind: Literal["plane", "slope", "rough", "ripple"] = "plane"
+    depth_m: PositiveFloat = Field(4.0, le=11000.0, description="depth at the NED origin")
+    slope_deg: float = Field(0.0, ge=0.0, lt=45.0)
+    slope_azimuth_deg: float = Field(0.0, ge=-360.0, le=360.0, description="downhill direction")
+    roughness_m: NonNegFloat = Field(0.05, le=5.0, description="rms height of rough seabed")
+    roughness_corr_m: PositiveFloat = Field(2.0, description="correlation length of roughness")
+    ripple_amplitude_m: NonNegFloat = Field(0.05, le=2.0)
+    ripple_wavelength_m: PositiveFloat = 1.0
+    ripple_azimuth_deg: float = Field(0.0, ge=-360.0, le=360.0)
+    extent_m: PositiveFloat = Field(120.0, le=5000.0, description="side of the square patch")
+    center_ne_m: Vec2 = (0.0, 0.0)
+    mesh_resolution_m: PositiveFloat = Field(0.5, ge=0.05, le=10.0)
+    reflectivity: Probability = 0.3
+
+
+class BasinConfig(StrictModel):
+    """Optional vertical walls from the surface to the seabed."""
+
+    shape: Literal["none", "rectangular", "circular"] = "none"
+    center_ne_m: Vec2 = (0.0, 0.0)
+    size_ne_m: tuple[PositiveFloat, PositiveFloat] = (60.0, 60.0)
+    radius_m: PositiveFloat = 30.0
+    wall_thickness_m: PositiveFloat = 0.3
+    reflectivity: Probability = 0.8
+
+
+TargetShape = Literal["half_sphere", "truncated_cone", "cylinder", "box", "tyre"]
+
+
+class TargetConfig(StrictModel):
+    """A seabed object built from a trimesh mesh. ``pos_ned`` is the centre of its base;
+    its z is the depth of the base (use the seabed depth to lay it on a flat bottom)."""
+
+    name: str = Field(min_length=1)
+    shape: TargetShape
+    pos_ned: Vec3
+    rpy_deg: Vec3 = (0.0, 0.0, 0.0)
+    radius_m: PositiveFloat = Field(0.5, le=20.0, description="sphere/cylinder/cone base/tyre")
+    top_radius_m: NonNegFloat = Field(0.2, le=20.0, description="truncated cone top radius")
+    height_m: PositiveFloat = Field(0.5, le=20.0, description="cylinder/cone height")
+    size_m: tuple[PositiveFloat, PositiveFloat, PositiveFloat] = (1.0, 0.5, 0.5)
+    tube_radius_m: PositiveFloat = Field(0.15, le=5.0, description="tyre tube radius")
+    reflectivity: Probability = 0.9
+    class_name: str = "opi"
+    is_target: bool = True
+
+    @model_validator(mode="after")
+    def _tyre_fits(self) -> "TargetConfig":
+        if self.shape == "tyre" and self.tube_radius_m >= self.radius_m:
+            raise ValueError("tyre needs tube_radius_m < radius_m")
+        return self
+
+
+class CurrentConfig(StrictModel):
+    """Ocean current: constant plus first-order Gauss-Markov, NED m/s."""
+
+    velocity_ned_mps: Vec3 = (0.0, 0.0, 0.0)
+    gauss_markov_sigma_mps: NonNegFloat = Field(0.0, le=5.0)
+    gauss_markov_tau_s: PositiveFloat = 60.0
+
+
+class WorldConfig(StrictModel):
+    seabed: SeabedConfig = SeabedConfig()
+    basin: BasinConfig = BasinConfig()
+    targets: tuple[TargetConfig, ...] = ()
+    current: CurrentConfig = CurrentConfig()
+
+    @model_validator(mode="after")
+    def _unique_names(self) -> "WorldConfig":
+        names = [t.name for t in self.targets]
+        dup = {n for n in names if names.count(n) > 1}
+        if dup:
+            raise ValueError(f"target names must be unique, repeated: {sorted(dup)}")
+        return self

@@ -1,0 +1,1 @@
+"""auvsim simulator side: MuJoCo world, vehicle physics, sensors, mission runner."""

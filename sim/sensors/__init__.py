@@ -1,0 +1,1 @@
+"""Simulated sensors. Each has a name, a rate, a latency and ``measure(truth, *, noise=True)``."""
