@@ -1,0 +1,262 @@
+"""Build the MuJoCo scene from a scenario with MjSpec: seabed, basin walls, targets, hull.
+
+The MuJoCo world frame is NED (z down) and MuJoCo gravity is off: weight and buoyancy
+act through the hydrodynamic wrench (:mod:`sim.vehicle`). Geom groups:
+
+* ``ACOUSTIC_GROUP`` (0): what sonars and ray-cast sensors see (seabed, walls, targets);
+* ``HULL_GROUP`` (1): the vehicle's geoms;
+* ``COLLISION_PROXY_GROUP`` (3): invisible collision stand-ins (a plane under a terrain
+  mesh, since MuJoCo collides meshes through their convex hulls).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import mujoco
+import numpy as np
+from numpy.typing import NDArray
+
+from autonomy.frames import quat_from_rot, rot_from_euler
+from scenarios.config.world import BasinConfig, TargetConfig, WorldConfig
+from scenarios.schema import Scenario
+from sim.rng import component_rng
+from sim.seabed import Seabed, make_seabed
+from sim.sensors.raycast import BACKGROUND_ID
+from sim.target_meshes import target_mesh
+
+ACOUSTIC_GROUP = 0
+HULL_GROUP = 1
+COLLISION_PROXY_GROUP = 3
+HULL_PREFIX = "hull/"
+VEHICLE_BODY = "vehicle"
+NO_OBJECT_ID = -3  # geoms that belong to no scene object and are not background (hull)
+
+_INTEGRATORS = {
+    "euler": mujoco.mjtIntegrator.mjINT_EULER,
+    "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST,
+    "rk4": mujoco.mjtIntegrator.mjINT_RK4,
+}
+
+
+@dataclass(frozen=True)
+class SceneObject:
+    """A labelled object on the seabed.
+
+    Attributes:
+        id: object id, 0..n-1 in scenario order (the id rays report).
+        centroid_ned: (3,) volume centroid in NED, m.
+        base_ned: (3,) centre of the object's base (its configured position).
+        bounding_radius_m: radius of a sphere about the centroid containing the object.
+        height_m: height above its base.
+    """
+
+    id: int
+    name: str
+    class_name: str
+    is_target: bool
+    shape: str
+    centroid_ned: NDArray[np.float64]
+    base_ned: NDArray[np.float64]
+    bounding_radius_m: float
+    height_m: float
+    reflectivity: float
+    geom_id: int = -1
+
+
+@dataclass
+class World:
+    """A compiled scene and the tables sensors need.
+
+    Attributes:
+        geom_object_id: (ngeom,) object id per geom: 0..n-1 for scene objects,
+            ``BACKGROUND_ID`` (-1) for seabed/walls, ``NO_OBJECT_ID`` for the hull.
+        geom_reflectivity: (ngeom,) acoustic reflectivity per geom in [0, 1].
+    """
+
+    spec: mujoco.MjSpec
+    model: mujoco.MjModel
+    data: mujoco.MjData
+    seabed: Seabed
+    objects: tuple[SceneObject, ...]
+    geom_object_id: NDArray[np.int64]
+    geom_reflectivity: NDArray[np.float64]
+    vehicle_body_id: int
+    site_ids: dict[str, int] = field(default_factory=dict)
+
+    def site_pos_body(self, name: str) -> NDArray[np.float64]:
+        """Offset (FRD, m) of a hull site from the vehicle body origin."""
+        return np.array(self.model.site_pos[self.site_ids[name]], dtype=float)
+
+    @property
+    def acoustic_geomgroup(self) -> NDArray[np.uint8]:
+        """``geomgroup`` mask for ``mj_multiRay`` selecting only acoustic geoms."""
+        mask = np.zeros(6, dtype=np.uint8)
+        mask[ACOUSTIC_GROUP] = 1
+        return mask
+
+
+def _quat_wxyz(rpy_rad: tuple[float, float, float] | NDArray) -> list[float]:
+    return quat_from_rot(rot_from_euler(*rpy_rad)).tolist()
+
+
+def _quat_z_to(normal: NDArray) -> list[float]:
+    """Quaternion rotating the local +z axis onto ``normal``."""
+    z = np.array([0.0, 0.0, 1.0])
+    n = normal / np.linalg.norm(normal)
+    axis = np.cross(z, n)
+    s = np.linalg.norm(axis)
+    if s < 1e-12:
+        return [1.0, 0.0, 0.0, 0.0] if n[2] > 0 else [0.0, 1.0, 0.0, 0.0]
+    angle = np.arctan2(s, float(z @ n))
+    axis /= s
+    return [np.cos(angle / 2), *(np.sin(angle / 2) * axis)]
+
+
+def _add_seabed(spec: mujoco.MjSpec, seabed: Seabed) -> list[mujoco.MjsGeom]:
+    cfg = seabed.cfg
+    center = np.array([cfg.center_ne_m[0], cfg.center_ne_m[1], 0.0])
+    center[2] = float(seabed.depth_at(center[0], center[1]))
+    if not seabed.is_mesh:
+        half = 0.5 * cfg.extent_m / np.cos(np.deg2rad(cfg.slope_deg))
+        geom = spec.worldbody.add_geom(
+            name="seabed", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[half, half, 1.0],
+            pos=center.tolist(), quat=_quat_z_to(seabed.plane_normal_ned()), group=ACOUSTIC_GROUP,
+            rgba=[0.55, 0.5, 0.4, 1.0],
+        )
+        return [geom]
+    mesh = seabed.terrain_mesh()
+    spec.add_mesh(name="seabed_mesh", uservert=mesh.vertices.astype(np.float32).ravel(),
+                  userface=mesh.faces.astype(np.int32).ravel())
+    geom = spec.worldbody.add_geom(
+        name="seabed", type=mujoco.mjtGeom.mjGEOM_MESH, meshname="seabed_mesh", group=ACOUSTIC_GROUP,
+        contype=0, conaffinity=0, rgba=[0.55, 0.5, 0.4, 1.0],
+    )
+    half = 0.5 * cfg.extent_m
+    proxy_depth = float(np.max(seabed.depth_grid_m))
+    spec.worldbody.add_geom(
+        name="seabed_collision", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[half, half, 1.0],
+        pos=[center[0], center[1], proxy_depth], quat=[0.0, 1.0, 0.0, 0.0], group=COLLISION_PROXY_GROUP,
+        rgba=[0, 0, 0, 0],
+    )
+    return [geom]
+
+
+def _add_basin(spec: mujoco.MjSpec, basin: BasinConfig, seabed: Seabed) -> list[mujoco.MjsGeom]:
+    if basin.shape == "none":
+        return []
+    cn, ce = basin.center_ne_m
+    t = basin.wall_thickness_m
+    if basin.shape == "rectangular":
+        ln, le = basin.size_ne_m
+        corners_n = np.array([cn - ln / 2, cn + ln / 2])
+        corners_e = np.array([ce - le / 2, ce + le / 2])
+        bottom = float(np.max(seabed.depth_at(*np.meshgrid(corners_n, corners_e)))) + 0.5
+        # (centre n, centre e, half n, half e)
+        walls = [
+            (cn + (ln + t) / 2, ce, t / 2, le / 2 + t),
+            (cn - (ln + t) / 2, ce, t / 2, le / 2 + t),
+            (cn, ce + (le + t) / 2, ln / 2 + t, t / 2),
+            (cn, ce - (le + t) / 2, ln / 2 + t, t / 2),
+        ]
+        geoms = []
+        for i, (n, e, hn, he) in enumerate(walls):
+            geoms.append(spec.worldbody.add_geom(
+                name=f"basin_wall_{i}", type=mujoco.mjtGeom.mjGEOM_BOX, size=[hn, he, (bottom + 0.5) / 2],
+                pos=[n, e, (bottom - 0.5) / 2], group=ACOUSTIC_GROUP, rgba=[0.6, 0.6, 0.65, 0.3],
+            ))
+        return geoms
+    n_seg = 64
+    r = basin.radius_m + t / 2
+    ang = np.linspace(0.0, 2 * np.pi, n_seg, endpoint=False)
+    bottom = float(np.max(seabed.depth_at(cn + r * np.cos(ang), ce + r * np.sin(ang)))) + 0.5
+    seg_half = r * np.tan(np.pi / n_seg) * 1.02
+    geoms = []
+    for i, a in enumerate(ang):
+        geoms.append(spec.worldbody.add_geom(
+            name=f"basin_wall_{i}", type=mujoco.mjtGeom.mjGEOM_BOX, size=[t / 2, seg_half, (bottom + 0.5) / 2],
+            pos=[cn + r * np.cos(a), ce + r * np.sin(a), (bottom - 0.5) / 2],
+            quat=_quat_wxyz((0.0, 0.0, a)), group=ACOUSTIC_GROUP, rgba=[0.6, 0.6, 0.65, 0.3],
+        ))
+    return geoms
+
+
+def _add_target(spec: mujoco.MjSpec, idx: int, cfg: TargetConfig) -> tuple[mujoco.MjsGeom, SceneObject]:
+    mesh = target_mesh(cfg)
+    mesh_name = f"target_mesh_{idx}"
+    spec.add_mesh(name=mesh_name, uservert=mesh.vertices.astype(np.float32).ravel(),
+                  userface=mesh.faces.astype(np.int32).ravel())
+    R = rot_from_euler(*np.deg2rad(cfg.rpy_deg))
+    base = np.asarray(cfg.pos_ned, dtype=float)
+    geom = spec.worldbody.add_geom(
+        name=f"target:{cfg.name}", type=mujoco.mjtGeom.mjGEOM_MESH, meshname=mesh_name,
+        pos=base.tolist(), quat=_quat_wxyz(np.deg2rad(cfg.rpy_deg)), group=ACOUSTIC_GROUP,
+        rgba=[0.9, 0.6, 0.1, 1.0] if cfg.is_target else [0.5, 0.5, 0.5, 1.0],
+    )
+    centroid_local = np.asarray(mesh.center_mass, dtype=float)
+    radius = float(np.max(np.linalg.norm(mesh.vertices - centroid_local, axis=1)))
+    obj = SceneObject(
+        id=idx, name=cfg.name, class_name=cfg.class_name, is_target=cfg.is_target, shape=cfg.shape,
+        centroid_ned=base + R @ centroid_local, base_ned=base, bounding_radius_m=radius,
+        height_m=float(-mesh.bounds[0, 2]), reflectivity=cfg.reflectivity,
+    )
+    return geom, obj
+
+
+def build_world(scenario: Scenario, *, with_vehicle: bool = True) -> World:
+    """Compile the scenario's scene. ``with_vehicle=False`` leaves the hull out (sensor tests)."""
+    spec = mujoco.MjSpec()
+    spec.modelname = scenario.name
+    spec.option.gravity = [0.0, 0.0, 0.0]
+    spec.option.timestep = 1.0 / scenario.physics.rate_hz
+    spec.option.integrator = _INTEGRATORS[scenario.physics.integrator]
+    spec.stat.extent = max(scenario.world.seabed.extent_m, 10.0)
+
+    wcfg: WorldConfig = scenario.world
+    seabed = make_seabed(wcfg.seabed, component_rng(scenario.seed, "seabed"))
+    background = _add_seabed(spec, seabed) + _add_basin(spec, wcfg.basin, seabed)
+    reflect_of = {id(g): wcfg.seabed.reflectivity for g in background[:1]}
+    reflect_of.update({id(g): wcfg.basin.reflectivity for g in background[1:]})
+
+    target_geoms = []
+    objects = []
+    for i, tcfg in enumerate(wcfg.targets):
+        geom, obj = _add_target(spec, i, tcfg)
+        target_geoms.append(geom)
+        objects.append(obj)
+
+    if with_vehicle:
+        from sim.hull import build_hull_spec
+        from sim.vehicle_params import load_vehicle_params
+
+        hull = build_hull_spec(load_vehicle_params(scenario.vehicle))
+        frame = spec.worldbody.add_frame()
+        frame.attach_body(hull.body(VEHICLE_BODY), HULL_PREFIX, "")
+
+    model = spec.compile()
+    data = mujoco.MjData(model)
+
+    geom_object_id = np.full(model.ngeom, NO_OBJECT_ID, dtype=np.int64)
+    geom_reflectivity = np.zeros(model.ngeom)
+    for g in background:
+        gid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, g.name)
+        geom_object_id[gid] = BACKGROUND_ID
+        geom_reflectivity[gid] = reflect_of[id(g)]
+    final_objects = []
+    for g, obj in zip(target_geoms, objects):
+        gid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, g.name)
+        geom_object_id[gid] = obj.id
+        geom_reflectivity[gid] = obj.reflectivity
+        final_objects.append(replace(obj, geom_id=gid))
+
+    vehicle_body_id = -1
+    site_ids: dict[str, int] = {}
+    if with_vehicle:
+        vehicle_body_id = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, HULL_PREFIX + VEHICLE_BODY)
+        for sid in range(model.nsite):
+            name = model.site(sid).name
+            if name.startswith(HULL_PREFIX):
+                site_ids[name[len(HULL_PREFIX):]] = sid
+    mujoco.mj_forward(model, data)
+    return World(spec, model, data, seabed, tuple(final_objects), geom_object_id, geom_reflectivity,
+                 vehicle_body_id, site_ids)
