@@ -111,6 +111,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, help="output directory")
     p.add_argument("--seed", type=int, default=None)
     p.add_argument("--no-rerun", action="store_true", help="skip the rerun recording")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing, non-empty --out")
     p.add_argument("--nav", choices=["estimate", "truth"], default="estimate",
                    help="pose used for target geolocalisation (default: estimate)")
     p.add_argument("--detector", choices=["cnn", "classical", "none"], default=None,

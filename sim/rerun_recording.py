@@ -1,0 +1,133 @@
+"""Rerun recording of a mission: 3-D scene, vehicle pose, true and estimated paths,
+FLS fan frames with ground-truth boxes and detections, navigation errors, world model.
+
+An observer of the mission loop; it streams to an ``.rrd`` file as the mission runs.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from autonomy.frames import quat_from_rot, rot_from_euler
+from sim.records import FlsEvent, StepRecord
+from sim.target_meshes import target_mesh
+
+
+class RerunRecorder:
+    """Streams a mission into ``path`` (a rerun ``.rrd`` file).
+
+    Args:
+        path: output file.
+        fls_every: log every n-th FLS frame (1 = all).
+        fls_scale: resize factor for logged fan images (JPEG-encoded).
+        path_every_s: how often the path line strips are re-logged.
+    """
+
+    def __init__(self, path: Path, *, fls_every: int = 1, fls_scale: float = 0.5, path_every_s: float = 2.0) -> None:
+        import rerun as rr
+
+        self._rr = rr
+        self.path = Path(path)
+        self.fls_every = max(int(fls_every), 1)
+        self.fls_scale = float(fls_scale)
+        self.path_every_s = float(path_every_s)
+        self._rec = rr.RecordingStream("auvsim")
+        self._true: list[np.ndarray] = []
+        self._est: list[np.ndarray] = []
+        self._last_path_t = -np.inf
+        self._n_fls = 0
+
+    # -- observer protocol -----------------------------------------------------------
+    def on_start(self, mission) -> None:
+        rr, rec = self._rr, self._rec
+        rec.save(self.path)
+        rec.log("world", rr.ViewCoordinates.FRD, static=True)  # NED: x north, y east, z down
+        scenario = mission.scenario
+        seabed = mission.world.seabed
+        cfg = scenario.world.seabed
+        if seabed.is_mesh:
+            mesh = seabed.terrain_mesh()
+            rec.log("world/seabed", rr.Mesh3D(vertex_positions=mesh.vertices, triangle_indices=mesh.faces,
+                                              albedo_factor=[140, 125, 100]), static=True)
+        else:
+            h = 0.5 * cfg.extent_m
+            cn, ce = cfg.center_ne_m
+            corners = np.array([[cn - h, ce - h], [cn + h, ce - h], [cn + h, ce + h], [cn - h, ce + h]])
+            depth = seabed.depth_at(corners[:, 0], corners[:, 1])
+            rec.log("world/seabed", rr.Mesh3D(vertex_positions=np.c_[corners, depth], triangle_indices=[[0, 1, 2], [0, 2, 3]],
+                                              albedo_factor=[140, 125, 100]), static=True)
+        for tcfg, obj in zip(scenario.world.targets, mission.world.objects):
+            mesh = target_mesh(tcfg)
+            R = rot_from_euler(*np.deg2rad(tcfg.rpy_deg))
+            verts = mesh.vertices @ R.T + np.asarray(tcfg.pos_ned)
+            color = [230, 150, 30] if obj.is_target else [128, 128, 128]
+            rec.log(f"world/objects/{obj.name}", rr.Mesh3D(vertex_positions=verts, triangle_indices=mesh.faces,
+                                                           albedo_factor=color), static=True)
+        env = mission.vehicle_envelope_m
+        rec.log("world/vehicle/hull", rr.Boxes3D(half_sizes=[0.5 * np.asarray(env)], colors=[[240, 220, 40]]), static=True)
+        rec.log("world/waypoints", rr.LineStrips3D([np.c_[mission.waypoints_ne, np.full(len(mission.waypoints_ne), 0.0)]],
+                                                   colors=[[150, 150, 150]]), static=True)
+
+    def on_step(self, r: StepRecord) -> None:
+        rr, rec = self._rr, self._rec
+        rec.set_time("sim_time", duration=r.t_s)
+        tr = r.truth
+        rec.log("world/vehicle", rr.Transform3D(translation=tr.pos_ned, quaternion=_xyzw(quat_from_rot(tr.R_nb))))
+        self._true.append(np.asarray(tr.pos_ned, dtype=float))
+        self._est.append(np.asarray(r.nav.pos_ned, dtype=float))
+        err = float(np.linalg.norm(tr.pos_ned[:2] - r.nav.pos_ned[:2]))
+        rec.log("nav/horizontal_error_m", rr.Scalars(err))
+        rec.log("nav/sigma_horizontal_m", rr.Scalars(float(np.sqrt(np.trace(r.nav.cov_pos_ned[:2, :2])))))
+        rec.log("nav/depth_error_m", rr.Scalars(float(tr.pos_ned[2] - r.nav.pos_ned[2])))
+        if r.t_s - self._last_path_t >= self.path_every_s:
+            self._last_path_t = r.t_s
+            rec.log("world/path/true", rr.LineStrips3D([np.asarray(self._true)], colors=[[40, 120, 220]]))
+            rec.log("world/path/estimated", rr.LineStrips3D([np.asarray(self._est)], colors=[[240, 140, 30]]))
+
+    def on_fls(self, ev: FlsEvent) -> None:
+        rr, rec = self._rr, self._rec
+        self._n_fls += 1
+        rec.set_time("sim_time", duration=ev.t_s)
+        if ev.world_objects:
+            pos = np.array([o.pos_ned for o in ev.world_objects])
+            half = np.array([2.0 * np.sqrt(np.clip(np.diag(o.cov_ned), 1e-6, None)) for o in ev.world_objects])
+            rec.log("world/world_model", rr.Ellipsoids3D(centers=pos, half_sizes=half, colors=[[220, 40, 40]],
+                                                         labels=[str(o.id) for o in ev.world_objects]))
+        if (self._n_fls - 1) % self.fls_every:
+            return
+        fan = ev.render.frame.fan
+        s = self.fls_scale
+        img = cv2.resize(fan, None, fx=s, fy=s, interpolation=cv2.INTER_AREA) if s != 1.0 else fan
+        ok, jpg = cv2.imencode(".jpg", img, [cv2.IMWRITE_JPEG_QUALITY, 80])
+        if ok:
+            rec.log("sonar/fan", rr.EncodedImage(contents=jpg.tobytes(), media_type="image/jpeg"))
+        gt = [o for o in ev.render.truth.objects if o.visible]
+        if gt:
+            rec.log("sonar/fan/ground_truth", rr.Boxes2D(
+                array=np.array([o.bbox_xyxy for o in gt]) * s, array_format=rr.Box2DFormat.XYXY,
+                labels=[o.name for o in gt], colors=[[40, 220, 40]]))
+        else:
+            rec.log("sonar/fan/ground_truth", rr.Clear(recursive=False))
+        if ev.detections:
+            rec.log("sonar/fan/detections", rr.Boxes2D(
+                array=np.array([d.box_xyxy_px for d in ev.detections]) * s, array_format=rr.Box2DFormat.XYXY,
+                labels=[f"{d.class_name} {d.score:.2f}" for d in ev.detections],
+                colors=[[40, 220, 40] if ok_ else [230, 40, 40] for ok_ in ev.true_detection]))
+        else:
+            rec.log("sonar/fan/detections", rr.Clear(recursive=False))
+
+    def on_end(self, mission) -> None:
+        rr, rec = self._rr, self._rec
+        if self._true:
+            rec.log("world/path/true", rr.LineStrips3D([np.asarray(self._true)], colors=[[40, 120, 220]]))
+            rec.log("world/path/estimated", rr.LineStrips3D([np.asarray(self._est)], colors=[[240, 140, 30]]))
+        rec.flush()
+        rec.disconnect()
+
+
+def _xyzw(q_wxyz: np.ndarray) -> list[float]:
+    w, x, y, z = q_wxyz
+    return [x, y, z, w]
