@@ -23,10 +23,10 @@ from autonomy.control.allocation import ThrustAllocator
 from autonomy.control.autopilot import Autopilot, AutopilotParams
 from autonomy.control.setpoint import Setpoint
 from autonomy.frames import rot_from_euler
-from autonomy.guidance.mission import MissionStateMachine
+from autonomy.guidance.mission import MissionFsm
 from autonomy.guidance.survey import SurveyGuidance
 from autonomy.messages import AltimeterMsg, DepthMsg, Detection, DvlMsg, GpsMsg, ImuMsg, NavEstimate
-from autonomy.navigation import NavigationFilter
+from autonomy.navigation import NavigationFilter, NavNoiseModel
 from scenarios.schema import Scenario
 from sim.current import OceanCurrent
 from sim.perception import Perception
@@ -117,19 +117,25 @@ class Mission:
 
         auto = scn.autonomy
         survey = auto.guidance.survey
-        init_pos = np.asarray(scn.vehicle.initial_pos_ned, dtype=float)
-        init_rpy = np.deg2rad(scn.vehicle.initial_rpy_deg)
-        self.nav_filter = NavigationFilter(auto.navigation, init_pos, float(init_rpy[2]))
+        self._nav_noise = NavNoiseModel.from_sensor_configs(scn.sensors.imu, scn.sensors.dvl, scn.sensors.depth,
+                                                            scn.sensors.gps)
+        self._mounts = mounts
+        self.nav_filter = self._make_nav_filter()
         swath = self.fls.swath_width_m(survey.altitude_m) if self.fls is not None else None
         self.guidance = SurveyGuidance.from_config(survey, auto.guidance.los, swath_width_m=swath)
         self.waypoints_ne = np.asarray(self.guidance.plan.waypoints_ne_m)
-        self.fsm = MissionStateMachine(auto.guidance.mission, survey)
+        self.fsm = MissionFsm.from_config(auto.guidance.mission, self.guidance)
         self.autopilot = Autopilot(AutopilotParams.from_config(auto.control))
         self.allocator = ThrustAllocator(self.params.thruster_matrix, self.params.thruster_limits_n)
         self.perception = (
             Perception(scn, self.fls, self.world.seabed, nav_source=self.nav_source)
             if (self.fls is not None and self.perception_enabled) else None
         )
+
+    def _make_nav_filter(self) -> NavigationFilter:
+        scn = self.scenario
+        return NavigationFilter(scn.autonomy.navigation, np.asarray(scn.vehicle.initial_pos_ned, dtype=float),
+                                float(np.deg2rad(scn.vehicle.initial_rpy_deg[2])), self._nav_noise, mounts=self._mounts)
 
     # -- stepping API ----------------------------------------------------------------
     def reset(self, seed: int | None = None) -> StepRecord:
@@ -146,7 +152,7 @@ class Mission:
         self.thruster_cmd = np.zeros(self.params.n_thrusters)
         self.wrench_body = np.zeros(6)
         self.scheduler.reset(0.0)
-        self.nav_filter.reset(init_pos, float(init_rpy[2]))
+        self.nav_filter = self._make_nav_filter()
         self.guidance.start(init_pos[:2], float(init_rpy[2]))
         self.fsm.reset()
         self.autopilot.reset()
@@ -186,10 +192,9 @@ class Mission:
             self._deliver(name, msg, truth)
         self.nav_filter.predict(self.t_s)
         nav = self._nav_for_control(truth)
-        mode = self.fsm.update(nav, self.t_s, dvl_lock=self.last_dvl_lock, guidance_finished=self.guidance.finished)
-        sp = setpoint if setpoint is not None else self._guidance_setpoint(nav, mode)
+        sp = setpoint if setpoint is not None else self.fsm.update(self.t_s, nav, self.last_dvl_lock)
         self._setpoint = sp
-        self.wrench_body = self.autopilot.update(nav, sp, self.autonomy_dt_s)
+        self.wrench_body = np.zeros(6) if sp is None else self.autopilot.update(nav, sp, self.autonomy_dt_s)
         self.thruster_cmd = self.allocator.allocate(self.wrench_body)
         rec = self._record(truth, nav, self.fsm.mode)
         self._wall_s = time.perf_counter() - self._wall_start
@@ -220,11 +225,6 @@ class Mission:
                               self.fsm.aborted, self.fsm.abort_reason or "")
 
     # -- internals -------------------------------------------------------------------
-    def _guidance_setpoint(self, nav: NavEstimate, mode: str) -> Setpoint:
-        if mode == "survey":
-            return self.guidance.update(nav)
-        return self.fsm.setpoint(nav)
-
     def _nav_for_control(self, truth: VehicleTruth) -> NavEstimate:
         est = self.nav_filter.estimate()
         if math.isfinite(self.last_altitude_m) and not math.isfinite(est.altitude_m):
@@ -253,8 +253,7 @@ class Mission:
             nf.on_depth(msg)
         elif isinstance(msg, AltimeterMsg):
             self.last_altitude_m = msg.altitude_m if msg.valid else math.nan
-            if hasattr(nf, "on_altimeter"):
-                nf.on_altimeter(msg)
+            nf.on_altimeter(msg)
         elif isinstance(msg, GpsMsg):
             nf.on_gps(msg)
         elif name == "fls":

@@ -1,21 +1,117 @@
-"""Guidance (lawnmower survey, LOS) and control (autopilots) configs."""
+"""Guidance (lawnmower survey, LOS, mission state machine) and control (autopilots) configs.
+
+Frames: NED metres, headings in degrees clockwise from north in the config (converted to
+radians by the consumers). Forces in N, moments in N m.
+"""
 
 from __future__ import annotations
 
-from pydantic import Field
+from typing import Literal
 
-from scenarios.config.base import StrictModel, Vec2
+from pydantic import Field, model_validator
+
+from scenarios.config.base import NonNegFloat, PositiveFloat, StrictModel, Vec2
 
 
 class SurveyConfig(StrictModel):
-    origin_ne_m: Vec2 = (0.0, 0.0)
+    """Lawnmower survey over a rectangle in NED.
+
+    The rectangle starts at corner ``origin_ne_m``; legs run along ``leg_heading_deg`` for
+    ``length_m``; successive legs step ``leg_spacing_m`` to starboard of the first leg's
+    direction (port when ``first_turn`` is ``port``) until ``width_m`` is covered. With
+    ``leg_spacing_m: from_swath`` the spacing is the sonar's seabed swath at the survey
+    altitude times ``1 - swath_overlap``.
+    """
+
+    origin_ne_m: Vec2 = Field((0.0, 0.0), description="first corner of the area (start of leg 1)")
+    length_m: PositiveFloat = Field(30.0, le=10000.0, description="leg length along leg_heading_deg")
+    width_m: float = Field(16.0, ge=0.0, le=10000.0, description="across-leg extent of the area")
+    leg_heading_deg: float = Field(0.0, ge=-360.0, le=360.0, description="direction of leg 1")
+    first_turn: Literal["starboard", "port"] = "starboard"
+    leg_spacing_m: PositiveFloat | Literal["from_swath"] = Field(4.0, description="m, or from_swath")
+    swath_overlap: float = Field(0.3, ge=0.0, lt=1.0, description="fraction of swath overlapping")
+    run_in_m: NonNegFloat = Field(0.0, le=1000.0, description="straight extension before/after each leg")
+    turn: Literal["corner", "arc"] = Field("arc", description="leg-to-leg turn: sharp corners or a semicircle")
+    min_turn_radius_m: PositiveFloat = Field(1.0, le=1000.0, description="arcs tighter than this use corners")
+    arc_points: int = Field(6, ge=2, le=90, description="waypoints per turn arc")
+    vertical_mode: Literal["altitude", "depth"] = "altitude"
+    altitude_m: float = Field(2.0, gt=0.0, le=100.0, description="survey altitude above seabed")
+    depth_m: float = Field(2.0, gt=0.0, le=6000.0, description="survey depth (depth mode)")
     speed_mps: float = Field(0.5, gt=0.0, le=3.0)
-    altitude_m: float = Field(2.0, gt=0.0, le=100.0)
+
+
+class LosConfig(StrictModel):
+    """Line-of-sight path following."""
+
+    lookahead_m: PositiveFloat = Field(3.0, le=1000.0, description="LOS lookahead distance Delta")
+    acceptance_radius_m: PositiveFloat = Field(1.0, le=1000.0, description="waypoint reached inside this")
+    sideslip_compensation: bool = Field(True, description="steer course, not heading (uses DVL sway)")
+    max_sideslip_deg: float = Field(30.0, ge=0.0, le=80.0)
+    sideslip_filter_tau_s: PositiveFloat = Field(5.0, le=600.0)
+    slow_down_heading_error_deg: float = Field(
+        45.0, gt=0.0, le=180.0,
+        description="surge speed falls linearly with heading error, to the floor at this error",
+    )
+    min_speed_fraction: float = Field(0.2, ge=0.0, le=1.0, description="floor of the slow-down")
+
+
+class MissionConfig(StrictModel):
+    """Mission state machine: idle -> dive -> survey -> surface -> done; abort surfaces."""
+
+    start_delay_s: NonNegFloat = Field(0.0, le=3600.0)
+    dive_tolerance_m: PositiveFloat = Field(0.3, le=100.0, description="vertical error to end the dive")
+    dive_settle_s: NonNegFloat = Field(3.0, le=600.0, description="time inside tolerance to end the dive")
+    dive_timeout_s: PositiveFloat = Field(120.0, le=3600.0)
+    surface_depth_m: PositiveFloat = Field(0.3, le=10.0, description="shallower than this counts as surfaced")
+    safe_depth_min_m: NonNegFloat = Field(0.5, le=6000.0, description="survey abort if shallower")
+    safe_depth_max_m: PositiveFloat = Field(10.0, le=6000.0, description="abort if deeper, any state")
+    min_altitude_m: NonNegFloat = Field(0.5, le=100.0, description="abort if closer to the seabed")
+    bottom_lock_timeout_s: PositiveFloat = Field(10.0, le=3600.0, description="abort after losing DVL lock this long")
+    nav_timeout_s: PositiveFloat = Field(2.0, le=600.0, description="abort if no navigation this long")
+    max_mission_time_s: PositiveFloat = Field(3600.0, le=86400.0)
+
+    @model_validator(mode="after")
+    def _band(self) -> "MissionConfig":
+        if self.safe_depth_min_m >= self.safe_depth_max_m:
+            raise ValueError("safe_depth_min_m must be < safe_depth_max_m")
+        return self
 
 
 class GuidanceConfig(StrictModel):
     survey: SurveyConfig = SurveyConfig()
+    los: LosConfig = LosConfig()
+    mission: MissionConfig = MissionConfig()
+
+
+class PidConfig(StrictModel):
+    """PID gains and limits (units of the loop: error unit -> N or N m)."""
+
+    kp: NonNegFloat = 0.0
+    ki: NonNegFloat = 0.0
+    kd: NonNegFloat = 0.0
+    integral_limit: NonNegFloat = Field(float("inf"), description="max |ki * integral|, output units")
+    output_limit: PositiveFloat = Field(float("inf"), description="max |output|")
+    output_rate_limit: PositiveFloat = Field(float("inf"), description="max |d output/dt| per s")
+    derivative_filter_tau_s: NonNegFloat = Field(0.0, le=60.0, description="first-order filter on D")
 
 
 class ControlConfig(StrictModel):
-    pass
+    """Autopilots producing a body wrench [X, Y, Z, K, M, N] (K = M = 0).
+
+    Defaults suit the FeelHippo estimate (about 35 kg, T100/T200-class thrusters).
+    """
+
+    surge: PidConfig = PidConfig(kp=120.0, ki=20.0, integral_limit=30.0, output_limit=40.0,
+                                 output_rate_limit=120.0)
+    sway: PidConfig = PidConfig(kp=80.0, ki=10.0, integral_limit=10.0, output_limit=12.0,
+                                output_rate_limit=60.0)
+    heading: PidConfig = PidConfig(kp=12.0, ki=0.5, kd=10.0, integral_limit=3.0, output_limit=12.0,
+                                   output_rate_limit=40.0)
+    depth: PidConfig = PidConfig(kp=120.0, ki=15.0, kd=150.0, integral_limit=10.0, output_limit=20.0,
+                                 output_rate_limit=120.0)
+    surge_feedforward_n_per_mps: NonNegFloat = Field(0.0, description="X += this * speed setpoint")
+    heave_bias_n: float = Field(0.0, ge=-1000.0, le=1000.0, description="constant Z (e.g. buoyancy trim)")
+    max_yaw_rate_dps: PositiveFloat = Field(15.0, le=360.0, description="heading reference slew limit")
+    max_vertical_speed_mps: PositiveFloat = Field(0.3, le=5.0, description="depth reference slew limit")
+    max_acceleration_mps2: PositiveFloat = Field(0.2, le=10.0, description="surge reference slew limit")
+    altitude_filter_tau_s: NonNegFloat = Field(1.0, le=60.0, description="seabed-depth estimate filter")

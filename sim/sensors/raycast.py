@@ -41,3 +41,120 @@ class RayCaster(Protocol):
     def cast(self, origin_ned: FloatArray, dirs_ned: FloatArray, max_range_m: float) -> RayHits:
         """Cast rays from ``origin_ned`` (3,) along unit ``dirs_ned`` (N, 3)."""
         ...
+
+
+class IsolatingRayCaster(RayCaster, Protocol):
+    """A caster that can also cast against one scene object alone (occlusion ground truth)."""
+
+    def cast_isolated(self, origin_ned: FloatArray, dirs_ned: FloatArray, max_range_m: float,
+                      object_id: int) -> FloatArray:
+        """(N,) distance to object ``object_id`` as if it were alone in the scene (``inf`` if missed)."""
+        ...
+
+    def object_bounding_sphere(self, object_id: int) -> tuple[FloatArray, float]:
+        """Centre (3,) NED and radius (m) of a sphere enclosing the object."""
+        ...
+
+
+NO_HIT_ID = -2  # object id reported where a ray hits nothing
+
+
+class MujocoRayCaster:
+    """:class:`RayCaster` over a compiled MuJoCo scene with ``mujoco.mj_multiRay``.
+
+    Args:
+        model, data: the compiled scene (``data`` must be forwarded for geom poses).
+        geom_object_id: (ngeom,) scene-object id per geom (``BACKGROUND_ID`` for seabed and
+            walls; anything below ``BACKGROUND_ID`` marks geoms that are not acoustic).
+        geom_reflectivity: (ngeom,) acoustic reflectivity per geom in [0, 1].
+        exclude_body_id: body whose geoms rays ignore (the hull); -1 for none.
+        geomgroup: (6,) ``mj_multiRay`` group mask; default: the groups of the acoustic geoms.
+    """
+
+    def __init__(self, model, data, geom_object_id: NDArray[np.integer], geom_reflectivity: FloatArray,
+                 exclude_body_id: int, geomgroup: NDArray[np.uint8] | None = None) -> None:
+        import mujoco
+
+        self._mj = mujoco
+        self.model = model
+        self.data = data
+        self.geom_object_id = np.asarray(geom_object_id, dtype=np.int64)
+        self.geom_reflectivity = np.asarray(geom_reflectivity, dtype=float)
+        if self.geom_object_id.shape != (model.ngeom,) or self.geom_reflectivity.shape != (model.ngeom,):
+            raise ValueError(f"geom_object_id and geom_reflectivity must have shape ({model.ngeom},), got "
+                             f"{self.geom_object_id.shape} and {self.geom_reflectivity.shape}")
+        self.exclude_body_id = int(exclude_body_id)
+        if geomgroup is None:
+            geomgroup = np.zeros(6, dtype=np.uint8)
+            acoustic = self.geom_object_id >= BACKGROUND_ID
+            geomgroup[np.unique(np.clip(model.geom_group[acoustic], 0, 5))] = 1
+        self.geomgroup = np.ascontiguousarray(geomgroup, dtype=np.uint8)
+        # lookup tables with a trailing "no hit" entry, indexed by geom id (-1 -> last)
+        self._obj_lut = np.append(self.geom_object_id, NO_HIT_ID)
+        self._refl_lut = np.append(self.geom_reflectivity, 0.0)
+        self._object_geoms = {int(k): np.flatnonzero(self.geom_object_id == k)
+                              for k in np.unique(self.geom_object_id[self.geom_object_id >= 0])}
+        self._isolated_group = np.zeros(6, dtype=np.uint8)
+        self._isolated_group[5] = 1
+        self._n = 0
+        self._alloc(1024)
+
+    def _alloc(self, n: int) -> None:
+        self._n = n
+        self._vec = np.zeros(3 * n)
+        self._geomid = np.zeros(n, dtype=np.int32)
+        self._dist = np.zeros(n)
+        self._normal = np.zeros(3 * n)
+
+    def _raw(self, origin_ned: FloatArray, dirs_ned: FloatArray, max_range_m: float, geomgroup: NDArray[np.uint8],
+             body_exclude: int) -> int:
+        n = int(dirs_ned.shape[0])
+        if n > self._n:
+            self._alloc(max(n, 2 * self._n))
+        self._vec[:3 * n] = np.asarray(dirs_ned, dtype=float).reshape(-1)
+        pnt = np.ascontiguousarray(origin_ned, dtype=float).reshape(3)
+        self._mj.mj_multiRay(self.model, self.data, pnt, self._vec[:3 * n], geomgroup, 1, body_exclude,
+                             self._geomid[:n], self._dist[:n], self._normal[:3 * n], n, float(max_range_m))
+        return n
+
+    def cast(self, origin_ned: FloatArray, dirs_ned: FloatArray, max_range_m: float) -> RayHits:
+        """Cast unit ``dirs_ned`` (N, 3) from ``origin_ned`` (3,); hits beyond ``max_range_m`` are misses."""
+        n = self._raw(origin_ned, dirs_ned, max_range_m, self.geomgroup, self.exclude_body_id)
+        gid = self._geomid[:n].astype(np.intp)
+        hit = gid >= 0
+        dist = np.where(hit, self._dist[:n], np.inf)
+        hit &= dist <= max_range_m
+        dist[~hit] = np.inf
+        gid[~hit] = -1
+        normal = self._normal[:3 * n].reshape(n, 3).copy()
+        normal[~hit] = 0.0
+        return RayHits(dist_m=dist, normal_ned=normal, reflectivity=self._refl_lut[gid],
+                       object_id=self._obj_lut[gid])
+
+    def cast_isolated(self, origin_ned: FloatArray, dirs_ned: FloatArray, max_range_m: float,
+                      object_id: int) -> FloatArray:
+        """(N,) distance to object ``object_id``'s geoms alone (``inf`` where missed).
+
+        Temporarily moves the object's geoms into group 5 and everything else out of it.
+        """
+        geoms = self._object_geoms.get(int(object_id))
+        if geoms is None or len(dirs_ned) == 0:
+            return np.full(len(dirs_ned), np.inf)
+        saved = self.model.geom_group.copy()
+        try:
+            self.model.geom_group[:] = 0
+            self.model.geom_group[geoms] = 5
+            n = self._raw(origin_ned, dirs_ned, max_range_m, self._isolated_group, -1)
+        finally:
+            self.model.geom_group[:] = saved
+        d = np.where(self._geomid[:n] >= 0, self._dist[:n], np.inf)
+        d[d > max_range_m] = np.inf
+        return d
+
+    def object_bounding_sphere(self, object_id: int) -> tuple[FloatArray, float]:
+        """Sphere about the object's geom centres enclosing their bounding spheres."""
+        geoms = self._object_geoms[int(object_id)]
+        pos = self.data.geom_xpos[geoms]
+        centre = pos.mean(axis=0)
+        radius = float(np.max(np.linalg.norm(pos - centre, axis=1) + self.model.geom_rbound[geoms]))
+        return centre, radius

@@ -1,0 +1,29 @@
+"""Detector factory from :class:`AtrConfig`."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from autonomy.atr.classical import ClassicalDetector
+from autonomy.atr.cnn_detector import CnnDetector
+from autonomy.atr.detector import Detector, NullDetector
+from scenarios.config.atr import AtrConfig
+
+SHIPPED_MODEL_PATH = Path(__file__).resolve().parent / "models" / "atr_centernet.onnx"
+
+
+def model_path(cfg: AtrConfig) -> Path:
+    """The ONNX file ``cfg`` selects (the shipped model when ``model_path`` is None)."""
+    return SHIPPED_MODEL_PATH if cfg.model_path is None else Path(cfg.model_path).expanduser()
+
+
+def build_detector(cfg: AtrConfig) -> Detector:
+    """The detector ``cfg.detector`` names, at ``cfg``'s operating point."""
+    if cfg.detector == "cnn":
+        return CnnDetector(model_path(cfg), score_threshold=cfg.score_threshold, nms_iou=cfg.nms_iou,
+                           max_detections=cfg.max_detections, intra_op_threads=cfg.intra_op_threads,
+                           classes=cfg.classes)
+    if cfg.detector == "classical":
+        return ClassicalDetector(cfg.classical, score_threshold=cfg.score_threshold,
+                                 max_detections=cfg.max_detections)
+    return NullDetector()

@@ -1,0 +1,37 @@
+"""Decoding of CenterNet-style heat-map outputs into boxes (pure numpy).
+
+Model outputs for one image, on a grid of stride ``s`` input pixels:
+``heatmap`` (C, h, w) peak scores in [0, 1] (non-maxima already zeroed by the model),
+``size`` (2, h, w) log of box (width, height) in input pixels, ``offset`` (2, h, w) sub-cell
+offset of the centre in cells.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+
+def decode_centernet(heatmap: NDArray, size_log: NDArray, offset: NDArray, stride: int,
+                     score_threshold: float, max_detections: int
+                     ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
+    """Peaks above ``score_threshold`` -> (boxes (N, 4) xyxy input px, scores (N,), class ids (N,)).
+
+    At most ``max_detections`` highest peaks are returned, by decreasing score.
+    """
+    if heatmap.ndim != 3 or size_log.shape[0] != 2 or offset.shape[0] != 2:
+        raise ValueError(f"decode_centernet: bad output shapes {heatmap.shape}, {size_log.shape}, {offset.shape}")
+    c, h, w = heatmap.shape
+    flat = heatmap.reshape(-1)
+    idx = np.flatnonzero(flat >= score_threshold)
+    if idx.size > max_detections:
+        idx = idx[np.argpartition(-flat[idx], max_detections - 1)[:max_detections]]
+    idx = idx[np.argsort(-flat[idx], kind="stable")]
+    cls, rem = np.divmod(idx, h * w)
+    iy, ix = np.divmod(rem, w)
+    cx = (ix + offset[0, iy, ix]) * stride
+    cy = (iy + offset[1, iy, ix]) * stride
+    bw = np.exp(np.clip(size_log[0, iy, ix], -4.0, 8.0))
+    bh = np.exp(np.clip(size_log[1, iy, ix], -4.0, 8.0))
+    boxes = np.stack([cx - 0.5 * bw, cy - 0.5 * bh, cx + 0.5 * bw, cy + 0.5 * bh], axis=1)
+    return boxes.astype(np.float64), flat[idx].astype(np.float64), cls.astype(np.int64)

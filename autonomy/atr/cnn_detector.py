@@ -1,0 +1,121 @@
+"""CNN detector: the ONNX CenterNet-style model run with onnxruntime.
+
+Model contract (written by ``sim.training``, checked on load):
+- input ``image`` float32 (1, 1, H, W): the fan resized to W x H (``cv2.INTER_AREA``), / 255;
+- outputs ``heatmap`` (1, C, H/s, W/s), ``size`` (1, 2, H/s, W/s), ``offset`` (1, 2, H/s, W/s)
+  as described in :mod:`autonomy.atr.centernet_decode`;
+- metadata ``auvsim_atr_format`` = ``centernet-v1``, ``class_names`` (JSON list), ``stride``,
+  ``fan_width_px``, ``fan_height_px`` (the fan size the model was trained on).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from autonomy.atr.centernet_decode import decode_centernet
+from autonomy.atr.detector import check_frame, to_detections
+from autonomy.atr.nms import nms
+from autonomy.messages import Detection, FlsFrame
+
+MODEL_FORMAT = "centernet-v1"
+INPUT_NAME = "image"
+OUTPUT_NAMES = ("heatmap", "size", "offset")
+
+
+class CnnDetector:
+    """Runs an ATR ONNX model on FLS frames.
+
+    Args:
+        model_path: ONNX file following the contract in the module docstring.
+        score_threshold: operating threshold on the peak score.
+        nms_iou: IoU above which a lower-scored box of the same class is dropped.
+        max_detections: cap on detections per frame.
+        intra_op_threads: onnxruntime CPU threads (1 = one core).
+        classes: keep only these class names (None = all).
+    """
+
+    def __init__(self, model_path: str | Path, score_threshold: float = 0.5, nms_iou: float = 0.3,
+                 max_detections: int = 50, intra_op_threads: int = 1,
+                 classes: tuple[str, ...] | None = None) -> None:
+        import onnxruntime as ort
+
+        self.model_path = Path(model_path)
+        if not self.model_path.is_file():
+            raise FileNotFoundError(f"ATR model file not found: {self.model_path}")
+        opts = ort.SessionOptions()
+        opts.intra_op_num_threads = int(intra_op_threads)
+        opts.inter_op_num_threads = 1
+        opts.execution_mode = ort.ExecutionMode.ORT_SEQUENTIAL
+        opts.log_severity_level = 3
+        try:
+            self._session = ort.InferenceSession(str(self.model_path), sess_options=opts,
+                                                 providers=["CPUExecutionProvider"])
+        except Exception as exc:  # onnxruntime raises several private exception types
+            raise ValueError(f"ATR model file {self.model_path} is not a valid ONNX model: {exc}") from exc
+        meta = self._session.get_modelmeta().custom_metadata_map
+        if meta.get("auvsim_atr_format") != MODEL_FORMAT:
+            raise ValueError(
+                f"ATR model file {self.model_path}: metadata auvsim_atr_format is "
+                f"{meta.get('auvsim_atr_format')!r}, expected {MODEL_FORMAT!r}"
+            )
+        try:
+            self.class_names: tuple[str, ...] = tuple(json.loads(meta["class_names"]))
+            self.stride = int(meta["stride"])
+            self.fan_hw = (int(meta["fan_height_px"]), int(meta["fan_width_px"]))
+        except (KeyError, ValueError) as exc:
+            raise ValueError(f"ATR model file {self.model_path}: bad or missing metadata ({exc})") from exc
+        inputs = self._session.get_inputs()
+        if len(inputs) != 1 or inputs[0].name != INPUT_NAME or len(inputs[0].shape) != 4:
+            raise ValueError(f"ATR model file {self.model_path}: expected one input {INPUT_NAME!r} (1, 1, H, W)")
+        shape = inputs[0].shape
+        if not all(isinstance(v, int) for v in shape[1:]) or shape[1] != 1:
+            raise ValueError(f"ATR model file {self.model_path}: input must be (1, 1, H, W) with fixed H, W; got {shape}")
+        self.input_hw = (int(shape[2]), int(shape[3]))
+        out_names = tuple(o.name for o in self._session.get_outputs())
+        if set(OUTPUT_NAMES) - set(out_names):
+            raise ValueError(f"ATR model file {self.model_path}: outputs {out_names}, expected {OUTPUT_NAMES}")
+        self.score_threshold = float(score_threshold)
+        self.nms_iou = float(nms_iou)
+        self.max_detections = int(max_detections)
+        self._keep = None if classes is None else set(classes)
+
+    def preprocess(self, fan: NDArray[np.uint8]) -> NDArray[np.float32]:
+        """Fan image (H_fan, W_fan) uint8 -> model input (1, 1, H, W) float32."""
+        h, w = self.input_hw
+        small = cv2.resize(fan, (w, h), interpolation=cv2.INTER_AREA)
+        return (small.astype(np.float32) * np.float32(1.0 / 255.0))[None, None]
+
+    def raw_outputs(self, fan: NDArray[np.uint8]) -> dict[str, NDArray[np.float32]]:
+        """Model outputs for one fan image, by name, batch dimension removed."""
+        outs = self._session.run(list(OUTPUT_NAMES), {INPUT_NAME: self.preprocess(fan)})
+        return {k: v[0] for k, v in zip(OUTPUT_NAMES, outs)}
+
+    def detect_boxes(self, fan: NDArray[np.uint8], score_threshold: float | None = None
+                     ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
+        """Boxes in fan px (N, 4), scores (N,), class ids (N,) after NMS, by decreasing score."""
+        thr = self.score_threshold if score_threshold is None else float(score_threshold)
+        out = self.raw_outputs(fan)
+        boxes, scores, cls = decode_centernet(out["heatmap"], out["size"], out["offset"], self.stride,
+                                              thr, self.max_detections)
+        sx = fan.shape[1] / self.input_hw[1]
+        sy = fan.shape[0] / self.input_hw[0]
+        # Input px (pixel centres at integers) -> fan px.
+        boxes = boxes.copy()
+        boxes[:, [0, 2]] = (boxes[:, [0, 2]] + 0.5) * sx - 0.5
+        boxes[:, [1, 3]] = (boxes[:, [1, 3]] + 0.5) * sy - 0.5
+        keep = nms(boxes, scores, self.nms_iou, cls)
+        return boxes[keep], scores[keep], cls[keep]
+
+    def detect(self, frame: FlsFrame, score_threshold: float | None = None) -> list[Detection]:
+        check_frame(frame, self.fan_hw, source=f"CNN detector ({self.model_path})")
+        boxes, scores, cls = self.detect_boxes(frame.fan, score_threshold)
+        names = [self.class_names[i] for i in cls]
+        if self._keep is not None:
+            sel = [i for i, n in enumerate(names) if n in self._keep]
+            boxes, scores, names = boxes[sel], scores[sel], [names[i] for i in sel]
+        return to_detections(frame, boxes, scores, names)

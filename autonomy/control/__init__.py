@@ -1,0 +1,1 @@
+"""Control: PID autopilots producing a desired body wrench, and the thrust allocation."""

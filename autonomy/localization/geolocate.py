@@ -1,0 +1,142 @@
+"""Geolocalise ATR detections: (range, azimuth) -> NED position with a 3x3 covariance.
+
+Chain (paper 000 section IV): sonar frame by eq. 4 (planar) or eqs. 5-6 (flat seabed with
+the altitude), -> body with the sonar mount extrinsics, -> NED with the navigation estimate
+(never ground truth). The covariance is the first-order propagation of range, azimuth,
+box extent, altitude, attitude and mount-tilt noise (numerical Jacobian) plus the
+navigation position covariance.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from autonomy.frames import rot_from_euler
+from autonomy.localization.sonar_projection import (
+    flat_seabed_point_sonar,
+    planar_point_sonar,
+    sonar_to_body_rotation,
+)
+from autonomy.messages import Detection, NavEstimate
+from autonomy.sonar_geometry import FanGeometry
+from scenarios.config.world_model import LocalizationConfig
+
+FloatArray = NDArray[np.float64]
+
+# Perturbed inputs, in this order: range, azimuth, altitude, roll, pitch, yaw, mount tilt.
+_STEPS = np.array([1e-4, 1e-6, 1e-4, 1e-6, 1e-6, 1e-6, 1e-6])
+
+
+@dataclass(frozen=True, slots=True)
+class LocalizedDetection:
+    """A detection placed in NED, the PMHA measurement.
+
+    Attributes:
+        t_s: frame time, s.
+        pos_ned: (3,) position, m.
+        cov_ned: (3, 3) covariance, m^2.
+        class_score: ATR probability that it is a target, in [0, 1].
+        class_name: ATR class label.
+        method: "flat_seabed" or "planar" (planar also when no altitude was available).
+    """
+
+    t_s: float
+    pos_ned: FloatArray
+    cov_ned: FloatArray
+    class_score: float
+    class_name: str = "target"
+    method: str = "flat_seabed"
+
+
+def sonar_point_ned(
+    range_m: float,
+    azimuth_rad: float,
+    pos_ned: ArrayLike,
+    rpy_rad: ArrayLike,
+    mount_pos_body_m: ArrayLike,
+    mount_rpy_rad: ArrayLike,
+    *,
+    altitude_m: float | None,
+) -> FloatArray:
+    """NED point (3,) of a sonar return; ``altitude_m`` None -> eq. 4, else eqs. 5-6.
+
+    ``altitude_m`` is the body origin's height above the seabed (altimeter/DVL).
+    """
+    R_nb = rot_from_euler(*np.asarray(rpy_rad, dtype=float))
+    R_bs = sonar_to_body_rotation(mount_rpy_rad)
+    mount = np.asarray(mount_pos_body_m, dtype=float)
+    lever_ned = R_nb @ mount
+    if altitude_m is None:
+        p_s = planar_point_sonar(range_m, azimuth_rad)
+    else:
+        sonar_altitude_m = altitude_m - lever_ned[2]
+        p_s = flat_seabed_point_sonar(range_m, azimuth_rad, sonar_altitude_m, R_nb @ R_bs)
+    return np.asarray(pos_ned, dtype=float) + lever_ned + R_nb @ (R_bs @ p_s)
+
+
+def box_polar_extent(box_xyxy_px: ArrayLike, geometry: FanGeometry) -> tuple[float, float]:
+    """(range extent m, azimuth extent rad) spanned by a fan-image box's corners."""
+    x0, y0, x1, y1 = np.asarray(box_xyxy_px, dtype=float)
+    r, a = geometry.pixel_to_polar(np.array([x0, x1, x0, x1]), np.array([y0, y0, y1, y1]))
+    return float(np.ptp(r)), float(np.ptp(a))
+
+
+def localize(
+    detection: Detection,
+    nav: NavEstimate,
+    mount_pos_body_m: ArrayLike,
+    mount_rpy_rad: ArrayLike,
+    cfg: LocalizationConfig,
+    *,
+    geometry: FanGeometry | None = None,
+) -> LocalizedDetection:
+    """Geolocalise one detection with the navigation estimate ``nav``.
+
+    ``geometry`` (the frame's fan geometry) lets the box extent enter the covariance.
+    The flat-seabed method falls back to eq. 4 when ``nav.altitude_m`` is not finite.
+    """
+    range_m = float(detection.range_m) + cfg.range_offset_m
+    use_seabed = cfg.method == "flat_seabed" and np.isfinite(nav.altitude_m)
+    mount_rpy = np.asarray(mount_rpy_rad, dtype=float)
+    x0 = np.array(
+        [range_m, detection.azimuth_rad, nav.altitude_m if use_seabed else 0.0,
+         *np.asarray(nav.rpy_rad, dtype=float), mount_rpy[1]]
+    )
+
+    def point(x: FloatArray) -> FloatArray:
+        return sonar_point_ned(
+            x[0], x[1], np.zeros(3), x[3:6], mount_pos_body_m, (mount_rpy[0], x[6], mount_rpy[2]),
+            altitude_m=x[2] if use_seabed else None,
+        )
+
+    p_rel = point(x0)
+    J = np.empty((3, x0.size))
+    for k, h in enumerate(_STEPS):
+        dx = np.zeros_like(x0)
+        dx[k] = h
+        J[:, k] = (point(x0 + dx) - point(x0 - dx)) / (2.0 * h)
+
+    var_r = cfg.range_sigma_m**2
+    var_a = cfg.azimuth_sigma_rad**2
+    if geometry is not None and cfg.box_sigma_fraction > 0.0:
+        dr, da = box_polar_extent(detection.box_xyxy_px, geometry)
+        var_r += (cfg.box_sigma_fraction * dr) ** 2
+        var_a += (cfg.box_sigma_fraction * da) ** 2
+    var_att = cfg.attitude_sigma_rad**2
+    var_in = np.array(
+        [var_r, var_a, cfg.altitude_sigma_m**2 if use_seabed else 0.0, var_att, var_att,
+         max(float(nav.cov_yaw_rad2), 0.0), cfg.tilt_sigma_rad**2]
+    )
+    cov = (J * var_in) @ J.T + np.asarray(nav.cov_pos_ned, dtype=float)
+    cov = 0.5 * (cov + cov.T) + cfg.min_sigma_m**2 * np.eye(3)
+    return LocalizedDetection(
+        t_s=float(detection.t_s),
+        pos_ned=np.asarray(nav.pos_ned, dtype=float) + p_rel,
+        cov_ned=cov,
+        class_score=float(detection.score),
+        class_name=detection.class_name,
+        method="flat_seabed" if use_seabed else "planar",
+    )

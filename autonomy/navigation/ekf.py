@@ -1,0 +1,312 @@
+"""AHRS + DVL dead reckoning with an error-state-consistent EKF (depth, GPS, USBL updates).
+
+State ``x`` (10,):
+    [0:3]  body-origin position, NED (m)
+    [3:6]  AHRS attitude bias b (rad): true rpy = measured rpy - b (heading bias: FOG drift)
+    [6]    DVL scale-factor error s: v_dvl = (1 + s) v_true + n
+    [7:10] error n of the DVL velocity currently held (FRD, m/s)
+
+Propagation is dead reckoning: the last DVL velocity (lever arm removed) is held in the body
+frame and rotated into NED with the AHRS attitude, ``p_dot = R(rpy_m - b) ((v_m - n)/(1+s) -
+omega x r_dvl)``. Each valid DVL ping resets ``n`` to a fresh, independent error with the
+beam-geometry covariance, so the held error integrates into position exactly as it does in
+the sensor. Depth, GPS (at the surface) and USBL fixes are EKF updates (Joseph form).
+In ``dead_reckoning`` mode GPS and USBL are ignored.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from autonomy.frames import euler_rate_matrix, rot_from_euler, rot_x, rot_y, rot_z, wrap_angle
+from autonomy.messages import AltimeterMsg, DepthMsg, DvlMsg, GpsMsg, ImuMsg, NavEstimate, UsblMsg
+from autonomy.navigation.noise_model import NavNoiseModel
+from scenarios.config.navigation import NavigationConfig
+
+FloatArray = NDArray[np.float64]
+
+N_STATES = 10
+POS, ATT, SCALE, DVEL = slice(0, 3), slice(3, 6), 6, slice(7, 10)
+_E = np.eye(3)
+
+
+def _cross(a, b):
+    """3-vector cross product (np.cross is slow for single vectors)."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
+def rotated_vector_jacobian(rpy_rad: FloatArray, v: FloatArray) -> FloatArray:
+    """d(R(rpy) v)/d(roll, pitch, yaw) for ZYX Euler angles, shape (3, 3)."""
+    roll, pitch, yaw = rpy_rad
+    Rx, Ry, Rz = rot_x(roll), rot_y(pitch), rot_z(yaw)
+    R = Rz @ Ry @ Rx
+    return np.column_stack(
+        [R @ _cross(_E[0], v), Rz @ Ry @ _cross(_E[1], Rx @ v), _cross(_E[2], R @ v)]
+    )
+
+
+def usbl_observation(rel_body_m: FloatArray) -> FloatArray:
+    """[range, bearing, elevation] of an FRD vector (bearing starboard +, elevation down +)."""
+    x, y, z = rel_body_m
+    return np.array([np.linalg.norm(rel_body_m), np.arctan2(y, x), np.arctan2(z, np.hypot(x, y))])
+
+
+def usbl_observation_jacobian(rel_body_m: FloatArray) -> FloatArray:
+    """d[range, bearing, elevation]/d(rel_body_m), shape (3, 3)."""
+    x, y, z = rel_body_m
+    rho2 = x * x + y * y
+    rho = np.sqrt(rho2)
+    r2 = rho2 + z * z
+    r = np.sqrt(r2)
+    return np.array(
+        [
+            [x / r, y / r, z / r],
+            [-y / rho2, x / rho2, 0.0],
+            [-x * z / (rho * r2), -y * z / (rho * r2), rho / r2],
+        ]
+    )
+
+
+class NavigationFilter:
+    """Navigation EKF (or dead reckoning) fed with sensor messages.
+
+    Args:
+        cfg: filter settings.
+        initial_pos_ned: (3,) prior position of the body origin, NED (m).
+        initial_yaw_rad: heading used until the first AHRS message.
+        noise: sensor noise model; by default the one matching default sensor configs.
+        mounts: FRD sensor offsets (3,) from the body origin, m, keyed ``dvl``, ``depth``,
+            ``gps``, ``usbl`` (missing keys: at the origin; other keys ignored).
+        usbl_beacon_pos_ned: (3,) known transponder position for :meth:`on_usbl`.
+        t0_s: mission time of the prior.
+
+    Messages must be fed in time order; one stamped earlier than the filter time (latency)
+    is applied at the filter time.
+    """
+
+    def __init__(
+        self,
+        cfg: NavigationConfig,
+        initial_pos_ned: ArrayLike,
+        initial_yaw_rad: float,
+        noise: NavNoiseModel | None = None,
+        *,
+        mounts: Mapping[str, ArrayLike] | None = None,
+        usbl_beacon_pos_ned: ArrayLike | None = None,
+        t0_s: float = 0.0,
+    ):
+        self.cfg = cfg
+        self.noise = noise if noise is not None else NavNoiseModel.from_sensor_configs()
+        mounts = mounts or {}
+        self._r_dvl, self._r_depth, self._r_gps, self._r_usbl = (
+            np.asarray(mounts.get(k, np.zeros(3)), dtype=float).reshape(3) for k in ("dvl", "depth", "gps", "usbl")
+        )
+        self._beacon_ned = None if usbl_beacon_pos_ned is None else np.asarray(usbl_beacon_pos_ned, float).reshape(3)
+        self._t_s = float(t0_s)
+        self._x = np.zeros(N_STATES)
+        self._x[POS] = np.asarray(initial_pos_ned, dtype=float).reshape(3)
+        p0 = np.zeros(N_STATES)
+        p0[POS] = [cfg.initial_pos_sigma_m**2] * 2 + [cfg.initial_depth_sigma_m**2]
+        p0[ATT] = self.noise.attitude_bias_sigma_rad**2
+        p0[SCALE] = self.noise.dvl_scale_sigma**2
+        p0[DVEL] = cfg.initial_vel_sigma_mps**2
+        self._P = np.diag(p0)
+        self._rpy_meas = np.array([0.0, 0.0, float(initial_yaw_rad)])
+        self._t_imu_s = float(t0_s)
+        self._rate_meas = np.zeros(3)
+        self._vel_dvl_meas = np.zeros(3)
+        self._omega_at_dvl = np.zeros(3)
+        self._t_dvl_valid_s = -np.inf
+        self._altitude_m = float("nan")
+
+    # ------------------------------------------------------------------ state access
+    @property
+    def t_s(self) -> float:
+        return self._t_s
+
+    @property
+    def state(self) -> FloatArray:
+        """Copy of the state vector (10,); layout in the module docstring."""
+        return self._x.copy()
+
+    @property
+    def covariance(self) -> FloatArray:
+        """Copy of the state covariance (10, 10)."""
+        return self._P.copy()
+
+    def _attitude(self, t_s: float | None = None) -> FloatArray:
+        """Bias-corrected AHRS attitude, extrapolated with the measured body rates to ``t_s``
+        (default: the filter time)."""
+        tau = (self._t_s if t_s is None else t_s) - self._t_imu_s
+        rpy = self._rpy_meas
+        if tau > 0.0:
+            rpy = rpy + euler_rate_matrix(rpy[0], rpy[1]) @ self._rate_meas * tau
+        return rpy - self._x[ATT]
+
+    def _vel_body(self) -> FloatArray:
+        v_m = self._vel_dvl_meas - self._x[DVEL]
+        return v_m / (1.0 + self._x[SCALE]) - _cross(self._omega_at_dvl, self._r_dvl)
+
+    # ------------------------------------------------------------------ propagation
+    def predict(self, t_s: float) -> None:
+        """Dead-reckon the state and covariance forward to ``t_s`` (no-op if not later)."""
+        dt = float(t_s) - self._t_s
+        if dt <= 0.0:
+            return
+        x, noise = self._x, self.noise
+        att = self._attitude(self._t_s + 0.5 * dt)  # midpoint attitude of the step
+        R = rot_from_euler(*att)
+        one_s = 1.0 + x[SCALE]
+        v_m = self._vel_dvl_meas - x[DVEL]
+        v_body = v_m / one_s - _cross(self._omega_at_dvl, self._r_dvl)
+        J_att = rotated_vector_jacobian(att, v_body)
+
+        F = np.eye(N_STATES)
+        F[POS, ATT] = -J_att * dt
+        F[POS, SCALE] = -(R @ v_m) / one_s**2 * dt
+        F[POS, DVEL] = -R / one_s * dt
+        Q = np.zeros((N_STATES, N_STATES))
+        Q[POS, POS] = J_att @ np.diag(noise.attitude_noise_rad**2) @ J_att.T * dt**2
+        Q[5, 5] = noise.heading_rw_rad_per_sqrt_s**2 * dt
+        # the held velocity goes stale: an unknown acceleration a ~ N(0, sigma_a^2) over the
+        # age tau of the ping gives var(a tau) = sigma_a^2 tau^2; after lock loss, a random walk
+        age = min(self._t_s - self._t_dvl_valid_s, self.cfg.dvl_timeout_s)
+        q_vel = self.cfg.hold_accel_sigma_mps2**2 * (2.0 * age * dt + dt * dt)
+        if self._t_s - self._t_dvl_valid_s > self.cfg.dvl_timeout_s:
+            q_vel += self.cfg.dvl_lost_noise_mps_per_sqrt_s**2 * dt
+        Q[DVEL, DVEL] = q_vel * _E
+
+        x[POS] += R @ v_body * dt
+        self._P = F @ self._P @ F.T + Q
+        self._t_s = float(t_s)
+
+    # ------------------------------------------------------------------ measurements
+    def _update(self, residual: FloatArray, H: FloatArray, R_meas: FloatArray, gate_chi2: float | None) -> bool:
+        P = self._P
+        S = H @ P @ H.T + R_meas
+        S_inv = np.linalg.inv(S)
+        if gate_chi2 is not None and float(residual @ S_inv @ residual) > gate_chi2:
+            return False
+        K = P @ H.T @ S_inv
+        self._x += K @ residual
+        I_KH = np.eye(N_STATES) - K @ H
+        self._P = I_KH @ P @ I_KH.T + K @ R_meas @ K.T
+        self._P = 0.5 * (self._P + self._P.T)
+        return True
+
+    def on_imu(self, msg: ImuMsg) -> None:
+        """AHRS attitude and rates: held until the next IMU message."""
+        self.predict(msg.t_s)
+        self._rpy_meas = np.asarray(msg.rpy_rad, dtype=float).copy()
+        self._t_imu_s = max(self._t_s, float(msg.t_s))
+        self._rate_meas = np.asarray(msg.rate_body_radps, dtype=float).copy()
+
+    def on_dvl(self, msg: DvlMsg) -> None:
+        """Valid bottom-track velocity replaces the held velocity and its error state."""
+        self.predict(msg.t_s)
+        if not msg.valid:
+            return
+        vel = np.asarray(msg.vel_body_mps, dtype=float)
+        ranges = np.asarray(msg.beam_ranges_m, dtype=float)
+        used = np.isfinite(ranges) if ranges.shape == (len(self.noise.dvl_beam_dirs_body),) else None
+        if used is not None and used.sum() < 3:
+            used = None
+        self._vel_dvl_meas = vel.copy()
+        self._omega_at_dvl = self._rate_meas.copy()
+        self._x[DVEL] = 0.0
+        self._P[DVEL, :] = 0.0
+        self._P[:, DVEL] = 0.0
+        self._P[DVEL, DVEL] = self.noise.dvl_velocity_cov(vel, used)
+        self._t_dvl_valid_s = max(self._t_s, float(msg.t_s))
+        if np.isfinite(msg.altitude_m):
+            self._altitude_m = float(msg.altitude_m)
+
+    def on_depth(self, msg: DepthMsg) -> None:
+        """Pressure depth of the depth sensor."""
+        self.predict(msg.t_s)
+        att = self._attitude()
+        predicted = self._x[2] + (rot_from_euler(*att) @ self._r_depth)[2]
+        H = np.zeros((1, N_STATES))
+        H[0, 2] = 1.0
+        H[0, ATT] = -rotated_vector_jacobian(att, self._r_depth)[2]
+        self._update(np.array([msg.depth_m - predicted]), H, np.array([[self.noise.depth_noise_m**2]]), None)
+
+    def on_altimeter(self, msg: AltimeterMsg) -> None:
+        """Altimeter slant range, levelled with the AHRS attitude, becomes the altitude output."""
+        if msg.valid and np.isfinite(msg.altitude_m):
+            roll, pitch, _ = self._attitude()
+            self._altitude_m = float(msg.altitude_m * np.cos(roll) * np.cos(pitch))
+
+    def on_gps(self, msg: GpsMsg) -> bool:
+        """GPS north/east fix of the antenna. Returns whether it was applied (valid, EKF mode,
+        inside the innovation gate)."""
+        if not msg.valid or self.cfg.mode != "ekf":
+            return False
+        self.predict(msg.t_s)
+        att = self._attitude()
+        predicted = self._x[0:2] + (rot_from_euler(*att) @ self._r_gps)[:2]
+        H = np.zeros((2, N_STATES))
+        H[:, 0:2] = np.eye(2)
+        H[:, ATT] = -rotated_vector_jacobian(att, self._r_gps)[:2]
+        R_meas = self.noise.gps_noise_m**2 * np.eye(2)
+        return self._update(np.asarray(msg.pos_ne_m, float) - predicted, H, R_meas, self.cfg.gps_gate_chi2)
+
+    def on_usbl(self, msg: UsblMsg) -> bool:
+        """Range/bearing/elevation of the known beacon seen from the vehicle's USBL head.
+        Returns whether it was applied (EKF mode, inside the innovation gate)."""
+        if self._beacon_ned is None:
+            raise ValueError("NavigationFilter.on_usbl needs usbl_beacon_pos_ned at construction")
+        if self.cfg.mode != "ekf":
+            return False
+        self.predict(msg.t_s)
+        att = self._attitude()
+        R = rot_from_euler(*att)
+        rel_body = R.T @ (self._beacon_ned - self._x[POS]) - self._r_usbl
+        predicted = usbl_observation(rel_body)
+        J_obs = usbl_observation_jacobian(rel_body)
+        # d(rel_body)/d(att): R^T w = R(att)^T w; use d(R^T w)_i/d(att) = (dR/d att)^T w
+        w = self._beacon_ned - self._x[POS]
+        J_rel_att = np.empty((3, 3))
+        for k in range(3):
+            J_rel_att[:, k] = _rotation_derivative(att, k).T @ w
+        H = np.zeros((3, N_STATES))
+        H[:, POS] = J_obs @ (-R.T)
+        H[:, ATT] = -(J_obs @ J_rel_att)  # state holds the bias: att = rpy_m - b
+        z = np.array([msg.range_m, msg.bearing_rad, msg.elevation_rad])
+        residual = z - predicted
+        residual[1:] = wrap_angle(residual[1:])
+        sig_r = self.cfg.usbl_range_noise_m + self.cfg.usbl_range_noise_frac * msg.range_m
+        sig_a = np.radians(self.cfg.usbl_angle_noise_deg)
+        return self._update(residual, H, np.diag([sig_r**2, sig_a**2, sig_a**2]), self.cfg.usbl_gate_chi2)
+
+    # ------------------------------------------------------------------ output
+    def estimate(self) -> NavEstimate:
+        """Current estimate at the filter time."""
+        att = self._attitude()
+        att[2] = float(wrap_angle(att[2]))
+        return NavEstimate(
+            t_s=self._t_s,
+            pos_ned=self._x[POS].copy(),
+            rpy_rad=att,
+            vel_body_mps=self._vel_body(),
+            rate_body_radps=self._rate_meas.copy(),
+            cov_pos_ned=self._P[POS, POS].copy(),
+            cov_yaw_rad2=float(self._P[5, 5]),
+            altitude_m=self._altitude_m,
+        )
+
+
+def _rotation_derivative(rpy_rad: FloatArray, axis: int) -> FloatArray:
+    """dR/d(angle ``axis``) of ``R = Rz Ry Rx`` (axis 0 roll, 1 pitch, 2 yaw), (3, 3)."""
+    roll, pitch, yaw = rpy_rad
+    Rx, Ry, Rz = rot_x(roll), rot_y(pitch), rot_z(yaw)
+    S = [np.array([[0, 0, 0], [0, 0, -1], [0, 1, 0]]), np.array([[0, 0, 1], [0, 0, 0], [-1, 0, 0]]),
+         np.array([[0, -1, 0], [1, 0, 0], [0, 0, 0]])][axis]
+    if axis == 0:
+        return Rz @ Ry @ Rx @ S
+    if axis == 1:
+        return Rz @ Ry @ S @ Rx
+    return Rz @ S @ Ry @ Rx

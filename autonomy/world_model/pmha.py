@@ -1,0 +1,346 @@
+"""Probabilistic multiple hypothesis anchoring (PMHA) world model (paper 000 section V).
+
+Every hypothesis is one admissible world: a set of anchors. Each scan, every measurement
+is a new object, an existing anchor of the parent hypothesis, or clutter, at most one
+measurement per anchor. The child probability (eqs. 10-16, Reid's MHT with Poisson new and
+clutter counts) is, up to a per-scan constant,
+
+    p(parent) * prod_{j -> new} p_new u_new c0 * prod_{j -> clutter} p_clutter u_clutter c0
+              * prod_{j -> a} p_existing P_D(a) N(z_j; x_a, P_a + R_j) c(a, j)
+              * prod_{a not detected} (1 - P_D(a)),
+
+with u the uniform densities over the surveyed volume, P_D(a) = p_detect * max(p(visible | x_a), visibility_floor),
+c(a, j) = class_pmf(a) . q(z_j) the class likelihood and c0 = 1/2 its value under the
+uniform class prior. The product factorises over (measurement, origin) pairs, so the
+children of a parent in decreasing probability are the ranked assignments of a cost
+matrix: rows are split into groups linked by a shared gated anchor, multi-row groups are
+ranked with Murty's algorithm (``linear_sum_assignment`` inside) and the groups' lists are
+combined best-first (:func:`autonomy.world_model.murty.ranked_associations`, exact).
+Children of all parents are drawn best-first from one heap until ``max_hypotheses``
+distinct worlds are found or the next one falls below ``prune_ratio`` times the best;
+children with identical anchor sets are merged (probabilities added), which also happens
+when unconfirmed anchors age out (``drop_tentative_after_s``). The most probable
+hypothesis is the world model.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from autonomy.localization.geolocate import LocalizedDetection
+from autonomy.world_model.anchor import (
+    CLASS_NAMES,
+    Anchor,
+    class_likelihood,
+    measurement_cov,
+    new_anchor,
+    update_anchor,
+)
+from autonomy.world_model.murty import LazyRanked, ranked_associations
+from scenarios.config.world_model import WorldModelConfig
+
+FloatArray = NDArray[np.float64]
+Visibility = Callable[[FloatArray], ArrayLike]
+_LOG_2PI = math.log(2.0 * math.pi)
+_PD_MAX = 1.0 - 1e-12
+_EYE3 = np.eye(3)
+_NEW, _CLUTTER = -1, -2  # private origin labels of a measurement
+
+
+@dataclass(frozen=True, slots=True)
+class Hypothesis:
+    """One world: its posterior probability and its anchors."""
+
+    probability: float
+    anchors: tuple[Anchor, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class WorldObject:
+    """An object of the world model (paper 000 Table VI)."""
+
+    id: int
+    class_pmf: FloatArray  # (2,) over CLASS_NAMES
+    pos_ned: FloatArray  # (3,)
+    cov_ned: FloatArray  # (3, 3)
+    n_detections: int
+    existence_probability: float  # total probability of the hypotheses holding this symbol
+
+    @property
+    def class_name(self) -> str:
+        return CLASS_NAMES[int(np.argmax(self.class_pmf))]
+
+    def to_dict(self) -> dict:
+        return {
+            "id": self.id,
+            "class_name": self.class_name,
+            "class_pmf": dict(zip(CLASS_NAMES, map(float, self.class_pmf))),
+            "pos_ned": [float(v) for v in self.pos_ned],
+            "cov_ned": [[float(v) for v in row] for row in self.cov_ned],
+            "n_detections": self.n_detections,
+            "existence_probability": self.existence_probability,
+        }
+
+
+class PMHA:
+    """PMHA world model.
+
+    Args:
+        cfg: world-model config.
+        region_ned: optional ((3,) min, (3,) max) corners of the surveyed volume; when given,
+            the new and clutter densities are 1 / its volume, else the configured densities.
+    """
+
+    def __init__(
+        self, cfg: WorldModelConfig, region_ned: tuple[ArrayLike, ArrayLike] | None = None
+    ) -> None:
+        self.cfg = cfg
+        if region_ned is None:
+            log_u_new = math.log(cfg.new_density_per_m3)
+            log_u_clutter = math.log(cfg.clutter_density_per_m3)
+        else:
+            lo, hi = (np.asarray(v, dtype=float).reshape(3) for v in region_ned)
+            volume = float(np.prod(hi - lo))
+            if not volume > 0.0:
+                raise ValueError(f"PMHA region_ned must have positive volume, got {lo} .. {hi}")
+            log_u_new = log_u_clutter = -math.log(volume)
+        log_c0 = math.log(0.5) if cfg.use_class_likelihood else 0.0
+        self._log_new = math.log(cfg.p_new) + log_u_new + log_c0
+        self._log_clutter = math.log(cfg.p_clutter) + log_u_clutter + log_c0
+        self._log_existing = math.log(cfg.p_existing)
+        self._log_w = np.zeros(1)
+        self._hyps: list[frozenset[int]] = [frozenset()]  # anchor versions of each world
+        self._anchors: dict[int, Anchor] = {}  # version -> anchor, for all live versions
+        self._next_uid = 0
+        self._next_version = 0
+        self.t_s = float("-inf")
+        self.n_scans = 0
+
+    # ------------------------------------------------------------------ update
+    def update(
+        self,
+        t_s: float,
+        measurements: Sequence[LocalizedDetection],
+        visible: Visibility | None = None,
+    ) -> None:
+        """Process one scan taken at ``t_s``.
+
+        ``visible(points_ned (N, 3)) -> (N,)`` gives, for anchor positions, whether (bool) or
+        how likely (float in [0, 1]) they lay inside the sonar field of view at ``t_s``
+        (e.g. :func:`autonomy.localization.fls_visibility`); None means every anchor was.
+        """
+        cfg = self.cfg
+        t_s = float(t_s)
+        if t_s < self.t_s:
+            raise ValueError(f"PMHA.update: time went backwards ({t_s} < {self.t_s})")
+        m = len(measurements)
+        uids = list(range(self._next_uid, self._next_uid + m))
+        self._next_uid += m
+
+        versions = sorted(frozenset().union(*self._hyps))
+        anchors = [self._anchors[v] for v in versions]
+        n_u = len(anchors)
+
+        # Per unique anchor: detection probability and miss factor.
+        if n_u:
+            X = np.stack([a.pos_ned for a in anchors])
+            vis = np.ones(n_u) if visible is None else np.asarray(visible(X), dtype=float)
+            if vis.shape != (n_u,):
+                raise ValueError(f"visible() must return shape ({n_u},), got {vis.shape}")
+            p_d = np.clip(cfg.p_detect * np.maximum(vis, cfg.visibility_floor), 0.0, _PD_MAX)
+            log_miss = np.log1p(-p_d)
+        else:
+            X = np.zeros((0, 3))
+            p_d = log_miss = np.zeros(0)
+        log_miss_of = dict(zip(versions, log_miss.tolist()))
+        anchor_of = dict(zip(versions, anchors))
+
+        # Gated associations per measurement: (anchor version, cost = -log weight rel. miss).
+        if m and n_u:
+            assoc = self._association_logw(anchors, X, p_d, log_miss, measurements, t_s)
+            gated = [
+                [(versions[u], -float(assoc[u, j])) for u in np.flatnonzero(np.isfinite(assoc[:, j]))]
+                for j in range(m)
+            ]
+        else:
+            gated = [[] for _ in range(m)]
+        private = [(_NEW, -self._log_new), (_CLUTTER, -self._log_clutter)]
+        any_gated = any(gated)
+
+        # Tentative anchors that age out in this scan (merged into the "clutter" worlds).
+        stale: frozenset[int] = frozenset()
+        if cfg.drop_tentative_after_s is not None:
+            stale = frozenset(
+                a.version for a in anchors
+                if a.n_detections < cfg.min_detections
+                and t_s - a.t_last_s > cfg.drop_tentative_after_s
+            )
+
+        # Parents offering the same options share one ranked list of associations.
+        streams: dict[tuple, LazyRanked] = {}
+        row_cache: dict = {}
+        heap: list[tuple[float, int, int]] = []
+        parent_stream: list[LazyRanked] = []
+        parent_base: list[float] = []
+        for h, hyp in enumerate(self._hyps):
+            base = float(self._log_w[h]) + sum(map(log_miss_of.__getitem__, hyp))
+            if any_gated:
+                present = tuple(tuple(o[0] for o in g if o[0] in hyp) for g in gated)
+            else:
+                present = ()
+            stream = streams.get(present)
+            if stream is None:
+                if present:
+                    opts = [[o for o in g if o[0] in hyp] + private for g in gated]
+                else:
+                    opts = [private] * m
+                stream = streams[present] = LazyRanked(ranked_associations(opts, row_cache))
+            parent_stream.append(stream)
+            parent_base.append(base)
+            first = stream.get(0)
+            if first is not None:
+                heapq.heappush(heap, (first[0] - base, h, 0))
+
+        update_cache: dict[tuple[int, int], Anchor] = {}
+        birth_cache: dict[int, Anchor] = {}
+        children: dict[frozenset[int], int] = {}
+        child_logw: list[float] = []
+        log_floor = -np.inf
+        while heap and len(children) < cfg.max_hypotheses:
+            neg, h, rank = heapq.heappop(heap)
+            labels = parent_stream[h].get(rank)[1]
+            logw = -neg
+            if not children:
+                log_floor = logw + math.log(cfg.prune_ratio)
+            elif logw < log_floor:
+                break
+            removed: list[int] = []
+            added: list[int] = []
+            for j, lab in enumerate(labels):
+                if lab >= 0:
+                    key = (lab, j)
+                    a = update_cache.get(key)
+                    if a is None:
+                        a = update_cache[key] = update_anchor(
+                            anchor_of[lab], measurements[j], uids[j], t_s, self._version(), cfg
+                        )
+                    removed.append(lab)
+                    added.append(a.version)
+                elif lab == _NEW:
+                    a = birth_cache.get(j)
+                    if a is None:
+                        a = birth_cache[j] = new_anchor(measurements[j], uids[j], self._version(), cfg)
+                    added.append(a.version)
+            child = self._hyps[h]
+            if removed or stale:
+                child = child.difference(removed, stale)
+            if added:
+                child = child.union(added)
+            i = children.get(child)
+            if i is None:
+                children[child] = len(child_logw)
+                child_logw.append(logw)
+            else:
+                child_logw[i] = float(np.logaddexp(child_logw[i], logw))
+            nxt = parent_stream[h].get(rank + 1)
+            if nxt is not None:
+                heapq.heappush(heap, (nxt[0] - parent_base[h], h, rank + 1))
+
+        child_hyps = list(children)
+        lw = np.asarray(child_logw)
+        lw -= lw.max()
+        lw -= math.log(np.exp(lw).sum())
+        order = np.argsort(-lw, kind="stable")
+        self._hyps = [child_hyps[i] for i in order]
+        self._log_w = lw[order]
+        live = frozenset().union(*self._hyps)
+        for a in (*anchors, *update_cache.values(), *birth_cache.values()):
+            if a.version in live:
+                self._anchors[a.version] = a
+        self._anchors = {v: self._anchors[v] for v in live}
+        self.t_s = t_s
+        self.n_scans += 1
+
+    def _association_logw(
+        self,
+        anchors: list[Anchor],
+        X: FloatArray,
+        p_d: FloatArray,
+        log_miss: FloatArray,
+        measurements: Sequence[LocalizedDetection],
+        t_s: float,
+    ) -> FloatArray:
+        cfg = self.cfg
+        Z = np.stack([np.asarray(z.pos_ned, dtype=float) for z in measurements])
+        R = np.stack([measurement_cov(z, cfg) for z in measurements])
+        dt = np.maximum(t_s - np.array([a.t_last_s for a in anchors]), 0.0)
+        P = np.stack([a.cov_ned for a in anchors]) + (cfg.process_noise_m2_per_s * dt)[:, None, None] * _EYE3
+        P[dt > cfg.kf_timeout_s] = cfg.fallback_cov_m2 * _EYE3  # as anchor.predicted_cov
+        S = P[:, None] + R[None]  # (n_u, m, 3, 3)
+        d = Z[None] - X[:, None]  # (n_u, m, 3)
+        L = np.linalg.cholesky(S)
+        w = np.linalg.solve(L, d[..., None])[..., 0]
+        maha2 = np.einsum("umk,umk->um", w, w)
+        logdet = 2.0 * np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(-1)
+        loglik = -0.5 * (maha2 + logdet + 3.0 * _LOG_2PI)
+        with np.errstate(divide="ignore"):
+            logw = self._log_existing + np.log(p_d)[:, None] + loglik - log_miss[:, None]
+        if cfg.use_class_likelihood:
+            Q = np.stack([class_likelihood(z.class_score, cfg) for z in measurements])  # (m, 2)
+            pmf = np.stack([a.class_pmf for a in anchors])  # (n_u, 2)
+            logw = logw + np.log(pmf @ Q.T)
+        logw[maha2 > cfg.gate_mahalanobis2] = -np.inf
+        return logw
+
+    def _version(self) -> int:
+        self._next_version += 1
+        return self._next_version
+
+    # ------------------------------------------------------------------ outputs
+    @property
+    def hypotheses(self) -> list[Hypothesis]:
+        """All hypotheses, most probable first."""
+        p = np.exp(self._log_w)
+        return [Hypothesis(float(pi), self._world(hyp)) for pi, hyp in zip(p, self._hyps)]
+
+    def _world(self, hyp: frozenset[int]) -> tuple[Anchor, ...]:
+        return tuple(sorted((self._anchors[v] for v in hyp), key=lambda a: a.id))
+
+    def world_model(self, min_detections: int | None = None) -> list[WorldObject]:
+        """Objects of the most probable hypothesis with enough supporting detections."""
+        n_min = self.cfg.min_detections if min_detections is None else min_detections
+        exist: dict[int, float] = {}
+        for lw, hyp in zip(self._log_w, self._hyps):
+            p = math.exp(float(lw))
+            for v in hyp:
+                i = self._anchors[v].id
+                exist[i] = exist.get(i, 0.0) + p
+        return [
+            WorldObject(
+                id=a.id,
+                class_pmf=a.class_pmf.copy(),
+                pos_ned=a.pos_ned.copy(),
+                cov_ned=a.cov_ned.copy(),
+                n_detections=a.n_detections,
+                existence_probability=exist[a.id],
+            )
+            for a in self._world(self._hyps[0])
+            if a.n_detections >= n_min
+        ]
+
+    def to_json(self) -> dict:
+        """JSON-ready world model (write with ``json.dump``)."""
+        return {
+            "t_s": self.t_s if np.isfinite(self.t_s) else None,
+            "n_scans": self.n_scans,
+            "n_hypotheses": len(self._hyps),
+            "best_hypothesis_probability": float(np.exp(self._log_w[0])),
+            "class_names": list(CLASS_NAMES),
+            "objects": [o.to_dict() for o in self.world_model()],
+        }

@@ -1,0 +1,242 @@
+"""``auvsim eval-atr``: detector evaluation on a labelled FLS dataset.
+
+Figures, for the target classes (``opi`` by default):
+- precision, recall, false alarms per frame at the operating threshold (greedy matching by
+  score at IoU >= 0.5; detections on ``iscrowd`` (barely visible) objects are ignored);
+- AP50 and AP50:95 from ``pycocotools`` COCOeval (the COCO reference implementation);
+- the same precision/recall split by range band (ground truth by its true range,
+  detections by their reference-point range);
+- ``frames_per_s``: detector wall time per frame on one core (onnxruntime intra-op threads 1).
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import io
+import json
+import math
+import time
+from pathlib import Path
+from typing import Sequence
+
+import cv2
+import numpy as np
+
+from autonomy.atr.nms import box_iou
+from autonomy.messages import FlsFrame
+from autonomy.sonar_geometry import FanGeometry
+from sim.dataset.coco_io import ANNOTATIONS_FILE, coco_bbox_to_xyxy, xyxy_to_coco_bbox
+
+DEFAULT_RANGE_BANDS_M = (0.0, 10.0, 20.0, 30.0, math.inf)
+MATCH_IOU = 0.5
+
+
+def frame_from_record(image_rec: dict, fan: np.ndarray) -> FlsFrame:
+    """Rebuild the :class:`FlsFrame` of a dataset image (geometry stored in its record)."""
+    g = image_rec["fan_geometry"]
+    geom = FanGeometry(int(g["width_px"]), int(g["height_px"]), float(g["range_min_m"]), float(g["range_max_m"]),
+                       float(g["fov_rad"]), float(g["m_per_px"]), float(g["apex_x_px"]), float(g["apex_y_px"]))
+    return FlsFrame(t_s=float(image_rec.get("t_s", 0.0)), polar=np.zeros((0, 0), np.uint8), fan=fan, geometry=geom,
+                    mount_pos_body_m=np.zeros(3), mount_rpy_rad=np.zeros(3))
+
+
+def match_frame(det_boxes: np.ndarray, det_scores: np.ndarray, gt_boxes: np.ndarray, gt_crowd: np.ndarray,
+                iou_threshold: float = MATCH_IOU) -> tuple[np.ndarray, np.ndarray]:
+    """Greedy matching by decreasing score.
+
+    Returns (det_state (N,) with 1 true, 0 false, -1 ignored; gt_matched (M,) bool).
+    """
+    n, m = det_boxes.shape[0], gt_boxes.shape[0]
+    state = np.zeros(n, dtype=np.int64)
+    matched = np.zeros(m, dtype=bool)
+    if n == 0:
+        return state, matched
+    iou = box_iou(det_boxes, gt_boxes) if m else np.zeros((n, 0))
+    for i in np.argsort(-det_scores, kind="stable"):
+        cand = np.where(~matched & ~gt_crowd & (iou[i] >= iou_threshold), iou[i], -1.0)
+        if m and cand.max() >= iou_threshold:
+            j = int(np.argmax(cand))
+            matched[j] = True
+            state[i] = 1
+        elif m and np.any(gt_crowd & (iou[i] >= iou_threshold)):
+            state[i] = -1
+    return state, matched
+
+
+def _pr(tp: int, fp: int, n_gt: int) -> tuple[float, float]:
+    precision = tp / (tp + fp) if tp + fp else 1.0
+    recall = tp / n_gt if n_gt else 1.0
+    return precision, recall
+
+
+def evaluate_detector(detector, data_dir: str | Path, score_threshold: float,
+                      target_classes: Sequence[str] = ("opi",), min_score: float = 0.05,
+                      range_bands_m: Sequence[float] = DEFAULT_RANGE_BANDS_M,
+                      max_images: int | None = None) -> dict:
+    """Evaluate ``detector`` (``.detect(frame, score_threshold=...)``) on ``data_dir``.
+
+    Detections down to ``min_score`` feed COCOeval; the operating point uses
+    ``score_threshold``. Returns a JSON-serialisable dict.
+    """
+    from pycocotools.coco import COCO
+    from pycocotools.cocoeval import COCOeval
+
+    data_dir = Path(data_dir)
+    ann_path = data_dir / ANNOTATIONS_FILE
+    if not ann_path.is_file():
+        raise FileNotFoundError(f"eval-atr: no {ANNOTATIONS_FILE} in {data_dir} (make one with `auvsim dataset`)")
+    with contextlib.redirect_stdout(io.StringIO()):
+        coco_gt = COCO(str(ann_path))
+    name_to_cat = {c["name"]: c["id"] for c in coco_gt.loadCats(coco_gt.getCatIds())}
+    missing = [c for c in target_classes if c not in name_to_cat]
+    if missing:
+        raise ValueError(f"eval-atr: classes {missing} not in {ann_path} (has {sorted(name_to_cat)})")
+    target_cats = [name_to_cat[c] for c in target_classes]
+    img_ids = sorted(coco_gt.getImgIds())[:max_images]
+    bands = list(range_bands_m)
+    n_bands = len(bands) - 1
+    tp = fp = n_gt = 0
+    band_tp_gt = np.zeros(n_bands, int)
+    band_gt = np.zeros(n_bands, int)
+    band_tp_det = np.zeros(n_bands, int)
+    band_fp = np.zeros(n_bands, int)
+    coco_dets = []
+    infer_s = 0.0
+    for img_id in img_ids:
+        rec = coco_gt.loadImgs(img_id)[0]
+        fan = cv2.imread(str(data_dir / rec["file_name"]), cv2.IMREAD_GRAYSCALE)
+        if fan is None:
+            raise FileNotFoundError(f"eval-atr: cannot read {data_dir / rec['file_name']}")
+        frame = frame_from_record(rec, fan)
+        t0 = time.perf_counter()
+        dets = detector.detect(frame, score_threshold=min_score)
+        infer_s += time.perf_counter() - t0
+        anns = [a for a in coco_gt.loadAnns(coco_gt.getAnnIds(imgIds=img_id)) if a["category_id"] in target_cats]
+        for d in dets:
+            if d.class_name in name_to_cat:
+                x, y, w, h = xyxy_to_coco_bbox(d.box_xyxy_px[None])[0]
+                coco_dets.append({"image_id": img_id, "category_id": name_to_cat[d.class_name],
+                                  "bbox": [float(x), float(y), float(w), float(h)], "score": d.score})
+        for cat in target_cats:
+            cat_name = coco_gt.loadCats(cat)[0]["name"]
+            ops = [d for d in dets if d.class_name == cat_name and d.score >= score_threshold]
+            gts = [a for a in anns if a["category_id"] == cat]
+            det_boxes = np.array([d.box_xyxy_px for d in ops], dtype=float).reshape(-1, 4)
+            det_scores = np.array([d.score for d in ops], dtype=float)
+            det_range = np.array([d.range_m for d in ops], dtype=float)
+            gt_boxes = coco_bbox_to_xyxy(np.array([a["bbox"] for a in gts], dtype=float).reshape(-1, 4))
+            gt_crowd = np.array([bool(a.get("iscrowd", 0)) for a in gts], dtype=bool)
+            gt_range = np.array([a["attributes"]["range_m"] for a in gts], dtype=float)
+            state, matched = match_frame(det_boxes, det_scores, gt_boxes, gt_crowd)
+            tp += int((state == 1).sum())
+            fp += int((state == 0).sum())
+            n_gt += int((~gt_crowd).sum())
+            gb = np.digitize(gt_range, bands) - 1
+            db = np.digitize(det_range, bands) - 1
+            for b in range(n_bands):
+                band_gt[b] += int(((gb == b) & ~gt_crowd).sum())
+                band_tp_gt[b] += int(((gb == b) & matched).sum())
+                band_tp_det[b] += int(((db == b) & (state == 1)).sum())
+                band_fp[b] += int(((db == b) & (state == 0)).sum())
+    n_img = len(img_ids)
+    ap50 = ap = float("nan")
+    if coco_dets:
+        with contextlib.redirect_stdout(io.StringIO()):
+            coco_dt = coco_gt.loadRes(coco_dets)
+            ev = COCOeval(coco_gt, coco_dt, "bbox")
+            ev.params.imgIds = img_ids
+            ev.params.catIds = target_cats
+            ev.evaluate()
+            ev.accumulate()
+            ev.summarize()
+        ap, ap50 = float(ev.stats[0]), float(ev.stats[1])
+    elif n_gt:
+        ap = ap50 = 0.0
+    precision, recall = _pr(tp, fp, n_gt)
+    by_band = []
+    for b in range(n_bands):
+        p_b = band_tp_det[b] / (band_tp_det[b] + band_fp[b]) if band_tp_det[b] + band_fp[b] else None
+        r_b = band_tp_gt[b] / band_gt[b] if band_gt[b] else None
+        by_band.append({"range_m": [bands[b], bands[b + 1] if math.isfinite(bands[b + 1]) else None],
+                        "ground_truth": int(band_gt[b]), "recall": r_b,
+                        "detections": int(band_tp_det[b] + band_fp[b]), "precision": p_b})
+    return {"frames": n_img, "classes": list(target_classes), "score_threshold": score_threshold,
+            "ground_truth": n_gt, "true_positives": tp, "false_positives": fp,
+            "precision": precision, "recall": recall, "false_alarms_per_frame": fp / n_img if n_img else 0.0,
+            "ap50": ap50, "ap50_95": ap, "by_range_band": by_band,
+            "frames_per_s": n_img / infer_s if infer_s > 0 else float("nan")}
+
+
+HELDOUT_SEED = 1009
+HELDOUT_FRAMES = 200
+
+
+def heldout_dir(seed: int = HELDOUT_SEED, n_frames: int = HELDOUT_FRAMES) -> Path:
+    """Cache directory of the default held-out set (``$AUVSIM_CACHE`` or ``~/.cache/auvsim``)."""
+    from sim.dataset.generate import GENERATOR_VERSION
+
+    import os
+
+    root = Path(os.environ.get("AUVSIM_CACHE", Path.home() / ".cache" / "auvsim"))
+    return root / f"atr_heldout_v{GENERATOR_VERSION}_seed{seed}_n{n_frames}"
+
+
+def ensure_heldout(seed: int = HELDOUT_SEED, n_frames: int = HELDOUT_FRAMES, workers: int | None = None,
+                   progress: bool = True) -> Path:
+    """Generate (or finish) the held-out set: seed and randomisation ranges unused in training."""
+    from sim.dataset.generate import generate_dataset
+    from sim.dataset.randomization import HELDOUT_RANDOMIZATION
+
+    out = heldout_dir(seed, n_frames)
+    generate_dataset(out, n_frames, seed=seed, workers=workers, randomization=HELDOUT_RANDOMIZATION,
+                     progress=progress)
+    return out
+
+
+def evaluate(detector_kind: str = "cnn", data_dir: str | Path | None = None, model_path: str | None = None,
+             score_threshold: float | None = None, max_images: int | None = None) -> dict:
+    """Evaluate the ``cnn`` or ``classical`` detector (as :func:`build_detector` builds it)."""
+    from autonomy.atr import build_detector
+    from scenarios.config.atr import AtrConfig
+
+    cfg = AtrConfig(detector=detector_kind, model_path=model_path, intra_op_threads=1,
+                    **({} if score_threshold is None else {"score_threshold": score_threshold}))
+    data = Path(data_dir) if data_dir is not None else ensure_heldout()
+    res = evaluate_detector(build_detector(cfg), data, cfg.score_threshold, max_images=max_images)
+    res.update(detector=detector_kind, data=str(data))
+    return res
+
+
+def add_parser(subparsers) -> argparse.ArgumentParser:
+    """Register ``eval-atr`` on an argparse ``subparsers`` object."""
+    p = subparsers.add_parser("eval-atr", help="evaluate the ATR detector on a held-out set")
+    p.add_argument("--data", default=None, help="dataset directory (default: generate the held-out set)")
+    p.add_argument("--detector", choices=["cnn", "classical"], default="cnn")
+    p.add_argument("--model", default=None, help="ONNX model (default: the shipped one)")
+    p.add_argument("--threshold", type=float, default=None, help="operating threshold (default: AtrConfig's)")
+    p.add_argument("--max-images", type=int, default=None)
+    p.add_argument("--json", action="store_true", help="print the figures as JSON")
+    p.set_defaults(func=eval_main)
+    return p
+
+
+def _fmt(v) -> str:
+    return "-" if v is None else (f"{v:.3f}" if isinstance(v, float) else str(v))
+
+
+def eval_main(args: argparse.Namespace) -> int:
+    """Entry point for ``auvsim eval-atr``."""
+    res = evaluate(args.detector, args.data, args.model, args.threshold, args.max_images)
+    if args.json:
+        print(json.dumps(res, indent=1))
+        return 0
+    print(f"eval-atr {res['detector']} on {res['data']} ({res['frames']} frames, classes {res['classes']})")
+    for k in ("score_threshold", "precision", "recall", "false_alarms_per_frame", "ap50", "ap50_95", "frames_per_s"):
+        print(f"  {k:24s} {_fmt(res[k])}")
+    print("  range band       gt   recall   det  precision")
+    for b in res["by_range_band"]:
+        lo, hi = b["range_m"]
+        print(f"  {lo:5.0f}-{'inf' if hi is None else f'{hi:.0f}':>4s} m  {b['ground_truth']:5d}  {_fmt(b['recall']):>7s}"
+              f"  {b['detections']:4d}  {_fmt(b['precision']):>9s}")
+    return 0

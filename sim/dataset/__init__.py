@@ -1,0 +1,1 @@
+"""Synthetic, labelled FLS datasets for ATR training and evaluation (``auvsim dataset``)."""

@@ -1,0 +1,264 @@
+"""``auvsim dataset``: domain-randomised, labelled FLS frames.
+
+Layout of an output directory::
+
+    manifest.json        generator version, seed, every parameter; ``complete`` once merged
+    images/000001.png    fan images (8-bit grey)
+    parts/scene_00000.json  per-scene labels, written atomically after the scene's images
+    annotations.json     COCO detection file (RLE instance masks, fan geometry per image)
+    labels/000001.txt    YOLO labels (class cx cy w h, normalised)
+
+Work is split into scenes (one compiled world, several sonar poses). A scene counts as
+done when its part file exists, so an interrupted run resumes where it stopped and a
+finished dataset is identical to an uninterrupted one. Frames depend only on (seed,
+scene index), never on the number of workers.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from scenarios.config.fls import FlsConfig
+from sim.dataset.coco_io import ANNOTATIONS_FILE, IMAGES_DIR, LABELS_DIR, write_atomic, write_coco, yolo_lines
+from sim.dataset.randomization import TRAIN_RANDOMIZATION, Randomization, SceneSpec, sample_scene
+from sim.rng import component_rng
+
+GENERATOR_VERSION = "1.0.0"
+MANIFEST_FILE = "manifest.json"
+PARTS_DIR = "parts"
+CLASS_NAMES = ("opi", "rock", "debris")
+RAY_HINT = "--ray needs Ray: pip install 'auvsim[scale]' (or pip install ray)"
+
+
+@dataclass(frozen=True)
+class RenderSettings:
+    """Sonar settings common to all frames (the rest is randomised per scene).
+
+    ``min_visible_fraction`` and ``min_area_px``: objects below either are labelled
+    ``iscrowd`` (present but not expected to be detected; ignored by the evaluation).
+    """
+
+    preset: str = "m900_130"
+    elevation_rays: int = 16
+    azimuth_columns: int | None = 361
+    min_visible_fraction: float = 0.3
+    min_area_px: int = 12
+
+
+def _seabed_depth_fn(seabed_cfg, world_seed: int):
+    from sim.seabed import make_seabed
+
+    bed = make_seabed(seabed_cfg, component_rng(world_seed, "seabed"))
+    return bed.depth_at
+
+
+def scene_spec(seed: int, index: int, rz: Randomization) -> SceneSpec:
+    """The scene ``index`` of a dataset with root ``seed`` (depends on nothing else)."""
+    return sample_scene(index, component_rng(seed, f"dataset/scene/{index}"), rz, _seabed_depth_fn)
+
+
+def fls_config(spec: SceneSpec, settings: RenderSettings) -> FlsConfig:
+    base = FlsConfig()
+    return FlsConfig(preset=settings.preset, tilt_deg=float(np.rad2deg(spec.tilt_rad)),
+                     range_window_m=(spec.range_min_m, spec.range_max_m), elevation_rays=settings.elevation_rays,
+                     azimuth_columns=settings.azimuth_columns, gain_db=base.gain_db + spec.gain_db,
+                     noise_floor_db=base.noise_floor_db + 10.0 * math.log10(spec.noise_scale),
+                     speckle=spec.speckle, k_shape=spec.k_shape)
+
+
+def render_scene(spec: SceneSpec, seed: int, settings: RenderSettings, frame_ids: list[int],
+                 out_dir: Path) -> dict:
+    """Render the frames of one scene, write their PNGs; return the scene's label part."""
+    import cv2
+
+    from sim.dataset.scene_render import render_frames
+
+    records = render_frames(spec, fls_config(spec, settings), component_rng(seed, f"dataset/fls/{spec.index}"),
+                            len(frame_ids))
+    images, annotations = [], []
+    for frame_id, rec in zip(frame_ids, records):
+        name = f"{IMAGES_DIR}/{frame_id:06d}.png"
+        ok, png = cv2.imencode(".png", rec.fan)
+        if not ok:
+            raise RuntimeError(f"PNG encoding failed for {name}")
+        write_atomic(out_dir / name, png.tobytes())
+        g = rec.geometry
+        images.append({
+            "id": frame_id, "file_name": name, "width": int(rec.fan.shape[1]), "height": int(rec.fan.shape[0]),
+            "scene": spec.index, "t_s": rec.t_s,
+            "fan_geometry": {"width_px": g.width_px, "height_px": g.height_px, "range_min_m": g.range_min_m,
+                             "range_max_m": g.range_max_m, "fov_rad": g.fov_rad, "m_per_px": g.m_per_px,
+                             "apex_x_px": g.apex_x_px, "apex_y_px": g.apex_y_px},
+            "sonar": {"pos_ned": list(rec.pos_ned), "rpy_rad": list(rec.rpy_rad), "tilt_rad": spec.tilt_rad,
+                      "altitude_m": rec.altitude_m, "seabed": spec.seabed.kind, "gain_db": spec.gain_db,
+                      "noise_scale": spec.noise_scale, "speckle": spec.speckle},
+        })
+        for obj in rec.objects:
+            crowd = obj.visible_fraction < settings.min_visible_fraction or obj.area_px < settings.min_area_px
+            annotations.append({
+                "image_id": frame_id, "category_id": CLASS_NAMES.index(obj.class_name) + 1,
+                "bbox": obj.bbox_coco, "area": obj.area_px, "segmentation": obj.rle, "iscrowd": int(crowd),
+                "attributes": {"object": obj.name, "shape": obj.shape, "is_target": obj.is_target,
+                               "visible_fraction": obj.visible_fraction, "range_m": obj.range_m,
+                               "azimuth_rad": obj.azimuth_rad, "pos_ned": list(obj.pos_ned)},
+            })
+    return {"scene": spec.index, "images": images, "annotations": annotations}
+
+
+def _scene_job(job: tuple) -> int:
+    seed, index, rz_json, settings, frame_ids, out_dir = job
+    out_dir = Path(out_dir)
+    spec = scene_spec(seed, index, Randomization.model_validate_json(rz_json))
+    part = render_scene(spec, seed, settings, frame_ids, out_dir)
+    write_atomic(out_dir / PARTS_DIR / f"scene_{index:05d}.json", json.dumps(part))
+    return len(frame_ids)
+
+
+def _manifest(n_frames: int, seed: int, rz: Randomization, settings: RenderSettings) -> dict:
+    return {"generator_version": GENERATOR_VERSION, "seed": seed, "n_frames": n_frames,
+            "classes": list(CLASS_NAMES), "randomization": rz.model_dump(mode="json"),
+            "render": settings.__dict__.copy(), "fls_defaults": FlsConfig().model_dump(mode="json")}
+
+
+def merge_parts(out_dir: Path, manifest: dict) -> None:
+    """Collect the per-scene parts into ``annotations.json`` and YOLO labels."""
+    parts = sorted((out_dir / PARTS_DIR).glob("scene_*.json"))
+    images, annotations = [], []
+    for p in parts:
+        part = json.loads(p.read_text())
+        images.extend(part["images"])
+        annotations.extend(part["annotations"])
+    images.sort(key=lambda r: r["id"])
+    annotations.sort(key=lambda a: (a["image_id"], a["attributes"]["object"]))
+    for i, a in enumerate(annotations, start=1):
+        a["id"] = i
+    categories = [{"id": i + 1, "name": n, "supercategory": "target" if i == 0 else "clutter"}
+                  for i, n in enumerate(CLASS_NAMES)]
+    (out_dir / LABELS_DIR).mkdir(exist_ok=True)
+    by_image: dict[int, list[dict]] = {}
+    for a in annotations:
+        if not a["iscrowd"]:
+            by_image.setdefault(a["image_id"], []).append(a)
+    for im in images:
+        anns = by_image.get(im["id"], [])
+        txt = yolo_lines(np.array([a["bbox"] for a in anns]).reshape(-1, 4),
+                         np.array([a["category_id"] - 1 for a in anns]), im["width"], im["height"])
+        write_atomic(out_dir / LABELS_DIR / f"{im['id']:06d}.txt", txt)
+    write_atomic(out_dir / "classes.txt", "\n".join(CLASS_NAMES) + "\n")
+    info = {"description": "auvsim synthetic FLS ATR dataset", "version": GENERATOR_VERSION,
+            "seed": manifest["seed"]}
+    write_coco(out_dir / ANNOTATIONS_FILE, images, annotations, categories, info)
+
+
+def generate_dataset(out_dir: str | Path, n_frames: int, seed: int = 0, workers: int | None = None,
+                     ray_address: str | None = None, use_ray: bool = False,
+                     randomization: Randomization = TRAIN_RANDOMIZATION,
+                     settings: RenderSettings = RenderSettings(), progress: bool = True) -> Path:
+    """Write (or finish) a dataset of ``n_frames`` frames in ``out_dir``; returns the COCO file.
+
+    ``workers``: local processes (default: all cores; 1 = in this process). ``use_ray``:
+    distribute scenes with Ray (``ray_address`` None starts a local instance).
+    Raises ``ValueError`` if ``out_dir`` holds a dataset made with other parameters.
+    """
+    if n_frames < 1:
+        raise ValueError(f"dataset: --n must be >= 1, got {n_frames}")
+    out_dir = Path(out_dir)
+    (out_dir / IMAGES_DIR).mkdir(parents=True, exist_ok=True)
+    (out_dir / PARTS_DIR).mkdir(exist_ok=True)
+    manifest = _manifest(n_frames, seed, randomization, settings)
+    man_path = out_dir / MANIFEST_FILE
+    if man_path.is_file():
+        old = json.loads(man_path.read_text())
+        old.pop("complete", None)
+        if old != manifest:
+            diff = sorted(k for k in set(old) | set(manifest) if old.get(k) != manifest.get(k))
+            raise ValueError(f"dataset: {out_dir} holds a dataset made with other parameters "
+                             f"(differs in {diff}); use a new --out directory")
+    write_atomic(man_path, json.dumps({**manifest, "complete": False}, indent=1))
+    fps = randomization.frames_per_scene
+    n_scenes = math.ceil(n_frames / fps)
+    rz_json = randomization.model_dump_json()
+    jobs = []
+    for k in range(n_scenes):
+        if (out_dir / PARTS_DIR / f"scene_{k:05d}.json").is_file():
+            continue
+        ids = list(range(k * fps + 1, min((k + 1) * fps, n_frames) + 1))
+        jobs.append((seed, k, rz_json, settings, ids, str(out_dir)))
+    total = sum(len(j[4]) for j in jobs)
+    from tqdm import tqdm
+
+    bar = tqdm(total=total, unit="frame", desc="dataset", disable=not progress)
+    try:
+        if use_ray:
+            _run_ray(jobs, ray_address, bar)
+        else:
+            n_workers = workers or os.cpu_count() or 1
+            if n_workers <= 1 or len(jobs) <= 1:
+                for job in jobs:
+                    bar.update(_scene_job(job))
+            else:
+                import multiprocessing as mp
+
+                with mp.get_context("spawn").Pool(min(n_workers, len(jobs))) as pool:
+                    for done in pool.imap_unordered(_scene_job, jobs):
+                        bar.update(done)
+    finally:
+        bar.close()
+    merge_parts(out_dir, manifest)
+    write_atomic(man_path, json.dumps({**manifest, "complete": True}, indent=1))
+    return out_dir / ANNOTATIONS_FILE
+
+
+def _run_ray(jobs: list[tuple], address: str | None, bar) -> None:
+    try:
+        import ray
+    except ImportError as exc:
+        raise ImportError(RAY_HINT) from exc
+    started = False
+    if not ray.is_initialized():
+        ray.init(address=address, include_dashboard=False, log_to_driver=False)
+        started = True
+    try:
+        remote = ray.remote(_scene_job)
+        pending = [remote.remote(j) for j in jobs]
+        while pending:
+            done, pending = ray.wait(pending, num_returns=1)
+            bar.update(ray.get(done[0]))
+    finally:
+        if started:
+            ray.shutdown()
+
+
+def add_parser(subparsers) -> argparse.ArgumentParser:
+    """Register ``dataset`` on an argparse ``subparsers`` object."""
+    p = subparsers.add_parser("dataset", help="render a labelled, domain-randomised FLS dataset")
+    p.add_argument("--n", type=int, required=True, help="number of frames")
+    p.add_argument("--out", required=True, help="output directory (re-run to resume)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--workers", type=int, default=None, help="local processes (default: all cores)")
+    p.add_argument("--ray", nargs="?", const="", default=None, metavar="ADDRESS",
+                   help="distribute with Ray (local instance, or the cluster at ADDRESS)")
+    p.add_argument("--heldout", action="store_true",
+                   help="use the held-out (distribution-shifted) randomisation ranges")
+    p.add_argument("--no-progress", action="store_true")
+    p.set_defaults(func=dataset_main)
+    return p
+
+
+def dataset_main(args: argparse.Namespace) -> int:
+    """Entry point for ``auvsim dataset``."""
+    from sim.dataset.randomization import HELDOUT_RANDOMIZATION
+
+    rz = HELDOUT_RANDOMIZATION if getattr(args, "heldout", False) else TRAIN_RANDOMIZATION
+    path = generate_dataset(args.out, args.n, seed=args.seed, workers=args.workers,
+                            use_ray=args.ray is not None, ray_address=args.ray or None, randomization=rz,
+                            progress=not getattr(args, "no_progress", False))
+    print(f"dataset: wrote {path}")
+    return 0

@@ -1,0 +1,150 @@
+"""The mission's perception stage: ATR on each FLS frame -> geolocalisation -> PMHA.
+
+Runs the onboard code (``autonomy.atr``, ``autonomy.localization``,
+``autonomy.world_model``) and scores it against the frame's ground truth. The scoring
+reads the truth; the onboard code never does (except with ``nav_source='truth'``, which
+replaces the navigation estimate by the true pose, as paper 000's simulated evaluation).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from autonomy.atr import build_detector
+from autonomy.frames import euler_from_rot
+from autonomy.localization import fls_visibility, localize
+from autonomy.messages import NavEstimate
+from autonomy.world_model import PMHA
+from scenarios.schema import Scenario
+from sim.detection_scoring import match_detections
+from sim.records import FlsEvent
+from sim.scoring import score_world_model
+from sim.seabed import Seabed
+from sim.sensors.fls import FlsRender, FlsSensor
+from sim.truth import VehicleTruth
+
+MATCH_IOU = 0.3  # a detection is true when it overlaps a visible target's box this much
+
+
+class Perception:
+    """ATR + geolocalisation + PMHA for one mission.
+
+    Args:
+        scenario: the scenario (uses ``autonomy.atr``, ``.localization``, ``.world_model``).
+        fls: the sonar whose frames arrive (for mount extrinsics and field of view).
+        seabed: the true seabed (only for ``nav_source='truth'`` altitudes).
+        nav_source: ``estimate`` or ``truth``.
+    """
+
+    def __init__(self, scenario: Scenario, fls: FlsSensor, seabed: Seabed, *, nav_source: str = "estimate") -> None:
+        self.scenario = scenario
+        self.fls = fls
+        self.seabed = seabed
+        self.nav_source = nav_source
+        auto = scenario.autonomy
+        self.detector = build_detector(auto.atr)
+        self.loc_cfg = auto.localization
+        self.wm_cfg = auto.world_model
+        self.truth_targets = np.array([t.pos_ned for t in scenario.world.targets if t.is_target], dtype=float)
+        self.region_ned = self._survey_region()
+        self.reset()
+
+    def _survey_region(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+        """Surveyed volume: the seabed patch (basin if any) from surface to seabed."""
+        w = self.scenario.world
+        if w.basin.shape == "rectangular":
+            (cn, ce), (ln, le) = w.basin.center_ne_m, w.basin.size_ne_m
+        elif w.basin.shape == "circular":
+            (cn, ce), ln = w.basin.center_ne_m, 2.0 * w.basin.radius_m
+            le = ln
+        else:
+            (cn, ce), ln = w.seabed.center_ne_m, w.seabed.extent_m
+            le = ln
+        n = cn + 0.5 * np.array([-ln, ln])
+        e = ce + 0.5 * np.array([-le, le])
+        depth = float(np.max(self.seabed.depth_at(*np.meshgrid(n, e)))) + 1.0
+        return (float(n[0]), float(e[0]), 0.0), (float(n[1]), float(e[1]), depth)
+
+    def reset(self) -> None:
+        self.pmha = PMHA(self.wm_cfg, region_ned=self.region_ned)
+        self.n_frames = 0
+        self.n_detections = 0
+        self.n_true = 0
+        self.n_false = 0
+        self.n_visible_targets = 0
+        self.n_hit_targets = 0
+
+    # -- per frame ----------------------------------------------------------------------
+    def _truth_nav(self, render: FlsRender) -> NavEstimate:
+        """Navigation message holding the true pose at capture (zero covariance)."""
+        tr = render.truth
+        R_nb = tr.R_ns @ self.fls.R_bs.T
+        pos_body = tr.pos_ned - R_nb @ self.fls.mount_pos_body_m
+        altitude = float(self.seabed.depth_at(pos_body[0], pos_body[1])) - float(pos_body[2])
+        return NavEstimate(t_s=tr.t_s, pos_ned=pos_body, rpy_rad=euler_from_rot(R_nb), vel_body_mps=np.zeros(3),
+                           rate_body_radps=np.zeros(3), cov_pos_ned=np.zeros((3, 3)), cov_yaw_rad2=0.0,
+                           altitude_m=altitude)
+
+    def process(self, event: FlsEvent, nav: NavEstimate, truth: VehicleTruth, altitude_m: float) -> None:
+        """Run perception on one delivered frame and fill ``event``'s perception fields."""
+        render: FlsRender = event.render
+        frame = render.frame
+        self.n_frames += 1
+        detections = self.detector.detect(frame)
+        event.detections = detections
+
+        gt = [o for o in render.truth.objects if o.visible and o.is_target and o.bbox_xyxy is not None]
+        self.n_visible_targets += len(gt)
+        gt_boxes = np.array([o.bbox_xyxy for o in gt], dtype=float).reshape(-1, 4)
+        match = match_detections(np.array([d.box_xyxy_px for d in detections], dtype=float).reshape(-1, 4),
+                                 [d.score for d in detections], gt_boxes, MATCH_IOU)
+        event.true_detection = [bool(m >= 0) for m in match]
+        self.n_detections += len(detections)
+        self.n_true += int(np.sum(match >= 0))
+        self.n_false += int(np.sum(match < 0))
+        self.n_hit_targets += len(set(match[match >= 0].tolist()))
+
+        if self.nav_source == "truth":
+            nav_loc = self._truth_nav(render)
+        else:
+            nav_loc = nav
+            if not math.isfinite(nav_loc.altitude_m) and math.isfinite(altitude_m):
+                from dataclasses import replace
+
+                nav_loc = replace(nav_loc, altitude_m=altitude_m)
+        localized = [localize(d, nav_loc, self.fls.mount_pos_body_m, self.fls.mount_rpy_rad, self.loc_cfg,
+                              geometry=frame.geometry) for d in detections]
+        event.localized = localized
+        g = self.fls.geometry
+        visible = fls_visibility(nav_loc.pos_ned, nav_loc.rpy_rad, self.fls.mount_pos_body_m, self.fls.mount_rpy_rad,
+                                 range_min_m=g.window_near_m, range_max_m=g.window_far_m, fov_rad=g.fov_rad,
+                                 vertical_fov_rad=g.vertical_beamwidth_rad, margin_m=1.0)
+        self.pmha.update(frame.t_s, localized, visible)
+        event.world_objects = self.pmha.world_model()
+
+    # -- results --------------------------------------------------------------------------
+    def world_objects(self) -> list[Any]:
+        return self.pmha.world_model()
+
+    def world_model_json(self) -> dict:
+        return self.pmha.to_json()
+
+    def detection_metrics(self) -> dict[str, Any]:
+        return {
+            "detections": self.n_detections,
+            "true_detections": self.n_true,
+            "false_detections": self.n_false,
+            "precision": self.n_true / self.n_detections if self.n_detections else None,
+            "recall_visible_targets": self.n_hit_targets / self.n_visible_targets if self.n_visible_targets else None,
+            "detector": self.scenario.autonomy.atr.detector,
+        }
+
+    def world_model_metrics(self) -> dict[str, Any]:
+        objs = self.world_objects()
+        est = np.array([o.pos_ned for o in objs], dtype=float).reshape(-1, 3)
+        s = score_world_model(est, self.truth_targets, match_radius_m=2.0, gospa_c_m=2.0, gospa_p=1.0)
+        return {k: v for k, v in s.items() if k in ("objects", "matched", "missed", "false", "mean_position_error_m",
+                                                      "gospa", "pairs")}

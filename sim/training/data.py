@@ -1,0 +1,74 @@
+"""Loading an ``auvsim dataset`` directory (COCO json + PNG fans) into training arrays."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from sim.dataset.coco_io import ANNOTATIONS_FILE, coco_bbox_to_xyxy
+
+
+@dataclass
+class DetectionArrays:
+    """A dataset resized to the model input.
+
+    ``images`` (N, H, W) uint8; per image, ``boxes`` (K, 4) xyxy in input px (pixel centres at
+    integers), ``class_ids`` (K,) indices into ``class_names`` and ``ignore`` (K,) bool.
+    """
+
+    images: NDArray[np.uint8]
+    boxes: list[NDArray[np.float64]]
+    class_ids: list[NDArray[np.int64]]
+    ignore: list[NDArray[np.bool_]]
+    class_names: list[str]
+    fan_hw: tuple[int, int]
+
+
+def fan_to_input_xyxy(boxes_fan: NDArray, fan_hw: tuple[int, int], input_hw: tuple[int, int]) -> NDArray:
+    """Fan px -> input px for xyxy boxes (pixel centres at integers in both)."""
+    b = np.asarray(boxes_fan, dtype=np.float64).reshape(-1, 4).copy()
+    sx, sy = fan_hw[1] / input_hw[1], fan_hw[0] / input_hw[0]
+    b[:, [0, 2]] = (b[:, [0, 2]] + 0.5) / sx - 0.5
+    b[:, [1, 3]] = (b[:, [1, 3]] + 0.5) / sy - 0.5
+    return b
+
+
+def load_detection_arrays(data_dir: str | Path, input_hw: tuple[int, int],
+                          class_names: list[str] | None = None) -> DetectionArrays:
+    """Read ``data_dir``'s COCO file and PNGs, resized to ``input_hw`` with INTER_AREA."""
+    data_dir = Path(data_dir)
+    ann_path = data_dir / ANNOTATIONS_FILE
+    if not ann_path.is_file():
+        raise FileNotFoundError(f"no {ANNOTATIONS_FILE} in dataset directory {data_dir}")
+    coco = json.loads(ann_path.read_text())
+    cats = {c["id"]: c["name"] for c in coco["categories"]}
+    names = class_names if class_names is not None else [cats[k] for k in sorted(cats)]
+    name_to_idx = {n: i for i, n in enumerate(names)}
+    by_image: dict[int, list[dict]] = {}
+    for a in coco["annotations"]:
+        by_image.setdefault(a["image_id"], []).append(a)
+    images, boxes, cls, ign = [], [], [], []
+    fan_hw = None
+    h, w = input_hw
+    for im in sorted(coco["images"], key=lambda r: r["id"]):
+        fan = cv2.imread(str(data_dir / im["file_name"]), cv2.IMREAD_GRAYSCALE)
+        if fan is None:
+            raise FileNotFoundError(f"dataset {data_dir}: cannot read image {im['file_name']}")
+        if fan_hw is None:
+            fan_hw = fan.shape
+        elif fan.shape != fan_hw:
+            raise ValueError(f"dataset {data_dir}: image {im['file_name']} is {fan.shape}, others {fan_hw}")
+        images.append(cv2.resize(fan, (w, h), interpolation=cv2.INTER_AREA))
+        anns = [a for a in by_image.get(im["id"], []) if cats[a["category_id"]] in name_to_idx]
+        xyxy = coco_bbox_to_xyxy(np.array([a["bbox"] for a in anns], dtype=np.float64).reshape(-1, 4))
+        boxes.append(fan_to_input_xyxy(xyxy, fan_hw, input_hw))
+        cls.append(np.array([name_to_idx[cats[a["category_id"]]] for a in anns], dtype=np.int64))
+        ign.append(np.array([bool(a.get("iscrowd", 0)) for a in anns], dtype=bool))
+    if not images:
+        raise ValueError(f"dataset {data_dir} has no images")
+    return DetectionArrays(np.stack(images), boxes, cls, ign, list(names), tuple(fan_hw))

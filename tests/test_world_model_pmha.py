@@ -1,0 +1,236 @@
+"""PMHA world model against exhaustive enumeration and synthetic detection streams."""
+
+from __future__ import annotations
+
+import itertools
+import json
+import math
+
+import numpy as np
+import pytest
+
+from autonomy.localization import LocalizedDetection
+from autonomy.world_model import PMHA
+from autonomy.world_model.anchor import Anchor, predicted_cov
+from scenarios.config.world_model import WorldModelConfig
+from sim.scoring import score_world_model
+
+TRUTHS = np.array([[0, 10, 4], [0, 20, 4], [0, 25, 4], [-8, 10, 4], [-7, 15, 4], [-8, 22, 4]], float)
+REGION = ([-20.0, 0.0, 3.0], [10.0, 35.0, 5.0])
+
+
+def _z(t, pos, score=0.8, var=0.09):
+    return LocalizedDetection(t, np.asarray(pos, float), var * np.eye(3), score)
+
+
+# ---------------------------------------------------------------- exhaustive enumeration
+def _brute_force(scans, cfg, volume, visible):
+    """Posterior over worlds by enumerating every origin of every measurement.
+
+    Independent of the PMHA code: plain Kalman filter and the hypothesis factor written out.
+    Returns {frozenset of measurement-id histories: probability}.
+    """
+    log_u = -math.log(volume)
+    paths = [(0.0, [])]  # (log weight, objects: list of dict(x, P, t, pmf, ids))
+    uid = 0
+    for t, zs in scans:
+        new_paths = []
+        ids = list(range(uid, uid + len(zs)))
+        uid += len(zs)
+        for logw, objs in paths:
+            n_obj = len(objs)
+            labels = ["C", "N"] + list(range(n_obj))
+            for combo in itertools.product(labels, repeat=len(zs)):
+                used = [c for c in combo if not isinstance(c, str)]
+                if len(used) != len(set(used)):
+                    continue
+                lw = logw
+                out = [dict(o) for o in objs]
+                for k, o in enumerate(objs):
+                    P = o["P"] + cfg.process_noise_m2_per_s * (t - o["t"]) * np.eye(3)
+                    if t - o["t"] > cfg.kf_timeout_s:
+                        P = cfg.fallback_cov_m2 * np.eye(3)
+                    pd = cfg.p_detect * max(float(visible(o["x"][None])[0]), cfg.visibility_floor)
+                    if k not in used:
+                        lw += math.log(1.0 - pd)
+                        continue
+                    if pd == 0.0:  # an anchor outside the fan cannot be detected
+                        lw = -math.inf
+                        break
+                    j = combo.index(k)
+                    z, R = zs[j].pos_ned, zs[j].cov_ned
+                    S = P + R
+                    d = z - o["x"]
+                    lw += (math.log(cfg.p_existing * pd)
+                           - 0.5 * (d @ np.linalg.solve(S, d) + math.log(np.linalg.det(2 * np.pi * S))))
+                    q = np.array([zs[j].class_score, 1 - zs[j].class_score])
+                    lw += math.log(o["pmf"] @ q)
+                    K = P @ np.linalg.inv(S)
+                    pmf = o["pmf"] * q
+                    out[k] = dict(x=o["x"] + K @ d, P=(np.eye(3) - K) @ P, t=t, pmf=pmf / pmf.sum(),
+                                  ids=o["ids"] + (ids[j],))
+                for j, c in enumerate(combo):
+                    if c == "C":
+                        lw += math.log(cfg.p_clutter) + log_u + math.log(0.5)
+                    elif c == "N":
+                        lw += math.log(cfg.p_new) + log_u + math.log(0.5)
+                        q = np.array([zs[j].class_score, 1 - zs[j].class_score])
+                        out.append(dict(x=zs[j].pos_ned.copy(), P=zs[j].cov_ned.copy(), t=t, pmf=q,
+                                        ids=(ids[j],)))
+                if lw > -math.inf:
+                    new_paths.append((lw, out))
+        paths = new_paths
+    lws = np.array([p[0] for p in paths])
+    probs = np.exp(lws - lws.max())
+    probs /= probs.sum()
+    out = {}
+    for p, (_, objs) in zip(probs, paths):
+        key = frozenset(o["ids"] for o in objs)
+        out[key] = out.get(key, 0.0) + p
+    return out
+
+
+def test_hypothesis_probabilities_equal_exhaustive_enumeration():
+    cfg = WorldModelConfig(max_hypotheses=100_000, prune_ratio=1e-300, drop_tentative_after_s=None,
+                           gate_mahalanobis2=1e6, process_noise_m2_per_s=0.05, kf_timeout_s=1.5,
+                           visibility_floor=0.1)
+    lo, hi = np.array(REGION[0]), np.array(REGION[1])
+    volume = float(np.prod(hi - lo))
+
+    def visible(p):  # the fan covers north > -5 only
+        return p[:, 0] > -5.0
+
+    scans = [
+        (0.0, [_z(0.0, [0, 10, 4], 0.9), _z(0.0, [0.6, 10.4, 4.1], 0.6)]),
+        (1.0, [_z(1.0, [0.2, 10.1, 4.0], 0.8), _z(1.0, [-8, 10, 4], 0.7)]),
+        (3.0, [_z(3.0, [0.1, 9.8, 4.0], 0.7), _z(3.0, [-7.5, 10.3, 4.2], 0.9)]),
+        (3.5, [_z(3.5, [0.3, 10.3, 4.0], 0.8)]),
+    ]
+    pmha = PMHA(cfg, region_ned=REGION)
+    for t, zs in scans:
+        pmha.update(t, zs, visible)
+    expected = _brute_force(scans, cfg, volume, visible)
+    got = {frozenset(a.measurement_ids for a in h.anchors): h.probability for h in pmha.hypotheses}
+    assert len(expected) > 500
+    assert set(got) == set(expected)
+    for key, p in expected.items():
+        assert got[key] == pytest.approx(p, rel=1e-7, abs=1e-15)
+
+
+def test_k_best_expansion_returns_the_top_k_of_the_exhaustive_set():
+    full_cfg = WorldModelConfig(max_hypotheses=100_000, prune_ratio=1e-300, drop_tentative_after_s=None)
+    k_cfg = full_cfg.model_copy(update={"max_hypotheses": 10})
+    scans = [(0.0, [_z(0.0, [0, 10, 4])]),
+             (0.5, [_z(0.5, [0.1, 10.2, 4]), _z(0.5, [0.4, 10, 4]), _z(0.5, [-8, 10, 4])])]
+    full, k = PMHA(full_cfg, REGION), PMHA(k_cfg, REGION)
+    for t, zs in scans:
+        full.update(t, zs)
+        k.update(t, zs)
+    assert len(full.hypotheses) > 20
+    top_full = full.hypotheses[:10]
+    got = k.hypotheses
+    assert [frozenset(a.measurement_ids for a in h.anchors) for h in got] == [
+        frozenset(a.measurement_ids for a in h.anchors) for h in top_full
+    ]
+    total = sum(h.probability for h in top_full)
+    np.testing.assert_allclose([h.probability for h in got], [h.probability / total for h in top_full])
+
+
+def test_singletons_are_filtered_as_clutter():
+    pmha = PMHA(WorldModelConfig(), REGION)
+    pmha.update(0.0, [_z(0.0, [0, 10, 4], 0.95)])
+    assert pmha.hypotheses[0].anchors == ()  # p_clutter > p_new: best world has no object
+    assert pmha.world_model(min_detections=1) == []
+    pmha.update(0.3, [_z(0.3, [0.1, 10.1, 4], 0.95)])  # confirmed by a second detection
+    wm = pmha.world_model()
+    assert len(wm) == 1 and wm[0].n_detections == 2
+
+
+def _lawnmower_stream(seed, n_scans=240, p_detect=0.8, clutter_rate=0.4, sigma=0.3):
+    """Detections of TRUTHS seen by a fan sweeping north->south legs, plus uniform clutter."""
+    rng = np.random.default_rng(seed)
+    scans = []
+    for k in range(n_scans):
+        t = k / 3.0
+        leg = (k // 60) % 2
+        east = 5.0 + 30.0 * ((k % 60) / 60.0 if leg == 0 else 1.0 - (k % 60) / 60.0)
+        window = (east - 2.0, east + 8.0) if leg == 0 else (east - 8.0, east + 2.0)
+
+        def visible(p, w=window):
+            return (p[:, 1] >= w[0]) & (p[:, 1] <= w[1])
+
+        zs = []
+        for x in TRUTHS[visible(TRUTHS)]:
+            if rng.random() < p_detect:
+                zs.append(_z(t, x + rng.normal(0, sigma, 3), rng.uniform(0.6, 0.95), sigma**2))
+        for _ in range(rng.poisson(clutter_rate)):
+            c = np.array([rng.uniform(-20, 10), rng.uniform(*window), rng.uniform(3, 5)])
+            zs.append(_z(t, c, rng.uniform(0.5, 0.8), sigma**2))
+        scans.append((t, zs, visible))
+    return scans
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_cardinality_converges_to_truth_with_clutter_and_misses(seed):
+    pmha = PMHA(WorldModelConfig(p_detect=0.8), REGION)
+    counts = []
+    for t, zs, visible in _lawnmower_stream(seed):
+        pmha.update(t, zs, visible)
+        counts.append(len(pmha.world_model()))
+    assert counts[-1] == len(TRUTHS)
+    assert all(c == len(TRUTHS) for c in counts[-30:])
+    est = np.array([o.pos_ned for o in pmha.world_model()])
+    s = score_world_model(est, TRUTHS)
+    assert s["matched"] == 6 and s["false"] == 0
+    assert s["mean_position_error_m"] < 0.15
+
+
+@pytest.mark.parametrize("floor", [0.0, 0.05])
+def test_invisible_anchor_is_not_penalised_for_missed_detections(floor):
+    def run(visible_later):
+        pmha = PMHA(WorldModelConfig(visibility_floor=floor), REGION)
+        pmha.update(0.0, [_z(0.0, [0, 10, 4])])
+        pmha.update(0.3, [_z(0.3, [0, 10, 4])])
+        for k in range(10):
+            pmha.update(1.0 + k, [], lambda p: np.full(len(p), visible_later))
+        return pmha.world_model()
+
+    assert len(run(False)) == 1  # out of the fan: no evidence against it
+    assert run(True) == []  # in the fan and never seen again: not an object
+
+
+def test_kf_falls_back_to_fixed_gaussian_after_timeout():
+    cfg = WorldModelConfig(kf_timeout_s=5.0, fallback_cov_m2=2.0, process_noise_m2_per_s=0.01)
+    a = Anchor(0, 0, np.zeros(3), 0.1 * np.eye(3), 0.0, 3, np.array([0.5, 0.5]), (0,))
+    np.testing.assert_allclose(predicted_cov(a, 4.0, cfg), 0.14 * np.eye(3))
+    np.testing.assert_allclose(predicted_cov(a, 6.0, cfg), 2.0 * np.eye(3))
+
+
+def test_class_pmf_follows_atr_scores():
+    pmha = PMHA(WorldModelConfig(), REGION)
+    for k in range(5):
+        pmha.update(0.3 * k, [_z(0.3 * k, [0, 10, 4], 0.8)])
+    (obj,) = pmha.world_model()
+    assert obj.class_name == "target"
+    assert obj.class_pmf[0] == pytest.approx(0.8**5 / (0.8**5 + 0.2**5))
+
+
+def test_runs_are_deterministic():
+    def run():
+        pmha = PMHA(WorldModelConfig(p_detect=0.8), REGION)
+        for t, zs, visible in _lawnmower_stream(5, n_scans=90):
+            pmha.update(t, zs, visible)
+        return json.dumps(pmha.to_json(), sort_keys=True)
+
+    assert run() == run()
+
+
+def test_bad_input_is_rejected():
+    with pytest.raises(ValueError, match="p_new"):
+        WorldModelConfig(p_new=0.5)
+    with pytest.raises(ValueError, match="region_ned"):
+        PMHA(WorldModelConfig(), ([0, 0, 0], [1, 1, 0]))
+    pmha = PMHA(WorldModelConfig())
+    pmha.update(1.0, [])
+    with pytest.raises(ValueError, match="backwards"):
+        pmha.update(0.5, [])
