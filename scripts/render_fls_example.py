@@ -49,7 +49,7 @@ def main() -> None:
         cv2.putText(img, f"{o.name} {o.visible_fraction:.2f}", (x0, max(y0 - 6, 10)), cv2.FONT_HERSHEY_SIMPLEX,
                     0.4, color, 1, cv2.LINE_AA)
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    cv2.imwrite(str(args.out), img)
+    cv2.imwrite(str(args.out), img, [cv2.IMWRITE_PNG_COMPRESSION, 9])
     print(f"wrote {args.out} ({sum(o.visible for o in out.truth.objects)} visible objects)")
 
 

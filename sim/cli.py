@@ -60,7 +60,10 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     if args.seed is not None:
         overrides.append(f"seed={args.seed}")
     scenario = load_scenario(args.scenario, overrides)
-    result = module.run(scenario)
+    import inspect
+
+    takes_scenario = "scenario" in inspect.signature(module.run).parameters
+    result = module.run(scenario) if takes_scenario else module.run(seed=scenario.seed)
     if args.json:
         print(json.dumps(result))
     else:

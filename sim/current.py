@@ -35,11 +35,8 @@ class OceanCurrent:
         self._phi = 1.0
         self._q = 0.0
         self._value = tuple(float(x) for x in self.mean_ned)
-
-    @property
-    def is_still(self) -> bool:
-        """True when the water never moves (lets the physics skip current terms)."""
-        return self.sigma_mps == 0.0 and not np.any(self.mean_ned)
+        #: True when the water never moves (lets the physics skip the current terms).
+        self.is_still: bool = self.sigma_mps == 0.0 and not np.any(self.mean_ned)
 
     @property
     def velocity_ned(self) -> FloatArray:

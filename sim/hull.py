@@ -106,3 +106,27 @@ def write_mjcf(params: VehicleParams, path: str | Path) -> Path:
     xml = xml.replace(f' meshdir="{path.parent}"', "")
     path.write_text(xml)
     return path
+
+
+def build_standalone_spec(params: VehicleParams, *, timestep_s: float = 0.005,
+                          integrator: str = "implicitfast", seabed_depth_m: float = 50.0,
+                          prefix: str = "hull/") -> mujoco.MjSpec:
+    """Minimal NED scene: a flat seabed plane at ``seabed_depth_m`` plus the hull attached
+    under ``prefix`` exactly as the scene builder does (gravity off). For tests and tools
+    that need the vehicle without a scenario world."""
+    integrators = {"euler": mujoco.mjtIntegrator.mjINT_EULER,
+                   "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST,
+                   "rk4": mujoco.mjtIntegrator.mjINT_RK4}
+    if integrator not in integrators:
+        raise ValueError(f"integrator must be one of {sorted(integrators)}, got {integrator!r}")
+    spec = mujoco.MjSpec()
+    spec.modelname = f"{params.name}_standalone"
+    spec.option.gravity = [0.0, 0.0, 0.0]
+    spec.option.timestep = timestep_s
+    spec.option.integrator = integrators[integrator]
+    # A plane's normal is its local +z; flip it to point up (-z in NED).
+    spec.worldbody.add_geom(name="seabed", type=mujoco.mjtGeom.mjGEOM_PLANE,
+                            size=[100.0, 100.0, 0.1], pos=[0.0, 0.0, seabed_depth_m],
+                            quat=[0.0, 1.0, 0.0, 0.0])
+    spec.worldbody.add_frame().attach_body(build_hull_spec(params).body(VEHICLE_BODY), prefix, "")
+    return spec

@@ -143,8 +143,17 @@ class FossenModel:
         M = M_RB + params.added_mass
         M_inv = np.linalg.inv(M)
         self._M_inv = M_inv
-        self._K = [tuple(float(x) for x in row) for row in M_RB @ M_inv]
+        K = M_RB @ M_inv
+        self._K = [tuple(float(x) for x in row) for row in K]
+        # K is mostly diagonal for real vehicles: diagonal + a short list of couplings.
+        tol = 1e-14 * float(np.max(np.abs(K)))
+        self._K_diag = tuple(float(x) for x in np.diag(K))
+        self._K_off = tuple((i, j, float(K[i, j])) for i in range(6) for j in range(6)
+                            if i != j and abs(K[i, j]) > tol)
+        self._K_sparse = len(self._K_off) <= 12
         self._MA = [tuple(float(x) for x in row) for row in params.added_mass]
+        self._MA_diag = tuple(float(x) for x in np.diag(params.added_mass))
+        self._diag_added_mass = bool(np.all(params.added_mass == np.diag(self._MA_diag)))
         self._m = params.mass_kg
         self._rg = tuple(float(x) for x in params.r_bg_m)
         self._Io = [tuple(float(x) for x in row) for row in params.inertia_co_kgm2]
@@ -230,9 +239,14 @@ class FossenModel:
         # C_A(nu_r) nu_r = [w x a1; v_r x a1 + w x a2] with a = M_A nu_r.
         nr = (ur, vr, wr, p, q, r)
         A = self._MA
-        a = [A[i][0] * ur + A[i][1] * vr + A[i][2] * wr + A[i][3] * p + A[i][4] * q + A[i][5] * r
-             for i in range(6)]
-        a0, a1, a2, a3, a4, a5 = a
+        if self._diag_added_mass:
+            Ad = self._MA_diag
+            a0 = Ad[0] * ur; a1 = Ad[1] * vr; a2 = Ad[2] * wr
+            a3 = Ad[3] * p; a4 = Ad[4] * q; a5 = Ad[5] * r
+        else:
+            a0, a1, a2, a3, a4, a5 = [
+                A[i][0] * ur + A[i][1] * vr + A[i][2] * wr + A[i][3] * p + A[i][4] * q + A[i][5] * r
+                for i in range(6)]
         ca0 = q * a2 - r * a1; ca1 = r * a0 - p * a2; ca2 = p * a1 - q * a0
         ca3 = (vr * a2 - wr * a1) + (q * a5 - r * a4)
         ca4 = (wr * a0 - ur * a2) + (r * a3 - p * a5)
@@ -290,9 +304,16 @@ class FossenModel:
         self.rhs = tuple(rhs)
 
         # Rigid-body wrench about CO, body axes: K rhs + C_RB nu.
-        K = self._K
-        f = [K[i][0] * rhs[0] + K[i][1] * rhs[1] + K[i][2] * rhs[2] + K[i][3] * rhs[3]
-             + K[i][4] * rhs[4] + K[i][5] * rhs[5] + crb[i] for i in range(6)]
+        if self._K_sparse:
+            Kd = self._K_diag
+            f = [Kd[0] * rhs[0] + c0, Kd[1] * rhs[1] + c1, Kd[2] * rhs[2] + c2,
+                 Kd[3] * rhs[3] + c3, Kd[4] * rhs[4] + c4, Kd[5] * rhs[5] + c5]
+            for i, j, k in self._K_off:
+                f[i] += k * rhs[j]
+        else:
+            K = self._K
+            f = [K[i][0] * rhs[0] + K[i][1] * rhs[1] + K[i][2] * rhs[2] + K[i][3] * rhs[3]
+                 + K[i][4] * rhs[4] + K[i][5] * rhs[5] + crb[i] for i in range(6)]
         fx, fy, fz, mxo, myo, mzo = f
         # Torque about the CoM: m_co - rg x f.
         mcx = mxo - (gy * fz - gz * fy); mcy = myo - (gz * fx - gx * fz); mcz = mzo - (gx * fy - gy * fx)

@@ -126,7 +126,7 @@ class Mission:
         self.waypoints_ne = np.asarray(self.guidance.plan.waypoints_ne_m)
         self.fsm = MissionFsm.from_config(auto.guidance.mission, self.guidance)
         self.autopilot = Autopilot(AutopilotParams.from_config(auto.control))
-        self.allocator = ThrustAllocator(self.params.thruster_matrix, self.params.thruster_limits_n)
+        self.allocator = ThrustAllocator.from_layout(self.params.layout)
         self.perception = (
             Perception(scn, self.fls, self.world.seabed, nav_source=self.nav_source)
             if (self.fls is not None and self.perception_enabled) else None
@@ -158,7 +158,6 @@ class Mission:
         self.autopilot.reset()
         if self.perception is not None:
             self.perception.reset()
-        self.last_altitude_m = math.nan
         self.last_dvl_lock = True
         self._setpoint: Setpoint | None = None
         self._wall_start = time.perf_counter()
@@ -207,7 +206,7 @@ class Mission:
         if not hasattr(self, "t_s"):
             self.reset()
         total = self.scenario.duration_s
-        with tqdm(total=round(total), unit="sim s", disable=not progress, desc=self.scenario.name,
+        with tqdm(total=round(total), unit="sim s", disable=not progress, desc=self.scenario.name, mininterval=1.0,
                   bar_format="{l_bar}{bar}| {n:.0f}/{total:.0f} sim s [{elapsed}<{remaining}, {rate_fmt}]") as bar:
             last = 0.0
             while not self.done:
@@ -226,12 +225,7 @@ class Mission:
 
     # -- internals -------------------------------------------------------------------
     def _nav_for_control(self, truth: VehicleTruth) -> NavEstimate:
-        est = self.nav_filter.estimate()
-        if math.isfinite(self.last_altitude_m) and not math.isfinite(est.altitude_m):
-            from dataclasses import replace
-
-            est = replace(est, altitude_m=self.last_altitude_m)
-        return est
+        return self.nav_filter.estimate()
 
     def _fire(self, name: str, truth: VehicleTruth) -> None:
         if name == "fls":
@@ -252,7 +246,6 @@ class Mission:
         elif isinstance(msg, DepthMsg):
             nf.on_depth(msg)
         elif isinstance(msg, AltimeterMsg):
-            self.last_altitude_m = msg.altitude_m if msg.valid else math.nan
             nf.on_altimeter(msg)
         elif isinstance(msg, GpsMsg):
             nf.on_gps(msg)
@@ -261,7 +254,7 @@ class Mission:
             event = FlsEvent(t_s=msg.frame.t_s, render=msg)
             if self.perception is not None:
                 nav = nf.estimate()
-                self.perception.process(event, nav, truth, self.last_altitude_m)
+                self.perception.process(event, nav)
             for obs in self.observers:
                 obs.on_fls(event)
 

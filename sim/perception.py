@@ -8,7 +8,6 @@ replaces the navigation estimate by the true pose, as paper 000's simulated eval
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
@@ -24,7 +23,6 @@ from sim.records import FlsEvent
 from sim.scoring import score_world_model
 from sim.seabed import Seabed
 from sim.sensors.fls import FlsRender, FlsSensor
-from sim.truth import VehicleTruth
 
 MATCH_IOU = 0.3  # a detection is true when it overlaps a visible target's box this much
 
@@ -88,7 +86,7 @@ class Perception:
                            rate_body_radps=np.zeros(3), cov_pos_ned=np.zeros((3, 3)), cov_yaw_rad2=0.0,
                            altitude_m=altitude)
 
-    def process(self, event: FlsEvent, nav: NavEstimate, truth: VehicleTruth, altitude_m: float) -> None:
+    def process(self, event: FlsEvent, nav: NavEstimate) -> None:
         """Run perception on one delivered frame and fill ``event``'s perception fields."""
         render: FlsRender = event.render
         frame = render.frame
@@ -107,14 +105,7 @@ class Perception:
         self.n_false += int(np.sum(match < 0))
         self.n_hit_targets += len(set(match[match >= 0].tolist()))
 
-        if self.nav_source == "truth":
-            nav_loc = self._truth_nav(render)
-        else:
-            nav_loc = nav
-            if not math.isfinite(nav_loc.altitude_m) and math.isfinite(altitude_m):
-                from dataclasses import replace
-
-                nav_loc = replace(nav_loc, altitude_m=altitude_m)
+        nav_loc = self._truth_nav(render) if self.nav_source == "truth" else nav
         localized = [localize(d, nav_loc, self.fls.mount_pos_body_m, self.fls.mount_rpy_rad, self.loc_cfg,
                               geometry=frame.geometry) for d in detections]
         event.localized = localized

@@ -42,7 +42,9 @@ class ThrusterArray:
         self._rev = [float(x) for x in self.layout.max_rev_n]
         self._exp = [float(x) for x in self.layout.curve_exponent]
         self._T = [float(x) for x in self.time_constant_s]
-        self._Bcols = [tuple(float(x) for x in self.config_matrix[:, j]) for j in range(self.n)]
+        # Non-zero entries of each column of B: (row, value) pairs.
+        self._Bcols = [tuple((i, float(x)) for i, x in enumerate(self.config_matrix[:, j]) if x != 0.0)
+                       for j in range(self.n)]
         self._alpha_dt = -1.0
         self._alpha = [1.0] * self.n
         self.speed = [0.0] * self.n
@@ -70,6 +72,8 @@ class ThrusterArray:
         thrust = self.thrust_n
         for j in range(self.n):
             c = float(cmd[j])
+            if c != c:
+                raise ValueError(f"thruster '{self.layout.names[j]}' command is NaN")
             c = 1.0 if c > 1.0 else (-1.0 if c < -1.0 else c)
             dz = self._dz[j]
             mag = abs(c) - dz
@@ -84,9 +88,8 @@ class ThrusterArray:
                 f = -self._rev[j] * (-s) ** self._exp[j]
             thrust[j] = f
             if f:
-                col = self._Bcols[j]
-                for i in range(6):
-                    tau[i] += col[i] * f
+                for i, b in self._Bcols[j]:
+                    tau[i] += b * f
         return tau
 
     def steady_thrust(self, cmd: ArrayLike) -> FloatArray:

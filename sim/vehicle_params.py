@@ -83,7 +83,7 @@ class _ParamsFile(StrictModel):
 
 
 # ---------------------------------------------------------------------------- runtime types
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class SensorMount:
     """Fixed sensor pose on the hull: position (FRD, m, from CO) and roll/pitch/yaw (rad)."""
 
@@ -91,7 +91,7 @@ class SensorMount:
     rpy_rad: FloatArray
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class HullShape:
     """Collision envelope of the hull (and optional visual mesh file path)."""
 
@@ -101,7 +101,7 @@ class HullShape:
     visual_mesh_path: Path | None
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class VehicleParams:
     """Everything the physics needs about one vehicle (SI units, FRD body frame at CO).
 

@@ -190,3 +190,17 @@ def test_usbl_fixes_pull_a_wrong_prior_to_the_truth():
     assert err @ np.linalg.solve(est.cov_pos_ned, err) < chi2.ppf(0.999, 3)
     with pytest.raises(ValueError, match="usbl_beacon_pos_ned"):
         NavigationFilter(cfg, np.zeros(3), 0.0).on_usbl(UsblMsg(t_s=0.0, range_m=1.0, bearing_rad=0.0, elevation_rad=0.0))
+
+
+def test_altitude_refers_to_body_origin_not_the_sensor():
+    """An altimeter 0.24 m below the body origin reads 0.24 m less than the body's altitude."""
+    from autonomy.messages import AltimeterMsg
+
+    mounts = {"altimeter": np.array([0.15, 0.0, 0.24]), "dvl": np.array([0.0, 0.0, 0.3])}
+    f = NavigationFilter(NavigationConfig(), np.zeros(3), 0.0, mounts=mounts)
+    f.on_imu(ImuMsg(t_s=0.0, rpy_rad=np.zeros(3), rate_body_radps=np.zeros(3),
+                    accel_body_mps2=np.array([0.0, 0.0, -9.81])))
+    f.on_altimeter(AltimeterMsg(t_s=0.0, altitude_m=1.76, valid=True))
+    assert f.estimate().altitude_m == pytest.approx(2.0)
+    f.on_dvl(DvlMsg(t_s=0.1, vel_body_mps=np.zeros(3), valid=True, altitude_m=1.7))
+    assert f.estimate().altitude_m == pytest.approx(2.0)

@@ -64,6 +64,8 @@ def test_rotor_lag_is_exact_first_order(feelhippo):
     assert tau[0] == pytest.approx(f) and tau[5] == pytest.approx(-y * f)
     with pytest.raises(ValueError, match="4 values"):
         thr.step([0.0, 0.0], dt)
+    with pytest.raises(ValueError, match="sway.*NaN"):
+        thr.step([0.0, 0.0, float("nan"), 0.0], dt)
 
 
 def test_zero_time_constant_is_instantaneous():

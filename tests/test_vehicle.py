@@ -13,8 +13,7 @@ from scipy.integrate import solve_ivp
 from scenarios.config.vehicle import ThrusterOverrides, VehicleConfig
 from scenarios.config.world import CurrentConfig
 from sim.current import OceanCurrent
-from sim.hull import build_hull_spec
-from sim.rng import component_rng
+from sim.hull import build_standalone_spec
 from sim.vehicle import VehicleDynamics
 from sim.vehicle_params import VehicleParams, load_vehicle_params
 
@@ -24,16 +23,9 @@ INSTANT = ThrusterOverrides(time_constant_s=0.0, dead_zone=0.0)
 
 def make_sim(params: VehicleParams, current=None, rng=None, integrator="implicitfast",
              seabed_depth_m: float = 50.0, dt_s: float = DT):
-    """Tiny world (a seabed plane) with the hull attached as the scene builder does."""
-    spec = mujoco.MjSpec()
-    spec.option.gravity = [0.0, 0.0, 0.0]
-    spec.option.timestep = dt_s
-    spec.option.integrator = getattr(mujoco.mjtIntegrator, f"mjINT_{integrator.upper()}")
-    # Plane normal must point up (-z in NED): flip the plane about x.
-    spec.worldbody.add_geom(name="seabed", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[50, 50, 0.1],
-                            pos=[0, 0, seabed_depth_m], quat=[0.0, 1.0, 0.0, 0.0])
-    hull = build_hull_spec(params)
-    spec.worldbody.add_frame().attach_body(hull.body("vehicle"), "hull/", "")
+    """Seabed plane + hull (attached as the scene builder does) and its dynamics."""
+    spec = build_standalone_spec(params, timestep_s=dt_s, integrator=integrator,
+                                 seabed_depth_m=seabed_depth_m)
     model = spec.compile()
     data = mujoco.MjData(model)
     return model, data, VehicleDynamics(model, data, params, current, rng)

@@ -24,8 +24,9 @@ import mujoco
 import pytest
 
 from scenarios.config.vehicle import ThrusterOverrides, VehicleConfig
+from sim.hull import build_standalone_spec
+from sim.vehicle import VehicleDynamics
 from sim.vehicle_params import load_vehicle_params
-from tests.test_vehicle import make_sim
 
 RHO, D_PROP, T_DED = 1026.0, 0.14, 0.1
 KT0, KT_MAX, J_MAX, WAKE = 0.4566, 0.1798, 0.6632, 0.944
@@ -43,7 +44,9 @@ def test_remus_steady_speed_matches_reference_table(rpm, speed_ref):
     p = load_vehicle_params(VehicleConfig(model="remus100",
                                           thrusters=ThrusterOverrides(time_constant_s=0.0)))
     assert p.n_thrusters == 1 and p.layout.curve_exponent[0] == 2.0 and p.layout.dead_zone[0] == 0.0
-    model, data, dyn = make_sim(p, dt_s=0.02)
+    model = build_standalone_spec(p, timestep_s=0.02).compile()
+    data = mujoco.MjData(model)
+    dyn = VehicleDynamics(model, data, p)
     dyn.reset([0.0, 0.0, 10.0], [0.0, 0.0, 0.0])
     f_max = p.layout.max_fwd_n[0]
     u = 0.0

@@ -11,7 +11,7 @@ import pytest
 from scenarios.config.vehicle import ThrusterOverrides, VehicleConfig
 from scenarios.config.world import CurrentConfig
 from sim.current import OceanCurrent
-from sim.hull import build_hull_spec
+from sim.hull import build_hull_spec, build_standalone_spec
 from sim.rng import component_rng
 from sim.vehicle import VehicleDynamics
 from sim.vehicle_params import (
@@ -26,13 +26,7 @@ MODELS = ("feelhippo", "remus100", "bluerov2_heavy")
 
 
 def _world_with_hull(params, dt_s=0.005):
-    spec = mujoco.MjSpec()
-    spec.option.gravity = [0.0, 0.0, 0.0]
-    spec.option.timestep = dt_s
-    spec.worldbody.add_geom(name="seabed", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[20, 20, 0.1],
-                            pos=[0, 0, 4.0], quat=[0.0, 1.0, 0.0, 0.0])
-    spec.worldbody.add_frame().attach_body(build_hull_spec(params).body("vehicle"), "hull/", "")
-    model = spec.compile()
+    model = build_standalone_spec(params, timestep_s=dt_s, seabed_depth_m=4.0).compile()
     return model, mujoco.MjData(model)
 
 
@@ -167,3 +161,21 @@ def test_bad_parameter_files_name_file_and_key(tmp_path):
         load_params_file(bad)
     with pytest.raises(VehicleParamsError, match="not found"):
         load_params_file(tmp_path / "nope.yaml")
+
+
+def test_current_is_advanced_once_per_step_by_its_owner():
+    """A CurrentConfig is built and advanced by the dynamics; an OceanCurrent passed in is
+    the caller's to advance (the dynamics only reads it)."""
+    p = load_vehicle_params(VehicleConfig())
+    cfg = CurrentConfig(gauss_markov_sigma_mps=0.2, gauss_markov_tau_s=1.0)
+    model, data = _world_with_hull(p)
+    dyn = VehicleDynamics(model, data, p, cfg, component_rng(1, "current"))
+    ref = OceanCurrent(cfg, component_rng(1, "current"))
+    for _ in range(5):
+        dyn.step_inputs([0.0] * 4, 0.005)
+        ref.step(0.005)
+    assert dyn.current.velocity_tuple == ref.velocity_tuple
+    external = OceanCurrent(cfg, component_rng(1, "current"))
+    dyn2 = VehicleDynamics(model, data, p, external)
+    dyn2.step_inputs([0.0] * 4, 0.005)
+    assert external.velocity_tuple == (0.0, 0.0, 0.0)

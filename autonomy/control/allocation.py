@@ -28,7 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 FloatArray = NDArray[np.float64]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ThrusterLayout:
     """Geometry and limits of a thruster set.
 

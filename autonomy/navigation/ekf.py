@@ -79,7 +79,7 @@ class NavigationFilter:
         initial_yaw_rad: heading used until the first AHRS message.
         noise: sensor noise model; by default the one matching default sensor configs.
         mounts: FRD sensor offsets (3,) from the body origin, m, keyed ``dvl``, ``depth``,
-            ``gps``, ``usbl`` (missing keys: at the origin; other keys ignored).
+            ``gps``, ``usbl``, ``altimeter`` (missing keys: at the origin; other keys ignored).
         usbl_beacon_pos_ned: (3,) known transponder position for :meth:`on_usbl`.
         t0_s: mission time of the prior.
 
@@ -101,8 +101,9 @@ class NavigationFilter:
         self.cfg = cfg
         self.noise = noise if noise is not None else NavNoiseModel.from_sensor_configs()
         mounts = mounts or {}
-        self._r_dvl, self._r_depth, self._r_gps, self._r_usbl = (
-            np.asarray(mounts.get(k, np.zeros(3)), dtype=float).reshape(3) for k in ("dvl", "depth", "gps", "usbl")
+        self._r_dvl, self._r_depth, self._r_gps, self._r_usbl, self._r_alt = (
+            np.asarray(mounts.get(k, np.zeros(3)), dtype=float).reshape(3)
+            for k in ("dvl", "depth", "gps", "usbl", "altimeter")
         )
         self._beacon_ned = None if usbl_beacon_pos_ned is None else np.asarray(usbl_beacon_pos_ned, float).reshape(3)
         self._t_s = float(t0_s)
@@ -222,7 +223,11 @@ class NavigationFilter:
         self._P[DVEL, DVEL] = self.noise.dvl_velocity_cov(vel, used)
         self._t_dvl_valid_s = max(self._t_s, float(msg.t_s))
         if np.isfinite(msg.altitude_m):
-            self._altitude_m = float(msg.altitude_m)
+            self._altitude_m = self._body_altitude_m(float(msg.altitude_m), self._r_dvl)
+
+    def _body_altitude_m(self, sensor_altitude_m: float, mount_body_m: np.ndarray) -> float:
+        """Altitude of the body origin from a sensor's altitude and its FRD mount offset."""
+        return sensor_altitude_m + float((rot_from_euler(*self._attitude()) @ mount_body_m)[2])
 
     def on_depth(self, msg: DepthMsg) -> None:
         """Pressure depth of the depth sensor."""
@@ -235,10 +240,11 @@ class NavigationFilter:
         self._update(np.array([msg.depth_m - predicted]), H, np.array([[self.noise.depth_noise_m**2]]), None)
 
     def on_altimeter(self, msg: AltimeterMsg) -> None:
-        """Altimeter slant range, levelled with the AHRS attitude, becomes the altitude output."""
+        """Altimeter slant range, levelled with the AHRS attitude and moved to the body origin,
+        becomes the altitude output."""
         if msg.valid and np.isfinite(msg.altitude_m):
             roll, pitch, _ = self._attitude()
-            self._altitude_m = float(msg.altitude_m * np.cos(roll) * np.cos(pitch))
+            self._altitude_m = self._body_altitude_m(float(msg.altitude_m * np.cos(roll) * np.cos(pitch)), self._r_alt)
 
     def on_gps(self, msg: GpsMsg) -> bool:
         """GPS north/east fix of the antenna. Returns whether it was applied (valid, EKF mode,

@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Protocol
 
+import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -269,8 +270,6 @@ class FlsSensor:
         img = np.multiply(polar_cols, self._bin_gain[None, :], dtype=np.float32)
         img = apply_azimuth_pattern(img, self._kernel)
         if self._n_cols != g.n_beams:
-            import cv2
-
             img = cv2.resize(img, (self.n_bins, g.n_beams), interpolation=cv2.INTER_LINEAR)
             mask = mask_cols[self._beam_col]
         else:
@@ -284,7 +283,10 @@ class FlsSensor:
         polar_u8 = to_uint8_db(intensity, self._tvg, self.cfg.gain_db, self.cfg.dynamic_range_db)
         fan_u8 = self._remap.image(polar_u8)
 
-        objs = tuple(self._object_truth(o, origin, R_ns, dirs, base, extents.get(int(o.id)), caster) for o in objects)
+        in_win = (base.dist_m >= g.window_near_m) & (base.dist_m <= g.window_far_m) & (base.object_id >= 0)
+        hits_per_obj = np.bincount(base.object_id[in_win], minlength=1 + max((int(o.id) for o in objects), default=0))
+        objs = tuple(self._object_truth(o, origin, R_ns, dirs, int(hits_per_obj[int(o.id)]), extents.get(int(o.id)),
+                                        caster) for o in objects)
         frame = FlsFrame(t_s=float(t_s), polar=polar_u8, fan=fan_u8, geometry=self.fan_geometry,
                          mount_pos_body_m=self.mount_pos_body_m.copy(), mount_rpy_rad=self.mount_rpy_rad.copy())
         truth = FlsGroundTruth(t_s=float(t_s), mask_polar=mask, objects=objs, pos_ned=origin.copy(), R_ns=R_ns,
@@ -394,7 +396,7 @@ class FlsSensor:
         return polar, mask, extents
 
     def _object_truth(self, obj: SceneObjectLike, origin: FloatArray, R_ns: FloatArray, dirs: FloatArray,
-                      base: RayHits, extent: tuple[int, int, int, int] | None,
+                      n_hit: int, extent: tuple[int, int, int, int] | None,
                       caster: RayCaster) -> FlsObjectTruth:
         g = self.geometry
         k = int(obj.id)
@@ -405,8 +407,6 @@ class FlsSensor:
         el = float(np.arctan2(p_s[2], np.hypot(p_s[0], p_s[1])))
         in_fov = bool(abs(az) <= 0.5 * g.fov_rad and abs(el) <= 0.5 * g.vertical_beamwidth_rad
                       and g.window_near_m <= rng_m <= g.window_far_m)
-        in_win = (base.dist_m >= g.window_near_m) & (base.dist_m <= g.window_far_m)
-        n_hit = int(np.count_nonzero((base.object_id == k) & in_win))
         frac = float("nan")
         if hasattr(caster, "cast_isolated"):
             centre, radius = caster.object_bounding_sphere(k)

@@ -63,21 +63,12 @@ def spread_segments(n_rows: int, n_bins: int, row: NDArray[np.intp], u_a: FloatA
     off = w * (1.0 - (pos - fl))
     idx = np.concatenate([base + 1, base, base + 1, base_p, base_p + 1])
     weights = np.concatenate([w, off, -off, e_p, -e_p])
-    acc = np.bincount(idx, weights=weights, minlength=n_rows * stride).reshape(n_rows, stride)
+    acc = np.bincount(idx, weights=weights, minlength=n_rows * stride).astype(np.float64, copy=False)
+    acc = acc.reshape(n_rows, stride)
     np.cumsum(acc, axis=1, out=acc)
     out = acc[:, :n_bins]
     np.maximum(out, 0.0, out=out)  # cumsum round-off
     return out
-
-
-def deposit_points(n_rows: int, n_bins: int, row: NDArray[np.intp], u: FloatArray,
-                   energy: FloatArray) -> FloatArray:
-    """Add each ``energy`` to the bin containing ``u`` (dropped outside). (n_rows, n_bins)."""
-    k = np.floor(u)
-    ok = (k >= 0) & (k < n_bins)
-    idx = row[ok] * n_bins + k[ok].astype(np.intp)
-    out = np.bincount(idx, weights=energy[ok], minlength=n_rows * n_bins)
-    return out.astype(np.float64, copy=False).reshape(n_rows, n_bins)
 
 
 def azimuth_kernel(spacing_rad: float, beamwidth_rad: float, extent_beamwidths: float) -> NDArray[np.float32]:

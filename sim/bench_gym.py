@@ -1,0 +1,130 @@
+"""Gym benchmark: env steps per second and real-time factor of the auvsim environments.
+
+Variants (each at its default decision interval, one process unless stated):
+
+* ``waypoint``: ``auvsim/Waypoint-v0``, uniform random actions;
+* ``survey``: ``auvsim/Survey-v0`` without sonar, a slow constant turn (stays in the area);
+* ``survey_sonar``: the same with FLS, ATR, PMHA and the sonar image observation;
+* ``vector``: ``Waypoint-v0`` and ``Survey-v0`` (no sonar) in an ``AsyncVectorEnv`` with
+  one worker per core (2 by default): total env steps per second across workers.
+
+Single-env figures time ``step`` only (resets are reported apart); vector figures
+include the workers' automatic resets. ``profile`` lists, per single-env
+variant, the functions with the most cumulative time in a short cProfile'd run.
+"""
+
+from __future__ import annotations
+
+import cProfile
+import os
+import pstats
+import time
+from functools import partial
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from scenarios.schema import Scenario
+from sim.envs.survey_env import SurveyEnv, SurveyEnvOptions
+from sim.envs.waypoint_env import WaypointEnv
+
+SURVEY_ACTION = np.array([0.0, 0.2, 0.0], dtype=np.float32)  # 0.5 m/s, 3 deg/s turn, 2 m altitude
+
+
+def _policy(env: gym.Env, rng: np.random.Generator):
+    """Survey: the constant turn; otherwise uniform random actions."""
+    if isinstance(env.unwrapped, SurveyEnv):
+        return lambda: SURVEY_ACTION
+    return lambda: rng.uniform(-1.0, 1.0, env.action_space.shape).astype(np.float32)
+
+
+def _time_env(env: gym.Env, n_steps: int, dt_s: float, seed: int) -> dict[str, float]:
+    """Step time only (``steps_per_s``, ``real_time_factor``); resets timed apart."""
+    rng = np.random.default_rng(seed)
+    act = _policy(env, rng)
+    t0 = time.perf_counter()
+    env.reset(seed=seed)
+    reset_s = [time.perf_counter() - t0]
+    step_s = 0.0
+    for _ in range(n_steps):
+        t0 = time.perf_counter()
+        _, _, term, trunc, _ = env.step(act())
+        step_s += time.perf_counter() - t0
+        if term or trunc:
+            t0 = time.perf_counter()
+            env.reset()
+            reset_s.append(time.perf_counter() - t0)
+    return {"steps_per_s": n_steps / step_s, "real_time_factor": n_steps * dt_s / step_s, "n_steps": n_steps,
+            "decision_interval_s": dt_s, "step_wall_time_s": step_s, "resets": len(reset_s),
+            "reset_mean_s": float(np.mean(reset_s))}
+
+
+def _time_vector(fn, n_envs: int, n_steps: int, dt_s: float, act_dim: int, constant: np.ndarray | None) -> dict[str, float]:
+    venv = gym.vector.AsyncVectorEnv([fn] * n_envs)
+    rng = np.random.default_rng(0)
+    try:
+        venv.reset(seed=list(range(n_envs)))
+        t0 = time.perf_counter()
+        for _ in range(n_steps):
+            a = np.tile(constant, (n_envs, 1)) if constant is not None else rng.uniform(-1, 1, (n_envs, act_dim))
+            venv.step(a.astype(np.float32))
+        wall = time.perf_counter() - t0
+    finally:
+        venv.close()
+    total = n_steps * n_envs
+    return {"n_envs": n_envs, "steps_per_s": total / wall, "real_time_factor": total * dt_s / wall,
+            "n_steps": total, "wall_time_s": wall}
+
+
+def _profile(env: gym.Env, n_steps: int, top: int = 8) -> list[dict[str, Any]]:
+    rng = np.random.default_rng(1)
+    act = _policy(env, rng)
+    env.reset(seed=1)
+    prof = cProfile.Profile()
+    prof.enable()
+    for _ in range(n_steps):
+        _, _, term, trunc, _ = env.step(act())
+        if term or trunc:
+            env.reset()
+    prof.disable()
+    stats = pstats.Stats(prof)
+    total = max(stats.total_tt, 1e-12)
+    rows = sorted(stats.stats.items(), key=lambda kv: kv[1][3], reverse=True)
+    out = []
+    for (path, line, name), (_, _, tt, ct, _) in rows:
+        if name == "<module>" or path.endswith(("survey_env.py", "waypoint_env.py")) and name == "step":
+            continue  # the env's own step is 100 %
+        out.append({"function": f"{os.path.relpath(path) if os.path.isabs(path) else path}:{line}({name})",
+                    "cumulative_fraction": round(ct / total, 3), "self_fraction": round(tt / total, 3)})
+        if len(out) >= top:
+            break
+    return out
+
+
+def run(scenario: Scenario, *, waypoint_steps: int = 3000, survey_steps: int = 60, sonar_steps: int = 15,
+        n_envs: int | None = None, profile: bool = True) -> dict[str, Any]:
+    """Time every variant on ``scenario``; returns
+    ``{"waypoint", "survey", "survey_sonar", "vector", "profile"}`` (each with
+    ``steps_per_s`` and ``real_time_factor``)."""
+    n_envs = n_envs or min(os.cpu_count() or 1, 2)
+    wp = WaypointEnv(scenario)
+    sv = SurveyEnv(scenario, SurveyEnvOptions(sonar=False))
+    sv_sonar = SurveyEnv(scenario, SurveyEnvOptions(sonar=True))
+    result: dict[str, Any] = {
+        "waypoint": _time_env(wp, waypoint_steps, wp.decision_interval_s, 0),
+        "survey": _time_env(sv, survey_steps, sv.decision_interval_s, 0),
+        "survey_sonar": _time_env(sv_sonar, sonar_steps, sv_sonar.decision_interval_s, 0),
+    }
+    result["vector"] = {
+        "waypoint": _time_vector(partial(WaypointEnv, scenario), n_envs, waypoint_steps // n_envs,
+                                 wp.decision_interval_s, wp.n_act, None),
+        "survey": _time_vector(partial(SurveyEnv, scenario, SurveyEnvOptions(sonar=False)), n_envs,
+                               survey_steps // n_envs, sv.decision_interval_s, 3, SURVEY_ACTION),
+    }
+    result["vector"].update(steps_per_s=result["vector"]["waypoint"]["steps_per_s"],
+                            real_time_factor=result["vector"]["waypoint"]["real_time_factor"])
+    if profile:
+        result["profile"] = {"waypoint": _profile(wp, 500), "survey": _profile(sv, 15),
+                             "survey_sonar": _profile(sv_sonar, 5)}
+    return result

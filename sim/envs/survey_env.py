@@ -1,0 +1,324 @@
+"""``auvsim/Survey-v0``: find and localise the targets of an area with high-level setpoints.
+
+Wraps the closed-loop :class:`sim.mission.Mission` (physics, navigation sensors, EKF,
+autopilots and, with ``sonar=True``, the FLS, ATR, geolocalisation and PMHA world model).
+The agent replaces the mission's guidance: each action sets surge speed, yaw rate and
+altitude for one decision interval; the autopilots track them at the autonomy rate.
+
+Coverage is computed onboard: a coarse grid over the survey area whose cells are marked
+when their centre on the (mapped) seabed falls inside the sonar fan at the navigation
+estimate's pose. Targets count as found when a confirmed world-model object (enough
+supporting detections) lies within ``match_radius_m`` of a true target.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import cv2
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from autonomy.control.setpoint import Setpoint
+from autonomy.frames import wrap_angle
+from scenarios.schema import Scenario
+from sim.envs.area import OperatingArea, survey_area
+from sim.envs.coverage import CoverageGrid
+from sim.envs.scenario_arg import resolve_scenario
+from sim.envs.world_model_obs import anchor_bounds, anchor_table, match_new_targets
+from sim.mission import Mission
+from sim.records import FlsEvent
+from sim.sensors.fls_presets import resolve_geometry
+
+NAV_FEATURES = ("n_m", "e_m", "depth_m", "altitude_m", "altitude_valid", "roll_rad", "pitch_rad", "sin_yaw",
+                "cos_yaw", "u_mps", "v_mps", "w_mps", "r_radps", "pos_sigma_m", "time_fraction",
+                "coverage_fraction")
+_NAV_HI = np.array([200.0, 200.0, 100.0, 100.0, 1.0, math.pi, math.pi, 1.0, 1.0, 5.0, 5.0, 5.0, 5.0, 100.0,
+                    1.0, 1.0], dtype=np.float32)
+_NAV_LO = np.array([-200.0, -200.0, -10.0, 0.0, 0.0, -math.pi, -math.pi, -1.0, -1.0, -5.0, -5.0, -5.0, -5.0,
+                    0.0, 0.0, 0.0], dtype=np.float32)
+
+
+@dataclass(frozen=True)
+class SurveyRewardWeights:
+    """Reward per decision step: ``target * new targets found + coverage * new covered
+    fraction of the area - energy_per_s * mean(cmd^2) * dt``, minus ``collision`` or
+    ``leave_area`` on those terminations, plus ``complete`` when the mission completes."""
+
+    target: float = 10.0
+    coverage: float = 10.0
+    energy_per_s: float = 0.02
+    collision: float = 50.0
+    leave_area: float = 50.0
+    complete: float = 10.0
+
+
+@dataclass(frozen=True)
+class SurveyEnvOptions:
+    """Typed options of :class:`SurveyEnv`.
+
+    Attributes:
+        sonar: simulate the FLS and run ATR + PMHA, and add the downsampled fan image
+            (``obs["sonar"]``); False: no sonar at all (fast; the world model stays empty,
+            coverage still uses the sonar's nominal fan).
+        decision_interval_s: time one action is held (a multiple of the autonomy period).
+        max_episode_s: time limit (None: the scenario's duration).
+        top_k_anchors: rows of the world-model table.
+        coverage_shape: (rows, cols) of the coverage grid over the survey area.
+        sonar_shape: (height, width) of the downsampled fan image.
+        speed_range_mps, altitude_range_m: what action -1 .. 1 maps to.
+        complete_coverage_fraction: the mission is complete at this covered fraction
+            (or once every target is found, with sonar).
+        match_radius_m: a world object within this of a true target finds it.
+        area_margin_m: the episode ends this far outside the survey area.
+        nav_source: pose used for target geolocalisation (``estimate`` or ``truth``).
+        physics_rate_hz: physics rate override (None: the scenario's).
+        reward: reward weights.
+    """
+
+    sonar: bool = True
+    decision_interval_s: float = 1.0
+    max_episode_s: float | None = None
+    top_k_anchors: int = 16
+    coverage_shape: tuple[int, int] = (16, 16)
+    sonar_shape: tuple[int, int] = (64, 64)
+    speed_range_mps: tuple[float, float] = (0.0, 1.0)
+    altitude_range_m: tuple[float, float] = (1.0, 3.0)
+    complete_coverage_fraction: float = 0.95
+    match_radius_m: float = 2.0
+    area_margin_m: float = 5.0
+    nav_source: str = "estimate"
+    physics_rate_hz: float | None = None
+    reward: SurveyRewardWeights = field(default_factory=SurveyRewardWeights)
+
+    def __post_init__(self) -> None:
+        if not self.decision_interval_s > 0.0:
+            raise ValueError(f"SurveyEnvOptions.decision_interval_s must be > 0, got {self.decision_interval_s}")
+        if self.max_episode_s is not None and not self.max_episode_s > 0.0:
+            raise ValueError(f"SurveyEnvOptions.max_episode_s must be > 0 or None, got {self.max_episode_s}")
+        if self.top_k_anchors < 1:
+            raise ValueError(f"SurveyEnvOptions.top_k_anchors must be >= 1, got {self.top_k_anchors}")
+        for name in ("coverage_shape", "sonar_shape"):
+            shape = getattr(self, name)
+            if len(shape) != 2 or min(shape) < 1:
+                raise ValueError(f"SurveyEnvOptions.{name} must be two positive ints, got {shape}")
+        if not 0.0 <= self.speed_range_mps[0] < self.speed_range_mps[1]:
+            raise ValueError(f"SurveyEnvOptions.speed_range_mps must satisfy 0 <= min < max, got {self.speed_range_mps}")
+        if not 0.0 < self.altitude_range_m[0] <= self.altitude_range_m[1]:
+            raise ValueError(f"SurveyEnvOptions.altitude_range_m must satisfy 0 < min <= max, got {self.altitude_range_m}")
+        if not 0.0 < self.complete_coverage_fraction <= 1.0:
+            raise ValueError("SurveyEnvOptions.complete_coverage_fraction must be in (0, 1], "
+                             f"got {self.complete_coverage_fraction}")
+        if not self.match_radius_m > 0.0 or not self.area_margin_m >= 0.0:
+            raise ValueError("SurveyEnvOptions.match_radius_m must be > 0 and area_margin_m >= 0")
+
+
+def _options(options: SurveyEnvOptions | dict | None) -> SurveyEnvOptions:
+    if options is None:
+        return SurveyEnvOptions()
+    if isinstance(options, dict):
+        opts = dict(options)
+        if isinstance(opts.get("reward"), dict):
+            opts["reward"] = SurveyRewardWeights(**opts["reward"])
+        for key in ("coverage_shape", "sonar_shape", "speed_range_mps", "altitude_range_m"):
+            if key in opts:
+                opts[key] = tuple(opts[key])
+        return SurveyEnvOptions(**opts)
+    return options
+
+
+class _LatestFls:
+    """Mission observer keeping the latest FLS fan image."""
+
+    def __init__(self) -> None:
+        self.fan: np.ndarray | None = None
+
+    def on_start(self, mission: Mission) -> None:
+        self.fan = None
+
+    def on_step(self, record) -> None:
+        pass
+
+    def on_fls(self, event: FlsEvent) -> None:
+        self.fan = event.render.frame.fan
+
+    def on_end(self, mission: Mission) -> None:
+        pass
+
+
+class _EnvMission(Mission):
+    """A mission that rebuilds every seeded component on each seeded reset (so that the same
+    seed twice in a row replays the same episode bit for bit)."""
+
+    def reseed(self, seed: int) -> None:
+        self._build_components(int(seed))
+
+
+class SurveyEnv(gym.Env):
+    """Survey an area for targets. See the module docstring.
+
+    Action: Box([-1, 1]^3): surge speed (mapped to ``speed_range_mps``), yaw rate (mapped
+    to +- the autopilot's max yaw rate; the heading setpoint integrates it) and altitude
+    (mapped to ``altitude_range_m``).
+
+    Observation (Dict): ``nav`` (:data:`NAV_FEATURES`, north/east relative to the area
+    centre), ``anchors`` (top-K world objects, features
+    :data:`sim.envs.world_model_obs.ANCHOR_FEATURES`), ``anchor_mask``, ``coverage``
+    ((rows, cols) in {0, 1}) and, with sonar, ``sonar`` (uint8 fan image).
+    """
+
+    metadata = {"render_modes": []}
+
+    def __init__(self, scenario: str | Path | Scenario = "cssn_lawnmower",
+                 options: SurveyEnvOptions | dict | None = None, overrides: tuple[str, ...] = ()) -> None:
+        self.options = opts = _options(options)
+        over = list(overrides)
+        if not opts.sonar:
+            over.append("sensors.fls.enabled=false")
+        if opts.physics_rate_hz is not None:
+            over.append(f"physics.rate_hz={opts.physics_rate_hz}")
+        self.scenario = scn = resolve_scenario(scenario, over)
+        self.area: OperatingArea = survey_area(scn, opts.area_margin_m)
+        self._latest_fls = _LatestFls()
+        self.mission = _EnvMission(scn, nav_source=opts.nav_source, observers=(self._latest_fls,),
+                                   perception=opts.sonar)
+        self.ticks_per_step = int(round(opts.decision_interval_s / self.mission.autonomy_dt_s))
+        if self.ticks_per_step < 1 or abs(self.ticks_per_step * self.mission.autonomy_dt_s
+                                          - opts.decision_interval_s) > 1e-6:
+            raise ValueError(f"SurveyEnvOptions.decision_interval_s={opts.decision_interval_s} must be a multiple of "
+                             f"the autonomy period {self.mission.autonomy_dt_s} s")
+        self.decision_interval_s = self.ticks_per_step * self.mission.autonomy_dt_s
+        self.max_episode_s = float(scn.duration_s if opts.max_episode_s is None else opts.max_episode_s)
+        self.max_yaw_rate_radps = math.radians(scn.autonomy.control.max_yaw_rate_dps)
+
+        fls_cfg = scn.sensors.fls
+        g = resolve_geometry(fls_cfg)
+        self.coverage = CoverageGrid(self.area, opts.coverage_shape, self.mission.world.seabed.depth_at,
+                                     self.mission.world.site_pos_body(fls_cfg.mount_site),
+                                     (0.0, math.radians(fls_cfg.tilt_deg), 0.0), range_min_m=g.window_near_m,
+                                     range_max_m=g.window_far_m, fov_rad=g.fov_rad,
+                                     vertical_fov_rad=g.vertical_beamwidth_rad)
+        self.targets_ned = np.array([t.pos_ned for t in scn.world.targets if t.is_target], dtype=float).reshape(-1, 3)
+        self.origin_ned = np.array([*self.area.center_ne_m, 0.0])
+
+        k = opts.top_k_anchors
+        a_lo, a_hi = anchor_bounds(k)
+        obs_spaces: dict[str, spaces.Space] = {
+            "nav": spaces.Box(_NAV_LO, _NAV_HI, dtype=np.float32),
+            "anchors": spaces.Box(a_lo, a_hi, dtype=np.float32),
+            "anchor_mask": spaces.MultiBinary(k),
+            "coverage": spaces.Box(0.0, 1.0, tuple(opts.coverage_shape), dtype=np.float32),
+        }
+        if opts.sonar:
+            obs_spaces["sonar"] = spaces.Box(0, 255, tuple(opts.sonar_shape), dtype=np.uint8)
+        self.observation_space = spaces.Dict(obs_spaces)
+        self.action_space = spaces.Box(-1.0, 1.0, (3,), dtype=np.float32)
+        self._found = np.zeros(len(self.targets_ned), dtype=bool)
+
+    # ------------------------------------------------------------------ episode
+    def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[dict, dict[str, Any]]:
+        super().reset(seed=seed)
+        mission_seed = int(self.np_random.integers(0, 2**63 - 1))
+        self.mission.reseed(mission_seed)
+        rec = self.mission.reset()
+        self._nav = rec.nav
+        self._heading_sp_rad = float(rec.nav.rpy_rad[2])
+        self._n_steps = 0
+        self.coverage.reset()
+        self.coverage.observe(rec.nav.pos_ned, rec.nav.rpy_rad)
+        self._found[:] = False
+        return self._observation(), self._info(False, False, 0)
+
+    def step(self, action: np.ndarray) -> tuple[dict, float, bool, bool, dict[str, Any]]:
+        a = np.clip(np.asarray(action, dtype=float).reshape(3), -1.0, 1.0)
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"SurveyEnv.step: action must be finite, got {action!r}")
+        opts, w, m = self.options, self.options.reward, self.mission
+        s_lo, s_hi = opts.speed_range_mps
+        h_lo, h_hi = opts.altitude_range_m
+        speed = s_lo + 0.5 * (a[0] + 1.0) * (s_hi - s_lo)
+        altitude = h_lo + 0.5 * (a[2] + 1.0) * (h_hi - h_lo)
+        dt = m.autonomy_dt_s
+        effort = 0.0
+        n_new_cells = 0
+        collided = False
+        for _ in range(self.ticks_per_step):
+            self._heading_sp_rad = float(wrap_angle(self._heading_sp_rad + a[1] * self.max_yaw_rate_radps * dt))
+            rec = m.step(Setpoint(float(speed), self._heading_sp_rad, altitude_m=float(altitude)))
+            effort += float(np.mean(np.square(rec.thruster_cmd))) * dt
+            n_new_cells += self.coverage.observe(rec.nav.pos_ned, rec.nav.rpy_rad)
+            if m.data.ncon and self._vehicle_contact():
+                collided = True
+        self._nav = rec.nav
+        self._n_steps += 1
+        t_s = self._n_steps * self.decision_interval_s
+
+        n_new_targets = 0
+        if m.perception is not None:
+            n_new_targets = match_new_targets(m.perception.pmha.world_model(), self.targets_ned, self._found,
+                                              opts.match_radius_m)
+        reward = (w.target * n_new_targets + w.coverage * n_new_cells / self.coverage.covered.size
+                  - w.energy_per_s * effort)
+        pos = rec.truth.pos_ned
+        left = bool(not self.area.contains(pos) or pos[2] < 0.0)
+        complete = self.coverage.fraction >= opts.complete_coverage_fraction or (
+            m.perception is not None and len(self._found) > 0 and bool(np.all(self._found)))
+        if collided:
+            reward -= w.collision
+        if left:
+            reward -= w.leave_area
+        if complete and not (collided or left):
+            reward += w.complete
+        terminated = complete or collided or left
+        truncated = (not terminated) and t_s >= self.max_episode_s - 1e-9
+        info = self._info(collided, left, n_new_targets)
+        info.update(energy=effort, complete=complete)
+        return self._observation(), float(reward), terminated, truncated, info
+
+    def _vehicle_contact(self) -> bool:
+        m = self.mission
+        body = m.model.geom_bodyid
+        vb = m.world.vehicle_body_id
+        for i in range(m.data.ncon):
+            c = m.data.contact[i]
+            if body[c.geom1] == vb or body[c.geom2] == vb:
+                return True
+        return False
+
+    # ------------------------------------------------------------------ observation
+    def _observation(self) -> dict[str, np.ndarray]:
+        nav = self._nav
+        m = self.mission
+        cov = np.asarray(nav.cov_pos_ned, dtype=float)
+        alt = float(nav.altitude_m)
+        alt_ok = math.isfinite(alt)
+        yaw = float(nav.rpy_rad[2])
+        t_frac = min(self._n_steps * self.decision_interval_s / self.max_episode_s, 1.0)
+        vec = np.array([nav.pos_ned[0] - self.origin_ned[0], nav.pos_ned[1] - self.origin_ned[1], nav.pos_ned[2],
+                        alt if alt_ok else 0.0, float(alt_ok), nav.rpy_rad[0], nav.rpy_rad[1], math.sin(yaw),
+                        math.cos(yaw), *nav.vel_body_mps, nav.rate_body_radps[2],
+                        math.sqrt(max(cov[0, 0] + cov[1, 1], 0.0)), t_frac, self.coverage.fraction],
+                       dtype=np.float64)
+        objects = m.perception.pmha.world_model() if m.perception is not None else []
+        anchors, mask = anchor_table(objects, self.options.top_k_anchors, self.origin_ned)
+        obs = {
+            "nav": np.clip(np.nan_to_num(vec), _NAV_LO, _NAV_HI).astype(np.float32),
+            "anchors": anchors,
+            "anchor_mask": mask,
+            "coverage": self.coverage.as_image(),
+        }
+        if self.options.sonar:
+            h, w = self.options.sonar_shape
+            fan = self._latest_fls.fan
+            obs["sonar"] = (np.zeros((h, w), dtype=np.uint8) if fan is None
+                            else cv2.resize(fan, (w, h), interpolation=cv2.INTER_AREA))
+        return obs
+
+    def _info(self, collided: bool, left: bool, n_new_targets: int) -> dict[str, Any]:
+        return {"t_s": self._n_steps * self.decision_interval_s, "coverage_fraction": self.coverage.fraction,
+                "targets_found": int(np.count_nonzero(self._found)), "new_targets": n_new_targets,
+                "collision": collided, "left_area": left, "nav_pos_ned": np.asarray(self._nav.pos_ned).copy()}

@@ -1,0 +1,166 @@
+"""auvsim/Survey-v0: gymnasium API, determinism, spaces, coverage geometry, world-model table."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import partial
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+import sim.envs  # noqa: F401  (registers the ids)
+from sim.envs import SURVEY_ID
+from sim.envs.area import OperatingArea
+from sim.envs.coverage import CoverageGrid
+from sim.envs.survey_env import SurveyEnv, SurveyEnvOptions
+from sim.envs.world_model_obs import ANCHOR_FEATURES, anchor_table, match_new_targets
+
+FAST = {"sonar": False, "max_episode_s": 6.0}
+
+
+@pytest.fixture(scope="module")
+def env():
+    return SurveyEnv(options=SurveyEnvOptions(**FAST))
+
+
+def test_check_env_passes(env):
+    check_env(env, skip_render_check=True)
+
+
+def test_make_by_id_and_bad_options():
+    e = gym.make(SURVEY_ID, options=FAST)
+    assert isinstance(e.unwrapped, SurveyEnv)
+    with pytest.raises(ValueError, match="decision_interval_s"):
+        SurveyEnv(options=SurveyEnvOptions(sonar=False, decision_interval_s=0.25))
+    with pytest.raises(ValueError, match="altitude_range_m"):
+        SurveyEnvOptions(altitude_range_m=(0.0, 2.0))
+
+
+def _rollout(e, seed, n):
+    obs, _ = e.reset(seed=seed)
+    rng = np.random.default_rng(0)
+    seq = [obs]
+    for _ in range(n):
+        obs, r, term, trunc, _ = e.step(rng.uniform(-1, 1, 3).astype(np.float32))
+        assert e.observation_space.contains(obs)
+        assert math.isfinite(r)
+        seq.append(obs)
+        if term or trunc:
+            break
+    return seq
+
+
+def test_seeded_reset_is_bit_for_bit(env):
+    a = _rollout(env, 4, 4)
+    b = _rollout(env, 4, 4)  # same env, same seed twice in a row: every component reseeded
+    c = _rollout(SurveyEnv(options=SurveyEnvOptions(**FAST)), 4, 4)
+    d = _rollout(env, 5, 4)
+    for x, y, z in zip(a, b, c):
+        for k in x:
+            np.testing.assert_array_equal(x[k], y[k])
+            np.testing.assert_array_equal(x[k], z[k])
+    assert not np.array_equal(a[-1]["nav"], d[-1]["nav"])  # navigation noise differs
+
+
+def test_coverage_grid_matches_fan_geometry():
+    """Level vehicle, flat seabed: a cell is covered iff its centre's slant range is in the
+    window and its bearing off the heading is within half the field of view."""
+    area = OperatingArea(np.array([-20.0, -20.0]), np.array([20.0, 20.0]), 0.0)
+    grid = CoverageGrid(area, (40, 40), lambda n, e: np.full(np.shape(n), 4.0), (0.5, 0.0, 0.0), (0.0, 0.0, 0.0),
+                        range_min_m=2.0, range_max_m=12.0, fov_rad=math.radians(90.0),
+                        vertical_fov_rad=math.radians(179.0))
+    yaw = math.radians(30.0)
+    new = grid.observe(np.array([1.0, -2.0, 1.0]), np.array([0.0, 0.0, yaw]))
+    origin = np.array([1.0 + 0.5 * math.cos(yaw), -2.0 + 0.5 * math.sin(yaw), 1.0])
+    d = grid.centres_ned - origin
+    slant = np.linalg.norm(d, axis=1)
+    bearing = np.arctan2(d[:, 1], d[:, 0]) - yaw
+    bearing = (bearing + math.pi) % (2 * math.pi) - math.pi
+    expected = (slant >= 2.0) & (slant <= 12.0) & (np.abs(bearing) <= math.radians(45.0))
+    np.testing.assert_array_equal(grid.covered, expected)
+    assert new == expected.sum() > 20
+    assert grid.observe(np.array([1.0, -2.0, 1.0]), np.array([0.0, 0.0, yaw])) == 0
+    assert grid.fraction == pytest.approx(expected.mean())
+
+
+@dataclass
+class _Obj:
+    id: int
+    pos_ned: np.ndarray
+    cov_ned: np.ndarray
+    class_pmf: np.ndarray
+    n_detections: int
+    existence_probability: float
+
+
+def test_anchor_table_ranks_masks_and_clips():
+    objs = [_Obj(i, np.array([i, 2.0 * i, 4.0]), np.diag([0.1 * (i + 1)] * 3), np.array([0.8, 0.2]), 2 + i, p)
+            for i, p in enumerate([0.5, 0.9, 0.7])]
+    objs.append(_Obj(9, np.array([1e4, 0.0, 4.0]), np.eye(3) * 1e6, np.array([0.1, 0.9]), 3, 0.6))
+    table, mask = anchor_table(objs, 3, np.array([1.0, 1.0, 0.0]))
+    assert table.shape == (3, len(ANCHOR_FEATURES))
+    np.testing.assert_array_equal(mask, [1, 1, 1])
+    np.testing.assert_allclose(table[:, 0], [0.0, 1.0, 199.0 + 1.0])  # ids 1, 2, then 9 (clipped to 200)
+    assert table[2, 3] == 100.0  # variance clipped
+    assert table[0, ANCHOR_FEATURES.index("existence")] == pytest.approx(0.9)
+    table, mask = anchor_table(objs[:1], 3, np.zeros(3))
+    np.testing.assert_array_equal(mask, [1, 0, 0])
+    assert not table[1:].any()
+
+
+def test_match_new_targets_counts_each_target_once():
+    targets = np.array([[0.0, 0.0, 4.0], [0.0, 5.0, 4.0]])
+    found = np.zeros(2, dtype=bool)
+    objs = [_Obj(0, np.array([0.5, 0.0, 4.0]), np.eye(3), np.ones(2) / 2, 2, 1.0),
+            _Obj(1, np.array([0.0, 0.4, 4.0]), np.eye(3), np.ones(2) / 2, 2, 1.0)]
+    assert match_new_targets(objs, targets, found, 2.0) == 1
+    np.testing.assert_array_equal(found, [True, False])
+    assert match_new_targets(objs + [_Obj(2, np.array([0.0, 6.0, 4.0]), np.eye(3), np.ones(2) / 2, 2, 1.0)],
+                             targets, found, 2.0) == 1
+    assert found.all()
+
+
+def test_coverage_reward_and_survey_progress(env):
+    """Flying straight east at 0.75 m/s: coverage grows and the reward is its gain minus energy."""
+    obs, _ = env.reset(seed=0)
+    cov0 = obs["nav"][-1]
+    total, energy = 0.0, 0.0
+    for _ in range(6):
+        obs, r, term, trunc, info = env.step(np.array([0.5, 0.0, 0.0], dtype=np.float32))
+        total += r
+        energy += info["energy"]
+    w = env.options.reward
+    assert trunc and not term
+    assert info["coverage_fraction"] > cov0
+    assert total == pytest.approx(w.coverage * (info["coverage_fraction"] - cov0) - w.energy_per_s * energy, abs=1e-9)
+    assert info["nav_pos_ned"][1] > 1.0  # moved east from E = 0
+
+
+def test_sonar_observation_with_classical_atr():
+    e = SurveyEnv(options=SurveyEnvOptions(sonar=True, max_episode_s=4.0, sonar_shape=(32, 48)),
+                  overrides=("autonomy.atr.detector=classical",))
+    obs, _ = e.reset(seed=1)
+    assert obs["sonar"].shape == (32, 48) and obs["sonar"].dtype == np.uint8 and not obs["sonar"].any()
+    for _ in range(2):
+        obs, r, term, trunc, info = e.step(np.array([0.0, 0.0, 0.0], dtype=np.float32))
+        assert e.observation_space.contains(obs)
+    assert e.mission.n_fls_frames >= 5
+    assert obs["sonar"].max() > 0
+
+
+def test_vector_envs_sync_and_async():
+    make = partial(gym.make, "sim.envs:" + SURVEY_ID, options={"sonar": False, "max_episode_s": 2.0})
+    outs = []
+    for cls in (gym.vector.SyncVectorEnv, gym.vector.AsyncVectorEnv):
+        venv = cls([make, make])
+        obs, _ = venv.reset(seed=[3, 4])
+        for _ in range(2):
+            obs, r, term, trunc, _ = venv.step(np.zeros((2, 3), dtype=np.float32))
+            assert venv.observation_space.contains(obs)
+        venv.close()
+        outs.append(obs)
+    for k in outs[0]:
+        np.testing.assert_array_equal(outs[0][k], outs[1][k])
