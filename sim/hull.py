@@ -21,7 +21,7 @@ from autonomy.frames import quat_from_euler, quat_from_rot
 from sim.vehicle_params import SENSOR_NAMES, VehicleParams
 
 VEHICLE_BODY = "vehicle"
-HULL_GROUP = 1  # same value as sim.world.HULL_GROUP
+HULL_GROUP = 1  # geom group of every hull geom (sim.world's groups are documented there)
 VISUAL_MESH = "hull_visual"
 
 _SHAPES = {

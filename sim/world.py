@@ -4,7 +4,7 @@ The MuJoCo world frame is NED (z down) and MuJoCo gravity is off: weight and buo
 act through the hydrodynamic wrench (:mod:`sim.vehicle`). Geom groups:
 
 * ``ACOUSTIC_GROUP`` (0): what sonars and ray-cast sensors see (seabed, walls, targets);
-* ``HULL_GROUP`` (1): the vehicle's geoms;
+* ``HULL_GROUP`` (1, :mod:`sim.hull`): the vehicle's geoms;
 * ``COLLISION_PROXY_GROUP`` (3): invisible collision stand-ins (a plane under a terrain
   mesh, since MuJoCo collides meshes through their convex hulls).
 """
@@ -23,13 +23,12 @@ from scenarios.schema import Scenario
 from sim.rng import component_rng
 from sim.seabed import Seabed, make_seabed
 from sim.sensors.raycast import BACKGROUND_ID
+from sim.hull import VEHICLE_BODY, build_hull_spec
 from sim.target_meshes import target_mesh
 
 ACOUSTIC_GROUP = 0
-HULL_GROUP = 1
 COLLISION_PROXY_GROUP = 3
 HULL_PREFIX = "hull/"
-VEHICLE_BODY = "vehicle"
 NO_OBJECT_ID = -3  # geoms that belong to no scene object and are not background (hull)
 
 _INTEGRATORS = {
@@ -226,7 +225,6 @@ def build_world(scenario: Scenario, *, with_vehicle: bool = True) -> World:
         objects.append(obj)
 
     if with_vehicle:
-        from sim.hull import build_hull_spec
         from sim.vehicle_params import load_vehicle_params
 
         hull = build_hull_spec(load_vehicle_params(scenario.vehicle))

@@ -68,8 +68,12 @@ class Plant:
         self.t_s += PHYSICS_DT_S
 
 
+STOP = object()  # returned by a setpoint function to end the run
+
+
 def fly(plant: Plant, duration_s: float, setpoint_fn, autopilot: Autopilot | None = None):
-    """Run the loop; ``setpoint_fn(nav) -> Setpoint | None`` (None stops). Returns a log."""
+    """Run the loop; ``setpoint_fn(nav) -> Setpoint | None | STOP`` (None: idle, zero
+    wrench; STOP ends the run). Returns a log."""
     ap = autopilot or Autopilot(AutopilotParams.from_config(ControlConfig()))
     cmd = np.zeros(plant.thrusters.n)
     log = []
@@ -77,9 +81,9 @@ def fly(plant: Plant, duration_s: float, setpoint_fn, autopilot: Autopilot | Non
         if k % CONTROL_EVERY == 0:
             nav = plant.nav()
             sp = setpoint_fn(nav)
-            if sp is None:
+            if sp is STOP:
                 break
-            wrench = ap.update(nav, sp, CONTROL_EVERY * PHYSICS_DT_S)
+            wrench = np.zeros(6) if sp is None else ap.update(nav, sp, CONTROL_EVERY * PHYSICS_DT_S)
             cmd = plant.thrusters.allocate(wrench)
             log.append((plant.t_s, *plant.pos, *euler_from_rot(plant.R), *plant.nu[:3]))
         plant.step(cmd)
@@ -118,7 +122,7 @@ def _line_in_cross_current(compensate: bool, sway_control: bool):
     guidance = SurveyGuidance([[0.0, 45.0]], 0.5, los, depth_m=2.0)
     guidance.start([0.0, 0.0], math.radians(90.0))
     cfg = ControlConfig() if sway_control else ControlConfig(sway=PidConfig())
-    log = fly(plant, 130.0, lambda nav: None if guidance.finished else guidance.update(nav),
+    log = fly(plant, 130.0, lambda nav: STOP if guidance.finished else guidance.update(nav),
               Autopilot(AutopilotParams.from_config(cfg)))
     assert guidance.finished, "did not reach the end of the line"
     t, north, east, depth = log[:, 0], log[:, 1], log[:, 2], log[:, 3]
@@ -157,7 +161,7 @@ def test_cssn_lawnmower_mission_visits_every_waypoint():
     x0 = scenario.vehicle.initial_pos_ned
     plant = Plant(x0, math.radians(scenario.vehicle.initial_rpy_deg[2]))
     ap = Autopilot(AutopilotParams.from_config(scenario.autonomy.control))
-    log = fly(plant, 720.0, lambda nav: None if fsm.done else fsm.update(nav.t_s, nav, True), ap)
+    log = fly(plant, 720.0, lambda nav: STOP if fsm.done else fsm.update(nav.t_s, nav, True), ap)
     assert fsm.succeeded, fsm.transitions
     assert [tr.to_state for tr in fsm.transitions] == [
         MissionState.DIVE, MissionState.SURVEY, MissionState.SURFACE, MissionState.DONE]
