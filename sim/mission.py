@@ -139,8 +139,8 @@ class Mission:
 
     # -- stepping API ----------------------------------------------------------------
     def reset(self, seed: int | None = None) -> StepRecord:
-        """Restart the mission (reseeding every component when ``seed`` is given)."""
-        if seed is not None and int(seed) != self.seed:
+        """Restart the mission; a given ``seed`` reseeds every component (same seed, same run)."""
+        if seed is not None:
             self._build_components(int(seed))
         scn = self.scenario
         mujoco.mj_resetData(self.model, self.data)

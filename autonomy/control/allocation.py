@@ -124,12 +124,15 @@ def allocate_thrust(
     thrust_min_n: ArrayLike,
     thrust_max_n: ArrayLike,
     dof_weights: ArrayLike | None = None,
+    pinv_cache: dict[bytes, FloatArray] | None = None,
 ) -> FloatArray:
     """Thrusts (n,) best producing ``wrench_body`` (6,) within ``[thrust_min, thrust_max]``.
 
     Weighted least squares ``min || W^(1/2) (B f - tau) ||`` (minimum-norm ``f`` among
     solutions) with redistribution of saturated thrusters; see the module docstring.
     ``dof_weights`` (6,) weighs the wrench components (default all ones).
+    ``pinv_cache`` (owned by the caller, valid for one matrix and weights) memoises the
+    pseudo-inverse of each set of unsaturated thrusters.
     """
     tau = np.asarray(wrench_body, dtype=float).reshape(6)
     B = np.asarray(config_matrix, dtype=float)
@@ -148,7 +151,13 @@ def allocate_thrust(
     free = np.ones(n, dtype=bool)
     for _ in range(n):
         residual = tw - Bw @ thrust
-        sol = np.linalg.pinv(Bw[:, free], rcond=1e-9) @ residual
+        key = free.tobytes()
+        pinv = None if pinv_cache is None else pinv_cache.get(key)
+        if pinv is None:
+            pinv = np.linalg.pinv(Bw[:, free], rcond=1e-9)
+            if pinv_cache is not None:
+                pinv_cache[key] = pinv
+        sol = pinv @ residual
         trial = thrust.copy()
         trial[free] += sol
         over = free & ((trial > hi + 1e-12) | (trial < lo - 1e-12))
@@ -202,6 +211,7 @@ class ThrustAllocator:
         self.thrust_min_n, self.thrust_max_n = limits[:, 0].copy(), limits[:, 1].copy()
         self.layout = layout
         self.dof_weights = dof_weights
+        self._pinv_cache: dict[bytes, FloatArray] = {}
 
     @classmethod
     def from_layout(cls, layout: ThrusterLayout, dof_weights: ArrayLike | None = None) -> "ThrustAllocator":
@@ -211,7 +221,7 @@ class ThrustAllocator:
     def allocate_thrust(self, wrench_body: ArrayLike) -> FloatArray:
         """Thrusts (n,) in N for the desired body wrench (6,)."""
         return allocate_thrust(wrench_body, self.config_matrix, self.thrust_min_n,
-                               self.thrust_max_n, self.dof_weights)
+                               self.thrust_max_n, self.dof_weights, self._pinv_cache)
 
     def allocate(self, wrench_body: ArrayLike) -> FloatArray:
         """Thruster commands (n,) in [-1, 1] for the desired body wrench (6,)."""

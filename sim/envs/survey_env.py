@@ -150,14 +150,6 @@ class _LatestFls:
         pass
 
 
-class _EnvMission(Mission):
-    """A mission that rebuilds every seeded component on each seeded reset (so that the same
-    seed twice in a row replays the same episode bit for bit)."""
-
-    def reseed(self, seed: int) -> None:
-        self._build_components(int(seed))
-
-
 class SurveyEnv(gym.Env):
     """Survey an area for targets. See the module docstring.
 
@@ -184,7 +176,7 @@ class SurveyEnv(gym.Env):
         self.scenario = scn = resolve_scenario(scenario, over)
         self.area: OperatingArea = survey_area(scn, opts.area_margin_m)
         self._latest_fls = _LatestFls()
-        self.mission = _EnvMission(scn, nav_source=opts.nav_source, observers=(self._latest_fls,),
+        self.mission = Mission(scn, nav_source=opts.nav_source, observers=(self._latest_fls,),
                                    perception=opts.sonar)
         self.ticks_per_step = int(round(opts.decision_interval_s / self.mission.autonomy_dt_s))
         if self.ticks_per_step < 1 or abs(self.ticks_per_step * self.mission.autonomy_dt_s
@@ -223,8 +215,7 @@ class SurveyEnv(gym.Env):
     def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[dict, dict[str, Any]]:
         super().reset(seed=seed)
         mission_seed = int(self.np_random.integers(0, 2**63 - 1))
-        self.mission.reseed(mission_seed)
-        rec = self.mission.reset()
+        rec = self.mission.reset(mission_seed)
         self._nav = rec.nav
         self._heading_sp_rad = float(rec.nav.rpy_rad[2])
         self._n_steps = 0
