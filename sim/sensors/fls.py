@@ -146,12 +146,15 @@ def _same_surface(d_a, n_a, o_a, v_a, d_b, n_b, o_b, v_b) -> NDArray[np.bool_]:
     """True where hits a and b lie on one continuous surface: same object, and the chord
     between them runs along both surface normals' tangent planes (no step/edge between)."""
     both = np.isfinite(d_a) & np.isfinite(d_b) & (o_a == o_b)
-    pa = np.where(both, d_a, 0.0)[:, None] * v_a
-    pb = np.where(both, d_b, 0.0)[:, None] * v_b
-    chord = pb - pa
-    length = np.linalg.norm(chord, axis=1)
-    tol = SURFACE_CHORD_SIN * length + 1e-9
-    return both & (np.abs(np.sum(chord * n_a, axis=1)) <= tol) & (np.abs(np.sum(chord * n_b, axis=1)) <= tol)
+    chord = np.where(both, d_b, 0.0)[:, None] * v_b
+    chord -= np.where(both, d_a, 0.0)[:, None] * v_a
+    tol = SURFACE_CHORD_SIN * np.sqrt(_rowdot(chord, chord)) + 1e-9
+    return both & (np.abs(_rowdot(chord, n_a)) <= tol) & (np.abs(_rowdot(chord, n_b)) <= tol)
+
+
+def _rowdot(a: FloatArray, b: FloatArray) -> FloatArray:
+    """Row-wise dot products of two (N, 3) arrays."""
+    return np.einsum("ij,ij->i", a, b)
 
 
 class FlsSensor:
@@ -196,6 +199,7 @@ class FlsSensor:
         bins_m = g.bin_centres_m()
         # r^-2 undoes the r_a r_b weighting of segment energies (see _form_columns)
         self._bin_gain = transmission_gain(bins_m, g.absorption_db_per_m) / np.maximum(bins_m, 1e-3) ** 2
+        self._bin_gain32 = self._bin_gain.astype(np.float32)
         self._tvg = tvg_gain(bins_m, cfg.tvg_spreading_db_per_decade,
                              g.absorption_db_per_m if cfg.tvg_absorption else 0.0).astype(np.float32)
         self._kernel = azimuth_kernel(g.fov_rad / self._n_cols, g.beamwidth_az_rad, cfg.side_lobe_extent_beamwidths)
@@ -263,11 +267,13 @@ class FlsSensor:
             keep = ~refine
             seg_a = np.concatenate([pa[keep], ra, lo_i, hi_i])
             seg_b = np.concatenate([pb[keep], lo_i, hi_i, rb])
+            new = np.concatenate([ra, lo_i, hi_i]), np.concatenate([lo_i, hi_i, rb])
+            conn = np.concatenate([same[keep], rays.same_surface(*new)])
         else:
-            seg_a, seg_b = pa, pb
+            seg_a, seg_b, conn = pa, pb, same
 
-        polar_cols, mask_cols, extents = self._form_columns(rays, seg_a, seg_b, R_ns)
-        img = np.multiply(polar_cols, self._bin_gain[None, :], dtype=np.float32)
+        polar_cols, mask_cols, extents = self._form_columns(rays, seg_a, seg_b, conn, R_ns)
+        img = np.multiply(polar_cols, self._bin_gain32[None, :], out=polar_cols)
         img = apply_azimuth_pattern(img, self._kernel)
         if self._n_cols != g.n_beams:
             img = cv2.resize(img, (self.n_bins, g.n_beams), interpolation=cv2.INTER_LINEAR)
@@ -320,17 +326,18 @@ class FlsSensor:
             slope = -np.where(np.isfinite(rays.dist), rays.dist, 0.0) * n_dphi / n_d
         return np.where(np.isfinite(slope), slope, 0.0)
 
-    def _form_columns(self, rays: "_RayTable", seg_a: NDArray[np.intp],
-                      seg_b: NDArray[np.intp], R_ns: FloatArray) -> tuple[FloatArray, NDArray[np.int16], dict]:
-        """Bin segment energies into (n_cols, n_bins), label object returns, and give each
-        labelled object's (col0, col1, bin0, bin1) extent."""
+    def _form_columns(self, rays: "_RayTable", seg_a: NDArray[np.intp], seg_b: NDArray[np.intp],
+                      conn: NDArray[np.bool_], R_ns: FloatArray
+                      ) -> tuple[NDArray[np.float32], NDArray[np.int16], dict]:
+        """Bin segment energies into (n_cols, n_bins) float32, label object returns, and give
+        each labelled object's (col0, col1, bin0, bin1) extent. ``conn``: per segment, whether
+        its two rays lie on one surface (:meth:`_RayTable.same_surface`)."""
         g = self.geometry
-        cos_inc = np.abs(np.sum(rays.dirs * rays.normal, axis=1))
+        cos_inc = np.abs(_rowdot(rays.dirs, rays.normal))
         strength = rays.refl * cos_inc ** self.cfg.scattering_exponent * two_way_beam_power(
             rays.phi, g.vertical_beamwidth_rad) / self._dphi  # energy in units of one base ray
         rr = np.where(np.isfinite(rays.dist), rays.dist, 0.0)
         dphi = rays.phi[seg_b] - rays.phi[seg_a]
-        conn = rays.same_surface(seg_a, seg_b)
         a, b, dc = seg_a[conn], seg_b[conn], dphi[conn]
         e_conn = 0.5 * (strength[a] + strength[b]) * dc
         # A convex/concave surface between two rays (a sphere's cap, a cylinder) has its range
@@ -369,21 +376,27 @@ class FlsSensor:
         ub = (r1 - g.window_near_m) / g.range_resolution_m
         ok = (r0 > 0.0) & (r1 > 0.0) & (energy > 0.0)
         rows, ua, ub, energy, obj = rows[ok], ua[ok], ub[ok], energy[ok], obj[ok]
-        polar = spread_segments(self._n_cols, self.n_bins, rows, ua, ub, energy)
+        polar = spread_segments(self._n_cols, self.n_bins, rows, ua, ub, energy, dtype=np.float32)
 
         mask = np.full((self._n_cols, self.n_bins), BACKGROUND_ID, dtype=np.int16)
         extents: dict[int, tuple[int, int, int, int]] = {}
         ids = np.unique(obj[obj >= 0])
-        if ids.size:
-            best = np.zeros_like(polar)
-            for k in ids:
-                sel = obj == k
+        windows = []
+        for k in ids:
+            sel = obj == k
+            r, ua_k, ub_k = rows[sel], ua[sel], ub[sel]
+            k0 = int(np.clip(np.floor(min(ua_k.min(), ub_k.min())), 0, self.n_bins - 1))
+            k1 = int(np.clip(np.floor(max(ua_k.max(), ub_k.max())), k0, self.n_bins - 1))
+            windows.append((k, sel, int(r.min()), int(r.max()), k0, k1))
+        if windows:
+            # strongest object per bin, over the union of the objects' windows only
+            u_c0, u_k0 = min(w[2] for w in windows), min(w[4] for w in windows)
+            u_c1, u_k1 = max(w[3] for w in windows), max(w[5] for w in windows)
+            best_u = np.zeros((u_c1 - u_c0 + 1, u_k1 - u_k0 + 1))
+            for k, sel, c0, c1, k0, k1 in windows:
                 r, ua_k, ub_k = rows[sel], ua[sel], ub[sel]
-                c0, c1 = int(r.min()), int(r.max())
-                k0 = int(np.clip(np.floor(min(ua_k.min(), ub_k.min())), 0, self.n_bins - 1))
-                k1 = int(np.clip(np.floor(max(ua_k.max(), ub_k.max())), k0, self.n_bins - 1))
                 e_k = spread_segments(c1 - c0 + 1, k1 - k0 + 1, r - c0, ua_k - k0, ub_k - k0, energy[sel])
-                win = best[c0:c1 + 1, k0:k1 + 1]
+                win = best_u[c0 - u_c0:c1 - u_c0 + 1, k0 - u_k0:k1 - u_k0 + 1]
                 take = e_k > np.maximum(win, 1e-6 * e_k.max())  # ignore cumsum round-off
                 if not take.any():
                     continue
@@ -408,7 +421,10 @@ class FlsSensor:
         in_fov = bool(abs(az) <= 0.5 * g.fov_rad and abs(el) <= 0.5 * g.vertical_beamwidth_rad
                       and g.window_near_m <= rng_m <= g.window_far_m)
         frac = float("nan")
-        if hasattr(caster, "cast_isolated"):
+        isolating = hasattr(caster, "cast_isolated")
+        if isolating and n_hit == 0:
+            frac = 0.0  # no first hit in the window: 0 whatever the isolated count
+        elif isolating:
             centre, radius = caster.object_bounding_sphere(k)
             v = np.asarray(centre, dtype=float) - origin
             dist_c = float(np.linalg.norm(v))

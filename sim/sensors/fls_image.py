@@ -32,19 +32,20 @@ def two_way_beam_power(offset_rad: FloatArray, beamwidth_rad: float) -> FloatArr
 
 
 def spread_segments(n_rows: int, n_bins: int, row: NDArray[np.intp], u_a: FloatArray, u_b: FloatArray,
-                    energy: FloatArray) -> FloatArray:
+                    energy: FloatArray, dtype: type = np.float64) -> NDArray:
     """Spread each ``energy`` uniformly over the range interval ``[u_a, u_b]`` of its row.
 
     Exact bin coverage (a bin gets energy * overlap / length); parts outside
     ``[0, n_bins)`` are dropped. Zero-length intervals go to the bin holding ``u_a``.
-    One ``bincount`` and one ``cumsum``. Returns (n_rows, n_bins) float64 (a view).
+    One ``bincount`` of kinks and one row-wise prefix sum, accumulated in float64 and
+    returned as ``dtype``. Returns (n_rows, n_bins), non-negative.
     """
     lo = np.minimum(u_a, u_b)
     hi = np.maximum(u_a, u_b)
     length = hi - lo
     point = length < 1e-9
     stride = n_bins + 2
-    # points: +E at their bin and -E at the next, so the cumsum leaves E in one bin
+    # points: +E at their bin and -E at the next, so the prefix sum leaves E in one bin
     kp = np.floor(lo[point])
     okp = (kp >= 0) & (kp < n_bins)
     base_p = row[point][okp] * stride + kp[okp].astype(np.intp)
@@ -52,7 +53,7 @@ def spread_segments(n_rows: int, n_bins: int, row: NDArray[np.intp], u_a: FloatA
     # segments: F(x) = density * (relu(x - lo) - relu(x - hi)) and bin k gets F(k+1) - F(k). A
     # kink of weight w at p = fl + fr adds w (k - fl - 1) + w (1 - fr) to F(k) for k > fl, so bin
     # k gets cumsum(S)[k] + O[k + 1] with S[fl + 1] += w and O[fl + 1] += w (1 - fr); the O term
-    # joins the same cumsum as +O at fl and -O at fl + 1.
+    # joins the same prefix sum as +O at fl and -O at fl + 1.
     seg = ~point & (hi > 0.0) & (lo < n_bins)
     r = row[seg]
     density = energy[seg] / length[seg]
@@ -64,11 +65,20 @@ def spread_segments(n_rows: int, n_bins: int, row: NDArray[np.intp], u_a: FloatA
     idx = np.concatenate([base + 1, base, base + 1, base_p, base_p + 1])
     weights = np.concatenate([w, off, -off, e_p, -e_p])
     acc = np.bincount(idx, weights=weights, minlength=n_rows * stride).astype(np.float64, copy=False)
-    acc = acc.reshape(n_rows, stride)
-    np.cumsum(acc, axis=1, out=acc)
-    out = acc[:, :n_bins]
-    np.maximum(out, 0.0, out=out)  # cumsum round-off
+    out = row_cumsum(acc.reshape(n_rows, stride), n_bins, dtype)
+    np.maximum(out, 0, out=out)  # prefix-sum round-off
     return out
+
+
+def row_cumsum(a: NDArray[np.float64], n_cols: int, dtype: type = np.float64) -> NDArray:
+    """Row-wise prefix sums ``cumsum(a, axis=1)[:, :n_cols]`` of a (rows, cols) float64 array.
+
+    Differences of consecutive rows of ``cv2.integral`` (a SIMD 2-D prefix sum, about 3x
+    faster than ``np.cumsum`` along rows); the round-off is that of float64 sums over the
+    column, ~1e-16 of the column total.
+    """
+    integral = cv2.integral(np.ascontiguousarray(a, dtype=np.float64), sdepth=cv2.CV_64F)
+    return np.subtract(integral[1:, 1:n_cols + 1], integral[:-1, 1:n_cols + 1], dtype=dtype)
 
 
 def azimuth_kernel(spacing_rad: float, beamwidth_rad: float, extent_beamwidths: float) -> NDArray[np.float32]:
@@ -101,6 +111,20 @@ def tvg_gain(range_m: FloatArray, db_per_decade: float, absorption_db_per_m: flo
     return 10.0 ** (0.1 * (db_per_decade * np.log10(r) + 2.0 * absorption_db_per_m * r))
 
 
+def standard_exponential_f32(rng: np.random.Generator, shape: tuple[int, ...]) -> NDArray[np.float32]:
+    """Exp(1) float32 samples by inversion, ``-log(1 - U)`` with ``U`` uniform float32.
+
+    About twice as fast as ``rng.standard_exponential(dtype=np.float32)`` (one uniform draw
+    and a SIMD ``cv2.log``); ``1 - U`` lies on a 2^-24 grid in (0, 1], so samples are
+    finite and at most 16.6 (exceeded with probability 6e-8 by the exact law).
+    """
+    u = rng.random(shape, dtype=np.float32)
+    np.subtract(np.float32(1.0), u, out=u)
+    e = cv2.log(u, dst=u)
+    np.negative(e, out=e)
+    return e
+
+
 def add_speckle_and_noise(mean: NDArray[np.float32], rng: np.random.Generator,
                           kind: Literal["none", "rayleigh", "k"], noise_power: float, *,
                           k_shape: float = 2.0, clutter: NDArray[np.bool_] | None = None) -> NDArray[np.float32]:
@@ -114,30 +138,33 @@ def add_speckle_and_noise(mean: NDArray[np.float32], rng: np.random.Generator,
     if kind == "none":
         out = mean.copy()
         if noise_power > 0.0:
-            out += np.float32(noise_power) * rng.standard_exponential(mean.shape, dtype=np.float32)
+            out += np.float32(noise_power) * standard_exponential_f32(rng, mean.shape)
         return out
-    out = mean.copy()
     if kind == "k":
-        tex = rng.standard_gamma(k_shape, mean.shape, dtype=np.float32) / np.float32(k_shape)
+        tex = rng.standard_gamma(k_shape, mean.shape, dtype=np.float32)
+        tex *= np.float32(1.0 / k_shape)
         if clutter is not None:
-            tex = np.where(clutter, tex, np.float32(1.0))
-        out *= tex
+            np.copyto(tex, np.float32(1.0), where=~clutter)
+        out = np.multiply(mean, tex, out=tex)
+        out += np.float32(noise_power)
+    else:
+        out = np.add(mean, np.float32(noise_power), dtype=np.float32)
     # echo and receiver noise are independent circular Gaussian fields: their sum is one,
     # of power (echo + noise), so one exponential draw models both
-    out += np.float32(noise_power)
-    out *= rng.standard_exponential(mean.shape, dtype=np.float32)
+    out *= standard_exponential_f32(rng, mean.shape)
     return out
 
 
 def to_uint8_db(intensity: NDArray[np.float32], gain_per_bin: NDArray[np.float32], gain_db: float,
                 dynamic_range_db: float) -> NDArray[np.uint8]:
     """Display mapping: ``10 log10(I g) + gain_db`` in dB, [-dynamic_range, 0] -> [0, 255]."""
-    x = intensity * gain_per_bin[None, :]
+    x = np.multiply(intensity, gain_per_bin[None, :], dtype=np.float32)
     np.maximum(x, np.float32(1e-30), out=x)
-    db = cv2.log(x)  # natural log, float32
-    scale = np.float32(255.0 * 10.0 / np.log(10.0) / dynamic_range_db)
-    offset = np.float32(255.0 * (gain_db + dynamic_range_db) / dynamic_range_db)
-    return cv2.convertScaleAbs(np.clip(db * scale + offset, 0.0, 255.0))
+    db = cv2.log(x, dst=x)  # natural log, float32
+    scale = 255.0 * 10.0 / np.log(10.0) / dynamic_range_db
+    offset = 255.0 * (gain_db + dynamic_range_db) / dynamic_range_db
+    # saturating, rounding conversion: round(db * scale + offset) clipped to [0, 255]
+    return cv2.addWeighted(db, scale, db, 0.0, offset, dtype=cv2.CV_8U)
 
 
 class FanRemap:

@@ -1,0 +1,155 @@
+"""Dataset generator: determinism, COCO validity (boxes match masks), YOLO labels, resume."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from pycocotools import mask as mask_utils
+from pycocotools.coco import COCO
+
+from sim.dataset import generate as gen
+from sim.dataset.generate import RenderSettings, generate_dataset
+from sim.dataset.randomization import Randomization
+
+# Small, fast scenes: short range window, few objects, always at least one target.
+FAST = Randomization(range_max_m=(12.0, 16.0), n_targets=(1, 2), n_distractors=(0, 1), frames_per_scene=2,
+                     seabed_kinds=("plane", "ripple"))
+SETTINGS = RenderSettings(azimuth_columns=181, elevation_rays=12)
+
+
+def _files(d: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(d)): p.read_bytes() for p in sorted(d.rglob("*")) if p.is_file()}
+
+
+def _make(d: Path, n: int = 4, seed: int = 3, **kw) -> Path:
+    generate_dataset(d, n, seed=seed, workers=1, randomization=FAST, settings=SETTINGS, progress=False, **kw)
+    return d
+
+
+@pytest.fixture(scope="module")
+def dataset(tmp_path_factory) -> Path:
+    return _make(tmp_path_factory.mktemp("ds") / "a")
+
+
+def test_same_seed_same_files_other_seed_other_images(dataset, tmp_path):
+    again = _make(tmp_path / "b")
+    assert _files(dataset) == _files(again)
+    other = _make(tmp_path / "c", seed=4)
+    assert _files(dataset)["images/000001.png"] != _files(other)["images/000001.png"]
+
+
+def test_coco_loads_and_boxes_match_masks(dataset):
+    coco = COCO(str(dataset / "annotations.json"))
+    anns = coco.loadAnns(coco.getAnnIds())
+    assert len(coco.getImgIds()) == 4 and anns
+    assert {c["name"] for c in coco.loadCats(coco.getCatIds())} == {"opi", "rock", "debris"}
+    import cv2
+
+    for a in anns:
+        m = coco.annToMask(a).astype(bool)
+        ys, xs = np.nonzero(m)
+        # COCO box = tight box of the mask pixels, pixel i spanning [i, i + 1)
+        np.testing.assert_allclose(a["bbox"], [xs.min(), ys.min(), xs.max() - xs.min() + 1, ys.max() - ys.min() + 1])
+        assert a["area"] == m.sum()
+        img_rec = coco.loadImgs(a["image_id"])[0]
+        assert m.shape == (img_rec["height"], img_rec["width"])
+    # visible targets are brighter than the image as a whole (the mask is where their echoes are)
+    for a in anns:
+        if a["iscrowd"] or not a["attributes"]["is_target"]:
+            continue
+        img = cv2.imread(str(dataset / coco.loadImgs(a["image_id"])[0]["file_name"]), cv2.IMREAD_GRAYSCALE)
+        m = coco.annToMask(a).astype(bool)
+        lit = img[img > 0]
+        assert img[m].mean() > np.median(lit)
+
+
+def test_yolo_labels_match_coco(dataset):
+    coco = json.loads((dataset / "annotations.json").read_text())
+    for im in coco["images"]:
+        anns = [a for a in coco["annotations"] if a["image_id"] == im["id"] and not a["iscrowd"]]
+        lines = (dataset / "labels" / f"{im['id']:06d}.txt").read_text().split()
+        rows = np.array(lines, dtype=float).reshape(-1, 5)
+        assert len(rows) == len(anns)
+        for row, a in zip(rows, anns):
+            x, y, w, h = a["bbox"]
+            assert int(row[0]) == a["category_id"] - 1
+            np.testing.assert_allclose(row[1:], [(x + w / 2) / im["width"], (y + h / 2) / im["height"],
+                                                 w / im["width"], h / im["height"]], atol=1e-6)
+
+
+def test_ground_truth_range_and_fan_geometry_agree(dataset):
+    from autonomy.sonar_geometry import FanGeometry
+
+    coco = json.loads((dataset / "annotations.json").read_text())
+    for a in coco["annotations"]:
+        im = next(i for i in coco["images"] if i["id"] == a["image_id"])
+        g = im["fan_geometry"]
+        geom = FanGeometry(g["width_px"], g["height_px"], g["range_min_m"], g["range_max_m"], g["fov_rad"],
+                           g["m_per_px"], g["apex_x_px"], g["apex_y_px"])
+        x, y, w, h = a["bbox"]
+        r_box, az_box = geom.pixel_to_polar(x + w / 2 - 0.5, y + h / 2 - 0.5)
+        # the echo box lies near the object's true (slant) range and bearing
+        assert abs(r_box - a["attributes"]["range_m"]) < 2.0
+        assert abs(az_box - a["attributes"]["azimuth_rad"]) < 0.15
+
+
+def test_interrupted_run_resumes_to_the_same_dataset(dataset, tmp_path, monkeypatch):
+    real = gen.render_scene
+
+    def flaky(spec, *args, **kw):
+        if spec.index == 1:
+            raise KeyboardInterrupt
+        return real(spec, *args, **kw)
+
+    monkeypatch.setattr(gen, "render_scene", flaky)
+    with pytest.raises(KeyboardInterrupt):
+        _make(tmp_path / "r")
+    man = json.loads((tmp_path / "r" / "manifest.json").read_text())
+    assert man["complete"] is False and not (tmp_path / "r" / "annotations.json").exists()
+    assert (tmp_path / "r" / "parts" / "scene_00000.json").exists()
+    monkeypatch.setattr(gen, "render_scene", real)
+    _make(tmp_path / "r")
+    assert _files(tmp_path / "r") == _files(dataset)
+
+
+def test_other_parameters_in_same_directory_are_refused(dataset, tmp_path):
+    d = _make(tmp_path / "m", n=2)
+    with pytest.raises(ValueError, match="other parameters.*seed"):
+        _make(d, n=2, seed=99)
+
+
+def test_manifest_records_version_seed_and_parameters(dataset):
+    man = json.loads((dataset / "manifest.json").read_text())
+    assert man["complete"] is True and man["seed"] == 3 and man["generator_version"] == gen.GENERATOR_VERSION
+    assert Randomization.model_validate(man["randomization"]) == FAST
+
+
+def test_ray_missing_gives_install_hint(tmp_path, monkeypatch):
+    import builtins
+
+    real_import = builtins.__import__
+
+    def no_ray(name, *a, **kw):
+        if name == "ray":
+            raise ImportError("No module named 'ray'")
+        return real_import(name, *a, **kw)
+
+    monkeypatch.setattr(builtins, "__import__", no_ray)
+    with pytest.raises(ImportError, match=r"auvsim\[scale\]"):
+        _make(tmp_path / "ray", n=2, use_ray=True)
+
+
+def test_ray_local_instance(tmp_path, dataset):
+    pytest.importorskip("ray", reason="ray not installed (the `scale` extra)")
+    d = _make(tmp_path / "rayds", use_ray=True)
+    assert _files(d) == _files(dataset)
+
+
+def test_bad_randomization_is_named():
+    with pytest.raises(ValueError, match="altitude_m"):
+        Randomization(altitude_m=(5.0, 2.0))
+    with pytest.raises(ValueError, match="seabed_kinds"):
+        Randomization(seabed_kinds=("plane", "lava"))
