@@ -28,22 +28,22 @@ class Randomization(StrictModel):
 
     seabed_kinds: tuple[str, ...] = ("plane", "slope", "rough", "ripple")
     seabed_depth_m: Range = (8.0, 20.0)
-    seabed_reflectivity: Range = (0.15, 0.45)
-    slope_deg: Range = (1.0, 8.0)
-    roughness_m: Range = (0.02, 0.12)
+    seabed_reflectivity: Range = (0.15, 0.5)
+    slope_deg: Range = (1.0, 10.0)
+    roughness_m: Range = (0.02, 0.15)
     roughness_corr_m: Range = (1.0, 4.0)
-    ripple_amplitude_m: Range = (0.02, 0.10)
-    ripple_wavelength_m: Range = (0.8, 2.5)
-    altitude_m: Range = (1.5, 5.0)
-    tilt_deg: Range = (3.0, 12.0)
+    ripple_amplitude_m: Range = (0.02, 0.12)
+    ripple_wavelength_m: Range = (0.8, 3.5)
+    altitude_m: Range = (1.5, 6.0)
+    tilt_deg: Range = (3.0, 14.0)
     vertical_beamwidth_deg: float = Field(20.0, gt=0.0, le=90.0, description="to place objects on insonified bed")
     roll_pitch_jitter_deg: float = Field(3.0, ge=0.0, le=20.0)
     range_max_m: Range = (15.0, 35.0)
     range_min_m: Range = (1.0, 2.0)
     gain_db: Range = (-4.0, 4.0)
-    noise_scale: Range = (0.6, 1.6)
+    noise_scale: Range = (0.5, 2.0)
     k_speckle_probability: float = Field(0.3, ge=0.0, le=1.0)
-    k_shape: Range = (2.0, 10.0)
+    k_shape: Range = (1.5, 10.0)
     n_targets: tuple[int, int] = (0, 4)
     n_distractors: tuple[int, int] = (0, 4)
     cluster_probability: float = Field(0.3, ge=0.0, le=1.0)
@@ -52,7 +52,7 @@ class Randomization(StrictModel):
     burial_probability: float = Field(0.3, ge=0.0, le=1.0)
     target_shapes: tuple[str, ...] = ("half_sphere", "truncated_cone", "cylinder", "box", "tyre")
     target_size_m: Range = (0.4, 1.2)
-    target_reflectivity: Range = (0.6, 1.0)
+    target_reflectivity: Range = (0.5, 1.0)
     distractor_size_m: Range = (0.2, 1.0)
     distractor_reflectivity: Range = (0.25, 0.7)
     frames_per_scene: int = Field(4, ge=1, le=100)
@@ -75,10 +75,10 @@ class Randomization(StrictModel):
 TRAIN_RANDOMIZATION = Randomization()
 # Held-out set: other altitudes, rougher and differently rippled seabeds, more noise, darker targets.
 HELDOUT_RANDOMIZATION = Randomization(
-    seabed_depth_m=(10.0, 25.0), seabed_reflectivity=(0.3, 0.55), roughness_m=(0.10, 0.2),
-    ripple_amplitude_m=(0.08, 0.15), ripple_wavelength_m=(2.5, 4.0), slope_deg=(6.0, 12.0),
-    altitude_m=(5.0, 6.5), tilt_deg=(8.0, 14.0), noise_scale=(1.4, 2.0), target_reflectivity=(0.5, 0.8),
-    k_speckle_probability=0.6, k_shape=(1.0, 3.0),
+    seabed_depth_m=(10.0, 25.0), seabed_reflectivity=(0.35, 0.55), roughness_m=(0.12, 0.2),
+    ripple_amplitude_m=(0.08, 0.15), ripple_wavelength_m=(3.0, 4.5), slope_deg=(8.0, 12.0),
+    altitude_m=(5.5, 7.0), tilt_deg=(8.0, 14.0), noise_scale=(1.5, 2.2), target_reflectivity=(0.5, 0.8),
+    k_speckle_probability=0.6, k_shape=(1.0, 2.5),
 )
 
 

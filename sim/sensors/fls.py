@@ -12,9 +12,10 @@ Ground truth comes from the same rays: a polar/fan instance mask (object id wher
 object's returns land, -1 elsewhere) and per object its box, visible fraction, and the
 true polar position of its centroid. The visible fraction of object k is
 ``(base rays whose first hit is k) / (base rays that hit k when k is cast alone)``; the
-second count re-casts only the base rays inside k's bounding cone against k's geoms
+second count re-casts, against k's geoms alone, only the base rays inside k's bounding cone
+whose first hit is not k (those that hit k hit it alone at the same range)
 (:meth:`sim.sensors.raycast.IsolatingRayCaster.cast_isolated`), so it is exact for the
-ray grid and cheap (hundreds of rays per object in view).
+ray grid and cheap (hundreds of rays per object in view; none when k is not hit).
 """
 
 from __future__ import annotations
@@ -185,6 +186,7 @@ class FlsSensor:
 
         self.n_bins = g.n_bins
         self._col_az = g.column_azimuths_rad()
+        self._col_cos, self._col_sin = np.cos(self._col_az), np.sin(self._col_az)
         self._phi = g.elevations_rad()
         self._n_cols, self._n_el = len(self._col_az), len(self._phi)
         self._dphi = float(self._phi[1] - self._phi[0])
@@ -291,8 +293,8 @@ class FlsSensor:
 
         in_win = (base.dist_m >= g.window_near_m) & (base.dist_m <= g.window_far_m) & (base.object_id >= 0)
         hits_per_obj = np.bincount(base.object_id[in_win], minlength=1 + max((int(o.id) for o in objects), default=0))
-        objs = tuple(self._object_truth(o, origin, R_ns, dirs, int(hits_per_obj[int(o.id)]), extents.get(int(o.id)),
-                                        caster) for o in objects)
+        objs = tuple(self._object_truth(o, origin, R_ns, dirs, base.object_id, int(hits_per_obj[int(o.id)]),
+                                        extents.get(int(o.id)), caster) for o in objects)
         frame = FlsFrame(t_s=float(t_s), polar=polar_u8, fan=fan_u8, geometry=self.fan_geometry,
                          mount_pos_body_m=self.mount_pos_body_m.copy(), mount_rpy_rad=self.mount_rpy_rad.copy())
         truth = FlsGroundTruth(t_s=float(t_s), mask_polar=mask, objects=objs, pos_ned=origin.copy(), R_ns=R_ns,
@@ -302,26 +304,37 @@ class FlsSensor:
     # -- internals --------------------------------------------------------------------------
     def _bisect(self, caster: RayCaster, origin: FloatArray, R_ns: FloatArray, rays: "_RayTable",
                 ia: NDArray[np.intp], ib: NDArray[np.intp]) -> tuple["_RayTable", "_RayTable"]:
-        """Shrink each (ia, ib) elevation interval onto the edge between ia's surface and the next."""
+        """Shrink each (ia, ib) elevation interval onto the edge between ia's surface and the next.
+
+        An interval stops once both its ends lie beyond the range window (as base pairs beyond
+        it are not refined): what is left of it cannot put energy into the image."""
         lo, hi = rays.take(ia), rays.take(ib)
-        col_az = self._col_az[lo.col]
+        far = self.geometry.window_far_m
         for _ in range(self.cfg.edge_refine_iters):
-            phi = 0.5 * (lo.phi + hi.phi)
-            v = sonar_ray_dirs(col_az, phi) @ R_ns.T
-            mid = _RayTable.from_hits(caster.cast(origin, v, self.geometry.range_max_m), v, lo.col, phi)
-            with_lo = _same_surface(lo.dist, lo.normal, lo.obj, lo.dirs, mid.dist, mid.normal, mid.obj, mid.dirs)
-            with_lo |= ~np.isfinite(lo.dist) & ~np.isfinite(mid.dist)
-            lo = lo.where(with_lo, mid)
-            hi = mid.where(with_lo, hi)
+            act = np.flatnonzero(np.minimum(lo.dist, hi.dist) <= far)
+            if act.size == 0:
+                break
+            lo_a, hi_a = lo.take(act), hi.take(act)
+            phi = 0.5 * (lo_a.phi + hi_a.phi)
+            v = sonar_ray_dirs(self._col_az[lo_a.col], phi) @ R_ns.T
+            mid = _RayTable.from_hits(caster.cast(origin, v, self.geometry.range_max_m), v, lo_a.col, phi)
+            with_lo = _same_surface(lo_a.dist, lo_a.normal, lo_a.obj, lo_a.dirs, mid.dist, mid.normal, mid.obj,
+                                    mid.dirs)
+            with_lo |= ~np.isfinite(lo_a.dist) & ~np.isfinite(mid.dist)
+            if act.size == len(lo.dist):
+                lo, hi = lo_a.where(with_lo, mid), mid.where(with_lo, hi_a)
+            else:
+                lo, hi = lo.put(act, lo_a.where(with_lo, mid)), hi.put(act, mid.where(with_lo, hi_a))
         return lo, hi
 
     def _range_slope(self, rays: "_RayTable", R_ns: FloatArray) -> FloatArray:
         """dr/dphi (m/rad) of each hit along its column, from the surface normal."""
-        az = self._col_az[rays.col]
+        n_s = rays.normal @ R_ns  # normals in the sonar frame
         sp = np.sin(rays.phi)
-        d_phi = np.stack([-np.cos(az) * sp, -np.sin(az) * sp, np.cos(rays.phi)], axis=1) @ R_ns.T
-        n_d = np.sum(rays.normal * rays.dirs, axis=1)
-        n_dphi = np.sum(rays.normal * d_phi, axis=1)
+        # d(dir)/dphi = [-cos a sin phi, -sin a sin phi, cos phi] in the sonar frame
+        n_dphi = n_s[:, 2] * np.cos(rays.phi) - (n_s[:, 0] * self._col_cos[rays.col]
+                                                 + n_s[:, 1] * self._col_sin[rays.col]) * sp
+        n_d = _rowdot(rays.normal, rays.dirs)
         with np.errstate(divide="ignore", invalid="ignore"):
             slope = -np.where(np.isfinite(rays.dist), rays.dist, 0.0) * n_dphi / n_d
         return np.where(np.isfinite(slope), slope, 0.0)
@@ -409,8 +422,10 @@ class FlsSensor:
         return polar, mask, extents
 
     def _object_truth(self, obj: SceneObjectLike, origin: FloatArray, R_ns: FloatArray, dirs: FloatArray,
-                      n_hit: int, extent: tuple[int, int, int, int] | None,
+                      first_obj: NDArray[np.int64], n_hit: int, extent: tuple[int, int, int, int] | None,
                       caster: RayCaster) -> FlsObjectTruth:
+        """Truth record of ``obj``; ``first_obj`` (n_rays,) first-hit object of each base ray and
+        ``n_hit`` how many of them hit ``obj`` inside the range window."""
         g = self.geometry
         k = int(obj.id)
         pos = np.asarray(obj.centroid_ned, dtype=float)
@@ -435,9 +450,12 @@ class FlsSensor:
                 else:
                     half = np.arcsin(min(1.0, radius / dist_c)) + self._ray_spacing_rad
                     cand = dirs @ (v / dist_c) >= np.cos(min(half, np.pi))
+                # a ray whose first hit is k hits k alone at the same range: only the others are cast
+                cand &= first_obj != k
+                n_alone = n_hit
                 if cand.any():
                     d_alone = caster.cast_isolated(origin, dirs[cand], g.range_max_m, k)
-                    n_alone = int(np.count_nonzero((d_alone >= g.window_near_m) & (d_alone <= g.window_far_m)))
+                    n_alone += int(np.count_nonzero((d_alone >= g.window_near_m) & (d_alone <= g.window_far_m)))
             frac = n_hit / n_alone if n_alone > 0 else 0.0
             frac = min(frac, 1.0)
         bbox = bbox_polar = None
@@ -499,6 +517,15 @@ class _RayTable:
         for f in self.__slots__:
             a, b = getattr(self, f), getattr(other, f)
             out.append(np.where(cond[:, None] if a.ndim == 2 else cond, b, a))
+        return _RayTable(*out)
+
+    def put(self, idx: NDArray[np.intp], rows: "_RayTable") -> "_RayTable":
+        """Copy with rows ``idx`` replaced by ``rows``."""
+        out = []
+        for f in self.__slots__:
+            a = getattr(self, f).copy()
+            a[idx] = getattr(rows, f)
+            out.append(a)
         return _RayTable(*out)
 
     def concat(self, other: "_RayTable") -> "_RayTable":

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
@@ -29,8 +29,8 @@ class TrainParams:
     threads: int = 2
     seed: int = 0
     classes: tuple[str, ...] | None = None
-    val_fraction: float = 0.0
-    extra: dict = field(default_factory=dict)
+    crop_hw: tuple[int, int] | None = (128, 224)
+    object_crop_fraction: float = 0.75
 
 
 def _focal_loss(torch, logits, target, weight):
@@ -42,6 +42,41 @@ def _focal_loss(torch, logits, target, weight):
     pos_loss = -(torch.log(p) * (1 - p) ** 2 * pos * w).sum()
     neg_loss = -(torch.log(1 - p) * p ** 2 * neg_w * (1 - pos) * w).sum()
     return (pos_loss + neg_loss) / pos.sum().clamp(min=1.0)
+
+
+def _crop_batch(images: np.ndarray, boxes: list, class_ids: list, ignore: list, idx: np.ndarray,
+                crop_hw: tuple[int, int], rng: np.random.Generator, object_fraction: float):
+    """Crops of ``crop_hw`` from images ``idx``: most centred near a random labelled object
+    (jittered), the rest anywhere. Returns (crops (B, h, w) uint8, boxes, class ids, ignore)."""
+    h_img, w_img = images.shape[1:]
+    ch, cw = crop_hw
+    crops, out_b, out_c, out_i = [], [], [], []
+    for i in idx:
+        b = boxes[i]
+        real = np.flatnonzero(~ignore[i])
+        if real.size and rng.random() < object_fraction:
+            k = real[rng.integers(real.size)]
+            cx = 0.5 * (b[k, 0] + b[k, 2]) + rng.uniform(-0.4, 0.4) * cw
+            cy = 0.5 * (b[k, 1] + b[k, 3]) + rng.uniform(-0.4, 0.4) * ch
+            x0 = int(np.clip(round(cx - cw / 2), 0, w_img - cw))
+            y0 = int(np.clip(round(cy - ch / 2), 0, h_img - ch))
+        else:
+            x0 = int(rng.integers(0, w_img - cw + 1))
+            y0 = int(rng.integers(0, h_img - ch + 1))
+        crops.append(images[i, y0:y0 + ch, x0:x0 + cw])
+        shifted = b - np.array([x0, y0, x0, y0], dtype=np.float64)
+        clipped = shifted.copy()
+        clipped[:, [0, 2]] = clipped[:, [0, 2]].clip(-0.5, cw - 0.5)
+        clipped[:, [1, 3]] = clipped[:, [1, 3]].clip(-0.5, ch - 0.5)
+        area = np.prod(np.clip(shifted[:, 2:] - shifted[:, :2], 1e-9, None), axis=1)
+        kept_area = np.prod(np.clip(clipped[:, 2:] - clipped[:, :2], 0.0, None), axis=1)
+        inside = kept_area > 0
+        # objects cut by the crop border are ignored (neither positive nor negative)
+        cut = inside & (kept_area < 0.7 * area)
+        out_b.append(clipped[inside])
+        out_c.append(class_ids[i][inside])
+        out_i.append(ignore[i][inside] | cut[inside])
+    return np.stack(crops), out_b, out_c, out_i
 
 
 def _augment(torch, imgs, boxes_list, rng: np.random.Generator, width: int):
@@ -63,8 +98,20 @@ def _augment(torch, imgs, boxes_list, rng: np.random.Generator, width: int):
     return imgs, out_boxes
 
 
+def _lr_at(progress: float, peak: float, warmup: float = 0.05, final_fraction: float = 0.02) -> float:
+    """Learning rate at training ``progress`` in [0, 1]: linear warm-up, cosine decay."""
+    if progress < warmup:
+        return peak * (0.1 + 0.9 * progress / warmup)
+    q = (progress - warmup) / (1.0 - warmup)
+    return peak * (final_fraction + (1.0 - final_fraction) * 0.5 * (1.0 + np.cos(np.pi * q)))
+
+
+def _log(msg: str) -> None:
+    print(msg, flush=True)
+
+
 def train_atr(data_dir: str | Path, out_path: str | Path, params: TrainParams = TrainParams(),
-              log=print) -> dict:
+              log=_log) -> dict:
     """Train on ``data_dir`` (an ``auvsim dataset`` output) and export ONNX to ``out_path``.
 
     Stops after ``params.epochs`` epochs or ``params.max_minutes``, whichever comes first.
@@ -86,19 +133,23 @@ def train_atr(data_dir: str | Path, out_path: str | Path, params: TrainParams = 
     h, w = params.input_hw
     if h % 16 or w % 16:
         raise ValueError(f"input_hw {params.input_hw}: height and width must be multiples of 16")
-    grid = (h // STRIDE, w // STRIDE)
+    crop = params.crop_hw or params.input_hw
+    crop = (min(crop[0], h), min(crop[1], w))
+    if crop[0] % 16 or crop[1] % 16:
+        raise ValueError(f"crop_hw {crop}: height and width must be multiples of 16")
+    grid = (crop[0] // STRIDE, crop[1] // STRIDE)
     model = CenterNetSmall(len(arrays.class_names), params.width)
     n_params = sum(p.numel() for p in model.parameters())
     opt = torch.optim.AdamW(model.parameters(), lr=params.lr, weight_decay=params.weight_decay)
     steps_per_epoch = max(1, int(np.ceil(n_img / params.batch_size)))
-    sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=params.lr, total_steps=params.epochs * steps_per_epoch,
-                                                pct_start=0.15)
-    log(f"train-atr: {n_img} images, classes {arrays.class_names}, {n_params} parameters, "
+    total_steps = params.epochs * steps_per_epoch
+    log(f"train-atr: {n_img} images, crops {crop}, classes {arrays.class_names}, {n_params} parameters, "
         f"input {h}x{w}, load {time.perf_counter() - t0:.1f} s")
     deadline = t0 + 60.0 * params.max_minutes
     model.train()
     history = []
     epoch = 0
+    step = 0
     stopped_early = False
     for epoch in range(1, params.epochs + 1):
         order = rng.permutation(n_img)
@@ -107,10 +158,12 @@ def train_atr(data_dir: str | Path, out_path: str | Path, params: TrainParams = 
             idx = order[s * params.batch_size:(s + 1) * params.batch_size]
             if idx.size == 0:
                 continue
-            imgs = torch.from_numpy(arrays.images[idx].astype(np.float32) / 255.0)[:, None]
-            imgs, boxes = _augment(torch, imgs, [arrays.boxes[i] for i in idx], rng, w)
-            tg = [encode_targets(boxes[k], arrays.class_ids[i], arrays.ignore[i], len(arrays.class_names),
-                                 grid, STRIDE) for k, i in enumerate(idx)]
+            crops, boxes, cls_b, ign_b = _crop_batch(arrays.images, arrays.boxes, arrays.class_ids, arrays.ignore,
+                                                     idx, crop, rng, params.object_crop_fraction)
+            imgs = torch.from_numpy(crops.astype(np.float32) / 255.0)[:, None]
+            imgs, boxes = _augment(torch, imgs, boxes, rng, crop[1])
+            tg = [encode_targets(boxes[k], cls_b[k], ign_b[k], len(arrays.class_names), grid, STRIDE)
+                  for k in range(len(idx))]
             heat_t = torch.from_numpy(np.stack([t.heat for t in tg]))
             weight_t = torch.from_numpy(np.stack([t.weight for t in tg]))
             size_t = torch.from_numpy(np.stack([t.size_log for t in tg]))
@@ -122,10 +175,14 @@ def train_atr(data_dir: str | Path, out_path: str | Path, params: TrainParams = 
             l_size = (torch.abs(size_log - size_t) * reg_t).sum() / n_reg
             l_off = (torch.abs(offset - off_t) * reg_t).sum() / n_reg
             loss = l_heat + 0.5 * l_size + l_off
+            # Warm-up then cosine decay over whichever runs out first: steps or the time budget.
+            progress = max(step / total_steps, (time.perf_counter() - t0) / (deadline - t0))
+            for group in opt.param_groups:
+                group["lr"] = _lr_at(min(progress, 1.0), params.lr)
             opt.zero_grad()
             loss.backward()
             opt.step()
-            sched.step()
+            step += 1
             sums += [l_heat.item(), l_size.item(), l_off.item()]
             if time.perf_counter() > deadline:
                 stopped_early = True
@@ -164,6 +221,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--width", type=int, default=TrainParams.width, help="base channel width")
     p.add_argument("--input", default=f"{DEFAULT_INPUT_HW[0]}x{DEFAULT_INPUT_HW[1]}",
                    help="model input HxW, multiples of 16 (default %(default)s)")
+    p.add_argument("--crop", default="128x224", help="training crop HxW in input px, or 'none'")
     p.add_argument("--max-minutes", type=float, default=TrainParams.max_minutes)
     p.add_argument("--threads", type=int, default=TrainParams.threads)
     p.add_argument("--seed", type=int, default=0)
@@ -178,7 +236,8 @@ def train_main(args: argparse.Namespace) -> int:
         hh, ww = (int(v) for v in str(args.input).lower().split("x"))
     except ValueError:
         raise SystemExit(f"train-atr: --input must look like 240x448, got {args.input!r}")
-    params = TrainParams(input_hw=(hh, ww), width=args.width, epochs=args.epochs, batch_size=args.batch_size,
+    crop = None if str(args.crop).lower() == "none" else tuple(int(v) for v in str(args.crop).lower().split("x"))
+    params = TrainParams(input_hw=(hh, ww), crop_hw=crop, width=args.width, epochs=args.epochs, batch_size=args.batch_size,
                          lr=args.lr, max_minutes=args.max_minutes, threads=args.threads, seed=args.seed,
                          classes=tuple(args.classes.split(",")) if args.classes else None)
     train_atr(args.data, args.out, params)
