@@ -128,7 +128,7 @@ class Mission:
         self.autopilot = Autopilot(AutopilotParams.from_config(auto.control))
         self.allocator = ThrustAllocator.from_layout(self.params.layout)
         self.perception = (
-            Perception(scn, self.fls, self.world.seabed, nav_source=self.nav_source)
+            Perception(scn, self.fls, self.world.seabed, self.waypoints_ne, nav_source=self.nav_source)
             if (self.fls is not None and self.perception_enabled) else None
         )
 

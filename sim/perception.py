@@ -33,11 +33,13 @@ class Perception:
     Args:
         scenario: the scenario (uses ``autonomy.atr``, ``.localization``, ``.world_model``).
         fls: the sonar whose frames arrive (for mount extrinsics and field of view).
-        seabed: the true seabed (only for ``nav_source='truth'`` altitudes).
+        seabed: the true seabed (only for ``nav_source='truth'`` altitudes and the region depth).
+        waypoints_ne: (k, 2) the survey plan, which bounds the surveyed region.
         nav_source: ``estimate`` or ``truth``.
     """
 
-    def __init__(self, scenario: Scenario, fls: FlsSensor, seabed: Seabed, *, nav_source: str = "estimate") -> None:
+    def __init__(self, scenario: Scenario, fls: FlsSensor, seabed: Seabed, waypoints_ne: np.ndarray, *,
+                 nav_source: str = "estimate") -> None:
         self.scenario = scenario
         self.fls = fls
         self.seabed = seabed
@@ -47,24 +49,18 @@ class Perception:
         self.loc_cfg = auto.localization
         self.wm_cfg = auto.world_model
         self.truth_targets = np.array([t.pos_ned for t in scenario.world.targets if t.is_target], dtype=float)
-        self.region_ned = self._survey_region()
+        self.region_ned = self._survey_region(np.asarray(waypoints_ne, dtype=float).reshape(-1, 2))
         self.reset()
 
-    def _survey_region(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
-        """Surveyed volume: the seabed patch (basin if any) from surface to seabed."""
-        w = self.scenario.world
-        if w.basin.shape == "rectangular":
-            (cn, ce), (ln, le) = w.basin.center_ne_m, w.basin.size_ne_m
-        elif w.basin.shape == "circular":
-            (cn, ce), ln = w.basin.center_ne_m, 2.0 * w.basin.radius_m
-            le = ln
-        else:
-            (cn, ce), ln = w.seabed.center_ne_m, w.seabed.extent_m
-            le = ln
-        n = cn + 0.5 * np.array([-ln, ln])
-        e = ce + 0.5 * np.array([-le, le])
-        depth = float(np.max(self.seabed.depth_at(*np.meshgrid(n, e)))) + 1.0
-        return (float(n[0]), float(e[0]), 0.0), (float(n[1]), float(e[1]), depth)
+    def _survey_region(self, waypoints_ne: np.ndarray) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+        """Surveyed volume: the survey waypoints' bounding box grown by ``region_margin_m``,
+        from the surface to below the deepest seabed point in it."""
+        margin = self.wm_cfg.region_margin_m
+        lo = np.min(waypoints_ne, axis=0) - margin
+        hi = np.max(waypoints_ne, axis=0) + margin
+        depth = float(np.max(self.seabed.depth_at(*np.meshgrid(np.linspace(lo[0], hi[0], 9),
+                                                                np.linspace(lo[1], hi[1], 9))))) + 1.0
+        return (float(lo[0]), float(lo[1]), 0.0), (float(hi[0]), float(hi[1]), depth)
 
     def reset(self) -> None:
         self.pmha = PMHA(self.wm_cfg, region_ned=self.region_ned)

@@ -234,3 +234,25 @@ def test_bad_input_is_rejected():
     pmha.update(1.0, [])
     with pytest.raises(ValueError, match="backwards"):
         pmha.update(0.5, [])
+
+
+def test_no_new_objects_outside_the_surveyed_region():
+    """Repeated detections of a structure outside the surveyed volume stay clutter, while
+    the same stream inside it becomes an object; an object inside keeps its anchor when
+    later measurements straddle the region edge."""
+    region = ((-10.0, -10.0, 0.0), (10.0, 10.0, 5.0))
+    outside = [[_z(t, [30.0, 0.0, 4.0])] for t in range(20)]
+    pmha = PMHA(WorldModelConfig(), region_ned=region)
+    for t, scan in enumerate(outside):
+        pmha.update(float(t), scan)
+    assert pmha.world_model() == []
+    inside = [[_z(t, [9.8, 0.0, 4.0])] for t in range(20)]
+    pmha = PMHA(WorldModelConfig(), region_ned=region)
+    for t, scan in enumerate(inside):
+        pmha.update(float(t), scan)
+    assert len(pmha.world_model()) == 1
+    edge = [[_z(20 + t, [10.2, 0.0, 4.0])] for t in range(5)]
+    for t, scan in enumerate(edge):
+        pmha.update(20.0 + t, scan)
+    objs = pmha.world_model()
+    assert len(objs) == 1 and objs[0].n_detections == 25

@@ -95,17 +95,21 @@ class PMHA:
         cfg: world-model config.
         region_ned: optional ((3,) min, (3,) max) corners of the surveyed volume; when given,
             the new and clutter densities are 1 / its volume, else the configured densities.
+            The new-object density is zero outside it: a measurement outside the surveyed
+            volume can update an existing anchor or be clutter, never start an object.
     """
 
     def __init__(
         self, cfg: WorldModelConfig, region_ned: tuple[ArrayLike, ArrayLike] | None = None
     ) -> None:
         self.cfg = cfg
+        self._region: tuple[np.ndarray, np.ndarray] | None = None
         if region_ned is None:
             log_u_new = math.log(cfg.new_density_per_m3)
             log_u_clutter = math.log(cfg.clutter_density_per_m3)
         else:
             lo, hi = (np.asarray(v, dtype=float).reshape(3) for v in region_ned)
+            self._region = (lo, hi)
             volume = float(np.prod(hi - lo))
             if not volume > 0.0:
                 raise ValueError(f"PMHA region_ned must have positive volume, got {lo} .. {hi}")
@@ -170,7 +174,9 @@ class PMHA:
             ]
         else:
             gated = [[] for _ in range(m)]
-        private = [(_NEW, -self._log_new), (_CLUTTER, -self._log_clutter)]
+        private_in = [(_NEW, -self._log_new), (_CLUTTER, -self._log_clutter)]
+        private_out = [(_CLUTTER, -self._log_clutter)]
+        privates = [private_in if self._in_region(z.pos_ned) else private_out for z in measurements]
         any_gated = any(gated)
 
         # Tentative anchors that age out in this scan (merged into the "clutter" worlds).
@@ -197,9 +203,9 @@ class PMHA:
             stream = streams.get(present)
             if stream is None:
                 if present:
-                    opts = [[o for o in g if o[0] in hyp] + private for g in gated]
+                    opts = [[o for o in g if o[0] in hyp] + pv for g, pv in zip(gated, privates)]
                 else:
-                    opts = [private] * m
+                    opts = privates
                 stream = streams[present] = LazyRanked(ranked_associations(opts, row_cache))
             parent_stream.append(stream)
             parent_base.append(base)
@@ -266,6 +272,13 @@ class PMHA:
         self._anchors = {v: self._anchors[v] for v in live}
         self.t_s = t_s
         self.n_scans += 1
+
+    def _in_region(self, pos_ned: np.ndarray) -> bool:
+        if self._region is None:
+            return True
+        lo, hi = self._region
+        p = np.asarray(pos_ned, dtype=float)
+        return bool(np.all(p >= lo) and np.all(p <= hi))
 
     def _association_logw(
         self,

@@ -72,6 +72,10 @@ class WorldModelConfig(StrictModel):
     use_class_likelihood: bool = Field(True, description="class pmf enters the association")
     class_score_floor: float = Field(0.01, gt=0.0, lt=0.5, description="ATR score clip")
     min_detections: int = Field(2, ge=1, description="supporting detections to report an object")
+    region_margin_m: float = Field(
+        10.0, ge=0.0, le=1000.0,
+        description="surveyed region = survey waypoints' bounding box grown by this (m); no new objects outside",
+    )
     drop_tentative_after_s: PositiveFloat | None = Field(
         60.0, description="forget anchors below min_detections unmeasured this long"
     )

@@ -30,7 +30,7 @@ from sim.dataset.coco_io import ANNOTATIONS_FILE, IMAGES_DIR, LABELS_DIR, write_
 from sim.dataset.randomization import TRAIN_RANDOMIZATION, Randomization, SceneSpec, sample_scene
 from sim.rng import component_rng
 
-GENERATOR_VERSION = "1.1.0"
+GENERATOR_VERSION = "1.2.0"
 MANIFEST_FILE = "manifest.json"
 PARTS_DIR = "parts"
 CLASS_NAMES = ("opi", "rock", "debris")

@@ -52,9 +52,9 @@ class Randomization(StrictModel):
     burial_probability: float = Field(0.3, ge=0.0, le=1.0)
     target_shapes: tuple[str, ...] = ("half_sphere", "truncated_cone", "cylinder", "box", "tyre")
     target_size_m: Range = (0.4, 1.2)
-    target_reflectivity: Range = (0.5, 1.0)
+    target_reflectivity: Range = (0.6, 1.0)
     distractor_size_m: Range = (0.2, 1.0)
-    distractor_reflectivity: Range = (0.25, 0.7)
+    distractor_reflectivity: Range = (0.15, 0.45)
     frames_per_scene: int = Field(4, ge=1, le=100)
     step_m: Range = (1.0, 4.0)
 
@@ -77,7 +77,7 @@ TRAIN_RANDOMIZATION = Randomization()
 HELDOUT_RANDOMIZATION = Randomization(
     seabed_depth_m=(10.0, 25.0), seabed_reflectivity=(0.35, 0.55), roughness_m=(0.12, 0.2),
     ripple_amplitude_m=(0.08, 0.15), ripple_wavelength_m=(3.0, 4.5), slope_deg=(8.0, 12.0),
-    altitude_m=(5.5, 7.0), tilt_deg=(8.0, 14.0), noise_scale=(1.5, 2.2), target_reflectivity=(0.5, 0.8),
+    altitude_m=(5.5, 7.0), tilt_deg=(8.0, 14.0), noise_scale=(1.5, 2.2), target_reflectivity=(0.55, 0.85),
     k_speckle_probability=0.6, k_shape=(1.0, 2.5),
 )
 
