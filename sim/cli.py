@@ -17,13 +17,15 @@ from scenarios.load import ScenarioError, list_scenarios, load_scenario
 
 DEFAULT_SCENARIO = "cssn_lawnmower"
 
-# bench name -> (module, help). Each module has ``run(scenario, **kwargs) -> dict``.
-BENCHES: dict[str, tuple[str, str]] = {
-    "physics": ("sim.bench_physics", "hull + hydrodynamics + thrusters at the physics rate"),
-    "fls": ("sim.bench_fls", "forward-looking sonar frame rendering"),
-    "mission": ("sim.bench_mission", "closed-loop mission, sensors and FLS included"),
-    "pmha": ("sim.bench_pmha", "PMHA world-model update time"),
-    "gym": ("sim.bench_gym", "gymnasium environment step rate"),
+# bench name -> (module, function, help). The function takes the scenario (or only a seed)
+# and returns a dict.
+BENCHES: dict[str, tuple[str, str, str]] = {
+    "physics": ("sim.bench_physics", "run", "hull + hydrodynamics + thrusters at the physics rate"),
+    "fls": ("sim.bench_fls", "run", "forward-looking sonar frame rendering"),
+    "mission": ("sim.bench_mission", "run", "closed-loop mission, sensors and FLS included"),
+    "pmha": ("sim.bench_pmha", "run", "PMHA world-model update time"),
+    "gym": ("sim.bench_gym", "run", "gymnasium environment step rate"),
+    "atr": ("sim.atr_eval", "bench_atr", "ATR inference frame rate (CNN and classical)"),
 }
 
 
@@ -54,16 +56,19 @@ def _cmd_validate(args: argparse.Namespace) -> int:
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
-    module_name, _ = BENCHES[args.name]
-    module = importlib.import_module(module_name)
+    module_name, func_name, _ = BENCHES[args.name]
+    bench = getattr(importlib.import_module(module_name), func_name)
     overrides = list(args.overrides)
     if args.seed is not None:
         overrides.append(f"seed={args.seed}")
     scenario = load_scenario(args.scenario, overrides)
     import inspect
 
-    takes_scenario = "scenario" in inspect.signature(module.run).parameters
-    result = module.run(scenario) if takes_scenario else module.run(seed=scenario.seed)
+    params = inspect.signature(bench).parameters
+    if "scenario" in params:
+        result = bench(scenario)
+    else:
+        result = bench(seed=scenario.seed) if "seed" in params else bench()
     if args.json:
         print(json.dumps(result))
     else:
@@ -102,7 +107,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_validate)
 
     p = sub.add_parser("bench", help="run a benchmark")
-    p.add_argument("name", choices=sorted(BENCHES), help="; ".join(f"{k}: {v[1]}" for k, v in BENCHES.items()))
+    p.add_argument("name", choices=sorted(BENCHES), help="; ".join(f"{k}: {v[2]}" for k, v in BENCHES.items()))
     p.add_argument("--scenario", default=DEFAULT_SCENARIO, help="scenario name or path")
     p.add_argument("--seed", type=int, default=None)
     p.add_argument("--json", action="store_true", help="print one JSON object as the last line")
@@ -121,7 +126,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="override autonomy.atr.detector")
     p.set_defaults(func=_cmd_run)
 
-    for module_name in ("sim.dataset.cli", "sim.atr_train", "sim.atr_eval"):
+    for module_name in ("sim.dataset.generate", "sim.training.train", "sim.atr_eval"):
         _register_optional(sub, module_name)
     return parser
 

@@ -194,7 +194,7 @@ def generate_dataset(out_dir: str | Path, n_frames: int, seed: int = 0, workers:
     total = sum(len(j[4]) for j in jobs)
     from tqdm import tqdm
 
-    bar = tqdm(total=total, unit="frame", desc="dataset", disable=not progress)
+    bar = tqdm(total=total, unit="frame", desc="dataset", disable=not progress or total == 0)
     try:
         if use_ray:
             _run_ray(jobs, ray_address, bar)
