@@ -25,13 +25,13 @@ CONFIGS = {
 }
 
 
-def _run_one(job: tuple[str, int, str, str]) -> tuple[str, int, dict]:
+def _run_one(job: tuple[str, int, str, str, tuple[str, ...]]) -> tuple[str, int, dict]:
     from scenarios import load_scenario
     from sim.mission_cli import run_mission
 
-    name, seed, scenario_name, out = job
+    name, seed, scenario_name, out, extra = job
     nav, overrides = CONFIGS[name]
-    scn = load_scenario(scenario_name, [*overrides, f"seed={seed}"])
+    scn = load_scenario(scenario_name, [*overrides, *extra, f"seed={seed}"])
     metrics = run_mission(scn, Path(out) / name / f"seed{seed}", nav_source=nav, rerun=False, progress=False,
                           overwrite=True)
     return name, seed, metrics
@@ -64,10 +64,12 @@ def main() -> None:
     ap.add_argument("--configs", nargs="*", default=list(CONFIGS), choices=list(CONFIGS))
     ap.add_argument("--out", default="runs/wm_eval")
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                    help="extra scenario override for every run (repeatable)")
     args = ap.parse_args()
     from tqdm import tqdm
 
-    jobs = [(c, s, args.scenario, args.out) for c in args.configs for s in range(args.seeds)]
+    jobs = [(c, s, args.scenario, args.out, tuple(args.overrides)) for c in args.configs for s in range(args.seeds)]
     results: dict[str, list[dict]] = {c: [] for c in args.configs}
     with ProcessPoolExecutor(max_workers=args.workers) as pool:
         for name, seed, metrics in tqdm(pool.map(_run_one, jobs), total=len(jobs), desc="missions"):
