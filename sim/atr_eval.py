@@ -168,6 +168,48 @@ def evaluate_detector(detector, data_dir: str | Path, score_threshold: float,
             "frames_per_s": n_img / infer_s if infer_s > 0 else float("nan")}
 
 
+class _MemoDetector:
+    """Caches ``detect`` results by fan content so a threshold sweep runs inference once."""
+
+    def __init__(self, detector) -> None:
+        self._detector = detector
+        self._cache: dict[bytes, list] = {}
+
+    def detect(self, frame: FlsFrame, score_threshold: float):
+        import hashlib
+
+        key = hashlib.blake2b(frame.fan.tobytes(), digest_size=16).digest() + repr(score_threshold).encode()
+        if key not in self._cache:
+            self._cache[key] = self._detector.detect(frame, score_threshold=score_threshold)
+        return self._cache[key]
+
+
+def choose_threshold(sweep: Sequence[dict], min_precision: float = 0.95) -> dict:
+    """Operating point from a :func:`threshold_sweep`: the highest recall with precision >=
+    ``min_precision``; if none reaches it, the highest F1."""
+    ok = [r for r in sweep if r["precision"] >= min_precision]
+    if ok:
+        return max(ok, key=lambda r: (r["recall"], r["precision"]))
+
+    def f1(r: dict) -> float:
+        p, q = r["precision"], r["recall"]
+        return 2 * p * q / (p + q) if p + q else 0.0
+
+    return max(sweep, key=f1)
+
+
+def threshold_sweep(detector, data_dir: str | Path, thresholds: Sequence[float], **kwargs) -> list[dict]:
+    """Precision, recall and false alarms per frame of ``detector`` on ``data_dir`` at each
+    threshold (inference runs once). ``kwargs`` go to :func:`evaluate_detector`."""
+    memo = _MemoDetector(detector)
+    out = []
+    for thr in thresholds:
+        r = evaluate_detector(memo, data_dir, float(thr), **kwargs)
+        out.append({k: r[k] for k in ("score_threshold", "precision", "recall", "false_alarms_per_frame",
+                                      "true_positives", "false_positives", "ground_truth")})
+    return out
+
+
 HELDOUT_SEED = 1009
 HELDOUT_FRAMES = 200
 
@@ -217,6 +259,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--threshold", type=float, default=None, help="operating threshold (default: AtrConfig's)")
     p.add_argument("--max-images", type=int, default=None)
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
+    p.add_argument("--sweep", action="store_true",
+                   help="print precision/recall over thresholds 0.10-0.90 and the chosen operating point "
+                        "(highest recall at precision >= 0.95, else best F1); use on a validation set")
     p.set_defaults(func=eval_main)
     return p
 
@@ -227,6 +272,24 @@ def _fmt(v) -> str:
 
 def eval_main(args: argparse.Namespace) -> int:
     """Entry point for ``auvsim eval-atr``."""
+    if getattr(args, "sweep", False):
+        from autonomy.atr import build_detector
+        from scenarios.config.atr import AtrConfig
+
+        cfg = AtrConfig(detector=args.detector, model_path=args.model, intra_op_threads=1)
+        data = Path(args.data) if args.data is not None else ensure_heldout()
+        sweep = threshold_sweep(build_detector(cfg), data, np.round(np.arange(0.10, 0.91, 0.025), 3),
+                                max_images=args.max_images)
+        best = choose_threshold(sweep)
+        if args.json:
+            print(json.dumps({"data": str(data), "sweep": sweep, "chosen": best}, indent=1))
+            return 0
+        print(f"eval-atr sweep {args.detector} on {data}")
+        for r in sweep:
+            mark = " <- chosen" if r is best else ""
+            print(f"  thr {r['score_threshold']:.3f}  precision {r['precision']:.3f}  recall {r['recall']:.3f}  "
+                  f"FA/frame {r['false_alarms_per_frame']:.3f}{mark}")
+        return 0
     res = evaluate(args.detector, args.data, args.model, args.threshold, args.max_images)
     if args.json:
         print(json.dumps(res, indent=1))

@@ -25,6 +25,7 @@ def plot_map(
     waypoints_ne: NDArray | None,
     targets: Sequence[tuple[str, NDArray, bool]],
     estimates: Sequence[tuple[str, NDArray, NDArray]] = (),
+    rejected_ned: Sequence[NDArray] = (),
     title: str = "",
 ) -> None:
     """Write a plan-view map. East is the horizontal axis, north the vertical.
@@ -34,7 +35,8 @@ def plot_map(
         est_pos_ned: (n, 3) navigation estimate, or None.
         waypoints_ne: (k, 2) planned waypoints, or None.
         targets: (name, pos_ned (3,), is_target) for every scene object.
-        estimates: (label, pos_ned (3,), cov_ned (3, 3)) world-model objects.
+        estimates: (label, pos_ned (3,), cov_ned (3, 3)) world-model targets.
+        rejected_ned: positions of world-model objects classified as not-targets.
     """
     import matplotlib
 
@@ -58,6 +60,8 @@ def plot_map(
         ax.plot(ell[:, 1], ell[:, 0], "-", color="tab:red", lw=0.9)
         ax.plot(pos[1], pos[0], "+", color="tab:red", ms=10, mew=1.6, label="world model (2-sigma)" if i == 0 else None)
         ax.annotate(label, (pos[1], pos[0]), textcoords="offset points", xytext=(-14, -12), fontsize=7, color="tab:red")
+    for i, pos in enumerate(rejected_ned):
+        ax.plot(pos[1], pos[0], "x", color="0.5", ms=7, label="world model: not target" if i == 0 else None)
     ax.set_xlabel("East (m)")
     ax.set_ylabel("North (m)")
     ax.set_aspect("equal")

@@ -99,16 +99,18 @@ def run_mission(
 
     metrics = collect_metrics(mission, log)
     log.write_csv(partial / "trajectory.csv")
-    estimates = []
+    estimates, rejected = [], []
     if mission.perception is not None:
-        objects = mission.perception.world_objects()
         write_json(partial / "world_model.json", mission.perception.world_model_json())
-        estimates = [(f"{o.id}", o.pos_ned, o.cov_ned) for o in objects]
+        targets = mission.perception.target_objects()
+        estimates = [(f"{o.id}", o.pos_ned, o.cov_ned) for o in targets]
+        target_ids = {o.id for o in targets}
+        rejected = [o.pos_ned for o in mission.perception.world_objects() if o.id not in target_ids]
     plot_map(
         partial / "map.png",
         true_pos_ned=log.true_pos_ned, est_pos_ned=log.est_pos_ned, waypoints_ne=mission.waypoints_ne,
         targets=[(o.name, o.centroid_ned, o.is_target) for o in mission.world.objects],
-        estimates=estimates,
+        estimates=estimates, rejected_ned=rejected,
         title=f"{scenario.name} seed {mission.seed} (nav: {nav_source})",
     )
     write_json(partial / "metrics.json", metrics)

@@ -16,7 +16,7 @@ from autonomy.atr import build_detector
 from autonomy.frames import euler_from_rot
 from autonomy.localization import fls_visibility, localize
 from autonomy.messages import NavEstimate
-from autonomy.world_model import PMHA
+from autonomy.world_model import CLASS_NAMES, PMHA
 from scenarios.schema import Scenario
 from sim.detection_scoring import match_detections
 from sim.records import FlsEvent
@@ -25,6 +25,7 @@ from sim.seabed import Seabed
 from sim.sensors.fls import FlsRender, FlsSensor
 
 MATCH_IOU = 0.3  # a detection is true when it overlaps a visible target's box this much
+TARGET_CLASS = CLASS_NAMES[0]  # the world model's class of objects of potential interest
 
 
 class Perception:
@@ -129,9 +130,20 @@ class Perception:
             "detector": self.scenario.autonomy.atr.detector,
         }
 
+    def target_objects(self) -> list[Any]:
+        """World objects the world model classifies as targets (most probable class)."""
+        return [o for o in self.world_objects() if o.class_name == TARGET_CLASS]
+
     def world_model_metrics(self) -> dict[str, Any]:
-        objs = self.world_objects()
-        est = np.array([o.pos_ned for o in objs], dtype=float).reshape(-1, 3)
+        """Targets of the world model scored against the true targets (optimal assignment
+        within 2 m, GOSPA c = 2 m, p = 1, alpha = 2). Objects the world model itself
+        classifies as not-targets are counted apart, not as false targets."""
+        targets = self.target_objects()
+        est = np.array([o.pos_ned for o in targets], dtype=float).reshape(-1, 3)
         s = score_world_model(est, self.truth_targets, match_radius_m=2.0, gospa_c_m=2.0, gospa_p=1.0)
-        return {k: v for k, v in s.items() if k in ("objects", "matched", "missed", "false", "mean_position_error_m",
-                                                      "gospa", "pairs")}
+        out = {k: v for k, v in s.items() if k in ("objects", "matched", "missed", "false", "mean_position_error_m",
+                                                     "gospa", "pairs")}
+        out["objects_not_target"] = len(self.world_objects()) - len(targets)
+        for pair in out["pairs"]:
+            pair["estimate_id"] = targets[pair["estimate"]].id
+        return out

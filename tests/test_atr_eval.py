@@ -90,3 +90,26 @@ def test_classical_baseline_runs_on_the_same_frames(eval_set):
     assert 0.0 <= res["precision"] <= 1.0 and 0.0 <= res["recall"] <= 1.0 and res["frames"] == 40
     cnn = evaluate_detector(build_detector(AtrConfig()), eval_set, 0.4)
     assert cnn["ap50"] > res["ap50"]
+
+
+def test_choose_threshold_prefers_recall_at_required_precision_else_f1():
+    from sim.atr_eval import choose_threshold
+
+    sweep = [{"score_threshold": 0.2, "precision": 0.80, "recall": 0.99},
+             {"score_threshold": 0.4, "precision": 0.96, "recall": 0.90},
+             {"score_threshold": 0.6, "precision": 0.99, "recall": 0.70}]
+    assert choose_threshold(sweep)["score_threshold"] == 0.4
+    low = [dict(r, precision=r["precision"] - 0.2) for r in sweep]  # none reaches 0.95
+    f1 = [2 * r["precision"] * r["recall"] / (r["precision"] + r["recall"]) for r in low]
+    assert choose_threshold(low)["score_threshold"] == low[int(np.argmax(f1))]["score_threshold"]
+
+
+def test_threshold_sweep_matches_separate_evaluations(eval_set):
+    from sim.atr_eval import threshold_sweep
+
+    det = _OracleDetector(eval_set, extra_false=1)  # true boxes score 0.9..0.8, the false one last
+    sweep = threshold_sweep(det, eval_set, [0.5, 0.85, 0.95], max_images=10)
+    for r in sweep:
+        ref = evaluate_detector(det, eval_set, r["score_threshold"], max_images=10)
+        assert (r["precision"], r["recall"]) == (ref["precision"], ref["recall"])
+    assert sweep[-1]["recall"] == 0.0 and sweep[0]["recall"] == 1.0

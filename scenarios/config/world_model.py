@@ -32,7 +32,10 @@ class LocalizationConfig(StrictModel):
     range_offset_m: float = Field(
         0.0, ge=-5.0, le=5.0, description="added to the detection range (leading edge -> centre)"
     )
-    min_sigma_m: NonNegFloat = Field(0.02, description="isotropic floor added to the covariance")
+    min_sigma_m: NonNegFloat = Field(
+        0.15, description="isotropic floor added to the covariance: where on an object the ATR box lands"
+        " varies with aspect, an error correlated across frames that the per-frame terms miss",
+    )
 
 
 class WorldModelConfig(StrictModel):

@@ -27,13 +27,15 @@ import numpy as np
 
 from scenarios.config.fls import FlsConfig
 from sim.dataset.coco_io import ANNOTATIONS_FILE, IMAGES_DIR, LABELS_DIR, write_atomic, write_coco, yolo_lines
-from sim.dataset.randomization import TRAIN_RANDOMIZATION, Randomization, SceneSpec, sample_scene
+from sim.dataset.randomization import (HELDOUT_RANDOMIZATION, TRAIN_RANDOMIZATION, WIDE_RANDOMIZATION,
+                                      Randomization, SceneSpec, sample_scene)
 from sim.rng import component_rng
 
 GENERATOR_VERSION = "1.2.0"
 MANIFEST_FILE = "manifest.json"
 PARTS_DIR = "parts"
 CLASS_NAMES = ("opi", "rock", "debris")
+RANDOMIZATION_PRESETS = {"train": TRAIN_RANDOMIZATION, "wide": WIDE_RANDOMIZATION, "heldout": HELDOUT_RANDOMIZATION}
 RAY_HINT = "--ray needs Ray: pip install 'auvsim[scale]' (or pip install ray)"
 
 
@@ -122,8 +124,11 @@ def _scene_job(job: tuple) -> int:
 
 
 def _manifest(n_frames: int, seed: int, rz: Randomization, settings: RenderSettings) -> dict:
+    rz_json = rz.model_dump(mode="json")
+    if rz_json.get("basin") is None:
+        rz_json.pop("basin", None)  # datasets without basin walls keep their earlier manifests
     return {"generator_version": GENERATOR_VERSION, "seed": seed, "n_frames": n_frames,
-            "classes": list(CLASS_NAMES), "randomization": rz.model_dump(mode="json"),
+            "classes": list(CLASS_NAMES), "randomization": rz_json,
             "render": settings.__dict__.copy(), "fls_defaults": FlsConfig().model_dump(mode="json")}
 
 
@@ -245,6 +250,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--workers", type=int, default=None, help="local processes (default: all cores)")
     p.add_argument("--ray", nargs="?", const="", default=None, metavar="ADDRESS",
                    help="distribute with Ray (local instance, or the cluster at ADDRESS)")
+    p.add_argument("--randomization", choices=sorted(RANDOMIZATION_PRESETS), default="train",
+                   help="randomisation ranges preset (default %(default)s)")
     p.add_argument("--heldout", action="store_true",
                    help="use the held-out (distribution-shifted) randomisation ranges")
     p.add_argument("--no-progress", action="store_true")
@@ -254,9 +261,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
 
 def dataset_main(args: argparse.Namespace) -> int:
     """Entry point for ``auvsim dataset``."""
-    from sim.dataset.randomization import HELDOUT_RANDOMIZATION
-
-    rz = HELDOUT_RANDOMIZATION if getattr(args, "heldout", False) else TRAIN_RANDOMIZATION
+    preset = "heldout" if getattr(args, "heldout", False) else getattr(args, "randomization", "train")
+    rz = RANDOMIZATION_PRESETS[preset]
     path = generate_dataset(args.out, args.n, seed=args.seed, workers=args.workers,
                             use_ray=args.ray is not None, ray_address=args.ray or None, randomization=rz,
                             progress=not getattr(args, "no_progress", False))

@@ -5,10 +5,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 from pydantic import Field, model_validator
 
 from scenarios.config.base import StrictModel
-from scenarios.config.world import SeabedConfig, TargetConfig
+from scenarios.config.world import BasinConfig, SeabedConfig, TargetConfig
 
 Range = tuple[float, float]
 TARGET_CLASS = "opi"
@@ -17,6 +18,17 @@ TARGET_CLASS = "opi"
 def _check_range(name: str, r: Range) -> None:
     if r[0] > r[1]:
         raise ValueError(f"{name}: lower bound {r[0]} above upper bound {r[1]}")
+
+
+class BasinRandomization(StrictModel):
+    """Rectangular basin walls as background clutter: with ``probability`` a scene gets an
+    axis-aligned basin whose wall faced by the sonar lies ``wall_range_m`` ahead of the first
+    pose (slant along the heading); half sizes from ``half_size_m``."""
+
+    probability: float = Field(0.3, ge=0.0, le=1.0)
+    wall_range_m: Range = (4.0, 40.0)
+    half_size_m: Range = (12.0, 50.0)
+    reflectivity: Range = (0.4, 0.9)
 
 
 class Randomization(StrictModel):
@@ -57,6 +69,7 @@ class Randomization(StrictModel):
     distractor_reflectivity: Range = (0.15, 0.45)
     frames_per_scene: int = Field(4, ge=1, le=100)
     step_m: Range = (1.0, 4.0)
+    basin: BasinRandomization | None = Field(None, description="basin walls as background (None: never)")
 
     @model_validator(mode="after")
     def _ranges(self) -> "Randomization":
@@ -73,6 +86,14 @@ class Randomization(StrictModel):
 
 
 TRAIN_RANDOMIZATION = Randomization()
+# Wider training ranges (model v2): covers higher altitudes, rougher/longer-rippled beds, more
+# noise and heavy-tailed clutter, darker targets, more distractors and basin walls as background.
+WIDE_RANDOMIZATION = Randomization(
+    seabed_reflectivity=(0.15, 0.55), slope_deg=(1.0, 12.0), roughness_m=(0.02, 0.2),
+    ripple_amplitude_m=(0.02, 0.15), ripple_wavelength_m=(0.8, 4.5), altitude_m=(1.5, 7.0),
+    noise_scale=(0.5, 2.5), k_speckle_probability=0.45, k_shape=(1.0, 10.0),
+    target_reflectivity=(0.5, 1.0), n_distractors=(0, 6), basin=BasinRandomization(),
+)
 # Held-out set: other altitudes, rougher and differently rippled seabeds, more noise, darker targets.
 HELDOUT_RANDOMIZATION = Randomization(
     seabed_depth_m=(10.0, 25.0), seabed_reflectivity=(0.35, 0.55), roughness_m=(0.12, 0.2),
@@ -106,6 +127,7 @@ class SceneSpec:
     noise_scale: float
     speckle: str
     k_shape: float
+    basin: BasinConfig = BasinConfig()
 
 
 def _u(rng: np.random.Generator, r: Range) -> float:
@@ -218,8 +240,26 @@ def sample_scene(index: int, rng: np.random.Generator, rz: Randomization, seabed
                 ang = _u(rng, (-np.pi, np.pi))
                 off = _u(rng, rz.cluster_spacing_m) * np.array([np.cos(ang), np.sin(ang)])
                 objects.append(_object(rng, f"{prefix}{k}c{m}", pos + off, depth, rz, bool(rng.random() < 0.7)))
-    return SceneSpec(index=index, world_seed=world_seed, seabed=seabed, targets=tuple(objects),
+    basin = BasinConfig()
+    if rz.basin is not None and rng.random() < rz.basin.probability:
+        basin = _sample_basin(rng, rz.basin, heading)
+    return SceneSpec(index=index, world_seed=world_seed, seabed=seabed, targets=tuple(objects), basin=basin,
                      poses=tuple(poses), tilt_rad=tilt, range_min_m=range_min,
                      range_max_m=range_max, gain_db=_u(rng, rz.gain_db), noise_scale=_u(rng, rz.noise_scale),
                      speckle="k" if rng.random() < rz.k_speckle_probability else "rayleigh",
                      k_shape=_u(rng, rz.k_shape))
+
+
+def _sample_basin(rng: np.random.Generator, rb: BasinRandomization, heading: NDArray) -> BasinConfig:
+    """Rectangular basin around the first pose (at the origin) with the wall faced along the
+    dominant axis of ``heading`` (unit NE vector) at slant range ``rb.wall_range_m`` ahead."""
+    half = np.array([_u(rng, rb.half_size_m), _u(rng, rb.half_size_m)])
+    k = int(np.argmax(np.abs(heading)))
+    sign = float(np.sign(heading[k])) or 1.0
+    d_axis = _u(rng, rb.wall_range_m) * abs(heading[k])
+    half[k] = max(half[k], d_axis + 1.0)
+    centre = np.zeros(2)
+    centre[k] = sign * (d_axis - half[k])
+    centre[1 - k] = _u(rng, (-0.5, 0.5)) * half[1 - k]
+    return BasinConfig(shape="rectangular", center_ne_m=(float(centre[0]), float(centre[1])),
+                       size_ne_m=(float(2 * half[0]), float(2 * half[1])), reflectivity=_u(rng, rb.reflectivity))

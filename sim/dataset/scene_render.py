@@ -51,7 +51,7 @@ def render_frames(spec: SceneSpec, fls_cfg: FlsConfig, rng: np.random.Generator,
     from sim.world import build_world
 
     scenario = Scenario(name=f"dataset_scene_{spec.index}", seed=spec.world_seed,
-                        world=WorldConfig(seabed=spec.seabed, targets=spec.targets))
+                        world=WorldConfig(seabed=spec.seabed, basin=spec.basin, targets=spec.targets))
     world = build_world(scenario, with_vehicle=False)
     caster = MujocoRayCaster(world.model, world.data, world.geom_object_id, world.geom_reflectivity,
                              exclude_body_id=-1)

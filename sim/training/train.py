@@ -31,6 +31,8 @@ class TrainParams:
     classes: tuple[str, ...] | None = None
     crop_hw: tuple[int, int] | None = (128, 224)
     object_crop_fraction: float = 0.75
+    size_loss_weight: float = 0.5
+    light_heads: bool = False
 
 
 def _focal_loss(torch, logits, target, weight):
@@ -110,15 +112,32 @@ def _log(msg: str) -> None:
     print(msg, flush=True)
 
 
-def train_atr(data_dir: str | Path, out_path: str | Path, params: TrainParams = TrainParams(),
+def _load_all(data_dirs: list[Path], input_hw: tuple[int, int], classes):
+    """Load and concatenate several dataset directories (class lists must agree)."""
+    from sim.training.data import DetectionArrays, load_detection_arrays
+
+    parts = [load_detection_arrays(d, input_hw, classes) for d in data_dirs]
+    first = parts[0]
+    for d, a in zip(data_dirs[1:], parts[1:]):
+        if a.class_names != first.class_names or a.fan_hw != first.fan_hw:
+            raise ValueError(f"train-atr: dataset {d} has classes {a.class_names} / fan {a.fan_hw}, "
+                             f"{data_dirs[0]} has {first.class_names} / {first.fan_hw}")
+    if len(parts) == 1:
+        return first
+    return DetectionArrays(np.concatenate([a.images for a in parts]), sum((a.boxes for a in parts), []),
+                           sum((a.class_ids for a in parts), []), sum((a.ignore for a in parts), []),
+                           first.class_names, first.fan_hw)
+
+
+def train_atr(data_dir: str | Path | list, out_path: str | Path, params: TrainParams = TrainParams(),
               log=_log) -> dict:
-    """Train on ``data_dir`` (an ``auvsim dataset`` output) and export ONNX to ``out_path``.
+    """Train on ``data_dir`` (an ``auvsim dataset`` output, or a list of them, concatenated)
+    and export ONNX to ``out_path``.
 
     Stops after ``params.epochs`` epochs or ``params.max_minutes``, whichever comes first.
     Returns a summary dict (epochs run, final losses, seconds, parameter count).
     """
     torch = require_torch()
-    from sim.training.data import load_detection_arrays
     from sim.training.export import export_onnx
     from sim.training.model import STRIDE, CenterNetSmall
     from sim.training.targets import encode_targets
@@ -127,8 +146,8 @@ def train_atr(data_dir: str | Path, out_path: str | Path, params: TrainParams = 
     torch.set_num_threads(params.threads)
     rng = np.random.default_rng(params.seed)
     t0 = time.perf_counter()
-    arrays = load_detection_arrays(data_dir, params.input_hw,
-                                   list(params.classes) if params.classes else None)
+    data_dirs = [Path(d) for d in (data_dir if isinstance(data_dir, (list, tuple)) else [data_dir])]
+    arrays = _load_all(data_dirs, params.input_hw, list(params.classes) if params.classes else None)
     n_img = arrays.images.shape[0]
     h, w = params.input_hw
     if h % 16 or w % 16:
@@ -138,7 +157,7 @@ def train_atr(data_dir: str | Path, out_path: str | Path, params: TrainParams = 
     if crop[0] % 16 or crop[1] % 16:
         raise ValueError(f"crop_hw {crop}: height and width must be multiples of 16")
     grid = (crop[0] // STRIDE, crop[1] // STRIDE)
-    model = CenterNetSmall(len(arrays.class_names), params.width)
+    model = CenterNetSmall(len(arrays.class_names), params.width, light_heads=params.light_heads)
     n_params = sum(p.numel() for p in model.parameters())
     opt = torch.optim.AdamW(model.parameters(), lr=params.lr, weight_decay=params.weight_decay)
     steps_per_epoch = max(1, int(np.ceil(n_img / params.batch_size)))
@@ -174,7 +193,7 @@ def train_atr(data_dir: str | Path, out_path: str | Path, params: TrainParams = 
             n_reg = reg_t.sum().clamp(min=1.0)
             l_size = (torch.abs(size_log - size_t) * reg_t).sum() / n_reg
             l_off = (torch.abs(offset - off_t) * reg_t).sum() / n_reg
-            loss = l_heat + 0.5 * l_size + l_off
+            loss = l_heat + params.size_loss_weight * l_size + l_off
             # Warm-up then cosine decay over whichever runs out first: steps or the time budget.
             progress = max(step / total_steps, (time.perf_counter() - t0) / (deadline - t0))
             for group in opt.param_groups:
@@ -195,12 +214,17 @@ def train_atr(data_dir: str | Path, out_path: str | Path, params: TrainParams = 
             log(f"train-atr: time budget of {params.max_minutes} min reached")
             break
     model.eval()
-    manifest_path = Path(data_dir) / "manifest.json"
-    data_manifest = json.loads(manifest_path.read_text()) if manifest_path.is_file() else {}
+    train_data = []
+    for d in data_dirs:
+        manifest_path = d / "manifest.json"
+        m = json.loads(manifest_path.read_text()) if manifest_path.is_file() else {}
+        train_data.append({"dir": str(d), "n_frames": m.get("n_frames"),
+                           "generator_version": m.get("generator_version"), "seed": m.get("seed")})
     meta = {"train_params": json.dumps({k: v for k, v in asdict(params).items()}, default=list),
-            "train_data": json.dumps({"dir": str(data_dir), "n_images": n_img,
-                                      "generator_version": data_manifest.get("generator_version"),
-                                      "seed": data_manifest.get("seed")}),
+            "train_data": json.dumps({"dir": ",".join(str(d) for d in data_dirs), "n_images": n_img,
+                                      "generator_version": train_data[0]["generator_version"],
+                                      "seed": train_data[0]["seed"] if len(train_data) == 1
+                                      else [t["seed"] for t in train_data], "datasets": train_data}),
             "epochs_run": str(epoch)}
     export_onnx(model, out_path, params.input_hw, arrays.fan_hw, arrays.class_names, meta)
     summary = {"epochs_run": epoch, "seconds": time.perf_counter() - t0, "parameters": n_params,
@@ -213,7 +237,8 @@ def train_atr(data_dir: str | Path, out_path: str | Path, params: TrainParams = 
 def add_parser(subparsers) -> argparse.ArgumentParser:
     """Register ``train-atr`` on an argparse ``subparsers`` object."""
     p = subparsers.add_parser("train-atr", help="train the ATR CNN on a dataset and export ONNX")
-    p.add_argument("--data", required=True, help="dataset directory written by `auvsim dataset`")
+    p.add_argument("--data", required=True,
+                   help="dataset directory written by `auvsim dataset` (comma-separated: several, concatenated)")
     p.add_argument("--out", required=True, help="output ONNX file")
     p.add_argument("--epochs", type=int, default=TrainParams.epochs)
     p.add_argument("--batch-size", type=int, default=TrainParams.batch_size)
@@ -225,6 +250,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--max-minutes", type=float, default=TrainParams.max_minutes)
     p.add_argument("--threads", type=int, default=TrainParams.threads)
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--size-loss-weight", type=float, default=TrainParams.size_loss_weight)
+    p.add_argument("--light-heads", action="store_true", help="depthwise-separable heads (faster inference)")
     p.add_argument("--classes", default=None, help="comma-separated class names (default: all in data)")
     p.set_defaults(func=train_main)
     return p
@@ -239,6 +266,9 @@ def train_main(args: argparse.Namespace) -> int:
     crop = None if str(args.crop).lower() == "none" else tuple(int(v) for v in str(args.crop).lower().split("x"))
     params = TrainParams(input_hw=(hh, ww), crop_hw=crop, width=args.width, epochs=args.epochs, batch_size=args.batch_size,
                          lr=args.lr, max_minutes=args.max_minutes, threads=args.threads, seed=args.seed,
+                         size_loss_weight=getattr(args, "size_loss_weight", TrainParams.size_loss_weight),
+                         light_heads=bool(getattr(args, "light_heads", False)),
                          classes=tuple(args.classes.split(",")) if args.classes else None)
-    train_atr(args.data, args.out, params)
+    dirs = [d for d in str(args.data).split(",") if d]
+    train_atr(dirs if len(dirs) > 1 else dirs[0], args.out, params)
     return 0
