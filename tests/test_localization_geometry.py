@@ -155,3 +155,18 @@ def test_mount_convention_matches_the_fls_renderer():
 
     for rpy in [(0.0, 0.35, 0.0), (0.05, -0.2, 0.3)]:
         np.testing.assert_allclose(sonar_to_body_rotation(rpy), mount_rotation(rpy), atol=1e-15)
+
+
+def test_batched_points_equal_the_scalar_chain():
+    from autonomy.localization.geolocate import relative_points_ned
+
+    rng = np.random.default_rng(3)
+    mount = np.array([0.28, 0.05, 0.15])
+    for use_seabed in (True, False):
+        x = np.column_stack([rng.uniform(3, 30, 20), rng.uniform(-1, 1, 20), rng.uniform(1, 4, 20),
+                             rng.normal(0, 0.05, (20, 2)), rng.uniform(-3, 3, 20), rng.uniform(0.1, 0.4, 20)])
+        got = relative_points_ned(x, mount, 0.01, -0.02, use_seabed)
+        for row, p in zip(x, got):
+            want = sonar_point_ned(row[0], row[1], np.zeros(3), row[3:6], mount, (0.01, row[6], -0.02),
+                                   altitude_m=row[2] if use_seabed else None)
+            assert np.allclose(p, want, atol=1e-9)

@@ -77,6 +77,45 @@ def sonar_point_ned(
     return np.asarray(pos_ned, dtype=float) + lever_ned + R_nb @ (R_bs @ p_s)
 
 
+def _rotations_zyx(rpy: FloatArray) -> FloatArray:
+    """Batched ``Rz(yaw) Ry(pitch) Rx(roll)`` for rows (K, 3) -> (K, 3, 3)."""
+    cr, sr = np.cos(rpy[:, 0]), np.sin(rpy[:, 0])
+    cp, sp = np.cos(rpy[:, 1]), np.sin(rpy[:, 1])
+    cy, sy = np.cos(rpy[:, 2]), np.sin(rpy[:, 2])
+    return np.stack([
+        np.stack([cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr], axis=-1),
+        np.stack([sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr], axis=-1),
+        np.stack([-sp, cp * sr, cp * cr], axis=-1),
+    ], axis=-2)
+
+
+def relative_points_ned(
+    x: FloatArray, mount_pos_body_m: ArrayLike, mount_roll_rad: float, mount_yaw_rad: float, use_seabed: bool
+) -> FloatArray:
+    """Batched :func:`sonar_point_ned` relative to the body origin.
+
+    Rows of ``x`` (K, 7): range, azimuth, altitude (ignored unless ``use_seabed``), roll,
+    pitch, yaw, mount tilt. Returns (K, 3) NED offsets from the vehicle position.
+    """
+    x = np.asarray(x, dtype=float)
+    r, a = x[:, 0], x[:, 1]
+    R_nb = _rotations_zyx(x[:, 3:6])
+    k = len(x)
+    # sonar->body: Rz(yaw) Ry(-tilt) Rx(roll), the convention of sonar_to_body_rotation
+    R_bs = _rotations_zyx(np.column_stack([np.full(k, mount_roll_rad), -x[:, 6], np.full(k, mount_yaw_rad)]))
+    R_ns = R_nb @ R_bs
+    lever = R_nb @ np.asarray(mount_pos_body_m, dtype=float)
+    if use_seabed:
+        sonar_alt = x[:, 2] - lever[:, 2]
+        A = R_ns[:, 2, 0] * np.cos(a) + R_ns[:, 2, 1] * np.sin(a)
+        B = R_ns[:, 2, 2]
+        phi = np.arcsin(np.clip(sonar_alt / (r * np.hypot(A, B)), -1.0, 1.0)) - np.arctan2(A, B)
+    else:
+        phi = np.zeros(k)
+    p_s = np.stack([r * np.cos(a) * np.cos(phi), r * np.sin(a) * np.cos(phi), r * np.sin(phi)], axis=-1)
+    return lever + np.einsum("kij,kj->ki", R_ns, p_s)
+
+
 def box_polar_extent(box_xyxy_px: ArrayLike, geometry: FanGeometry) -> tuple[float, float]:
     """(range extent m, azimuth extent rad) spanned by a fan-image box's corners."""
     x0, y0, x1, y1 = np.asarray(box_xyxy_px, dtype=float)
@@ -106,18 +145,13 @@ def localize(
          *np.asarray(nav.rpy_rad, dtype=float), mount_rpy[1]]
     )
 
-    def point(x: FloatArray) -> FloatArray:
-        return sonar_point_ned(
-            x[0], x[1], np.zeros(3), x[3:6], mount_pos_body_m, (mount_rpy[0], x[6], mount_rpy[2]),
-            altitude_m=x[2] if use_seabed else None,
-        )
-
-    p_rel = point(x0)
-    J = np.empty((3, x0.size))
-    for k, h in enumerate(_STEPS):
-        dx = np.zeros_like(x0)
-        dx[k] = h
-        J[:, k] = (point(x0 + dx) - point(x0 - dx)) / (2.0 * h)
+    # x0 and its central-difference perturbations, evaluated in one batch
+    dx = np.diag(_STEPS)
+    pts = relative_points_ned(np.vstack([x0, x0 + dx, x0 - dx]), mount_pos_body_m, mount_rpy[0], mount_rpy[2],
+                              use_seabed)
+    p_rel = pts[0]
+    n_in = x0.size
+    J = ((pts[1:1 + n_in] - pts[1 + n_in:]) / (2.0 * _STEPS)[:, None]).T
 
     var_r = cfg.range_sigma_m**2
     var_a = cfg.azimuth_sigma_rad**2
