@@ -73,11 +73,11 @@ def _pr(tp: int, fp: int, n_gt: int) -> tuple[float, float]:
 def evaluate_detector(detector, data_dir: str | Path, score_threshold: float,
                       target_classes: Sequence[str] = ("opi",), min_score: float = 0.05,
                       range_bands_m: Sequence[float] = DEFAULT_RANGE_BANDS_M,
-                      max_images: int | None = None) -> dict:
+                      max_images: int | None = None, coco_ap: bool = True) -> dict:
     """Evaluate ``detector`` (``.detect(frame, score_threshold=...)``) on ``data_dir``.
 
     Detections down to ``min_score`` feed COCOeval; the operating point uses
-    ``score_threshold``. Returns a JSON-serialisable dict.
+    ``score_threshold``. Returns a JSON-serialisable dict (AP figures NaN if not ``coco_ap``).
     """
     from pycocotools.coco import COCO
     from pycocotools.cocoeval import COCOeval
@@ -141,7 +141,7 @@ def evaluate_detector(detector, data_dir: str | Path, score_threshold: float,
                 band_fp[b] += int(((db == b) & (state == 0)).sum())
     n_img = len(img_ids)
     ap50 = ap = float("nan")
-    if coco_dets:
+    if coco_dets and coco_ap:
         with contextlib.redirect_stdout(io.StringIO()):
             coco_dt = coco_gt.loadRes(coco_dets)
             ev = COCOeval(coco_gt, coco_dt, "bbox")
@@ -151,7 +151,7 @@ def evaluate_detector(detector, data_dir: str | Path, score_threshold: float,
             ev.accumulate()
             ev.summarize()
         ap, ap50 = float(ev.stats[0]), float(ev.stats[1])
-    elif n_gt:
+    elif n_gt and coco_ap:
         ap = ap50 = 0.0
     precision, recall = _pr(tp, fp, n_gt)
     by_band = []
@@ -184,18 +184,16 @@ class _MemoDetector:
         return self._cache[key]
 
 
-def choose_threshold(sweep: Sequence[dict], min_precision: float = 0.95) -> dict:
-    """Operating point from a :func:`threshold_sweep`: the highest recall with precision >=
-    ``min_precision``; if none reaches it, the highest F1."""
-    ok = [r for r in sweep if r["precision"] >= min_precision]
-    if ok:
-        return max(ok, key=lambda r: (r["recall"], r["precision"]))
+def choose_threshold(sweep: Sequence[dict], min_precision: float = 0.95, min_recall: float = 0.90) -> dict:
+    """Operating point from a :func:`threshold_sweep`: the best F1 among the thresholds that
+    reach both ``min_precision`` and ``min_recall``, else the best F1 overall."""
 
     def f1(r: dict) -> float:
         p, q = r["precision"], r["recall"]
         return 2 * p * q / (p + q) if p + q else 0.0
 
-    return max(sweep, key=f1)
+    ok = [r for r in sweep if r["precision"] >= min_precision and r["recall"] >= min_recall]
+    return max(ok or sweep, key=f1)
 
 
 def threshold_sweep(detector, data_dir: str | Path, thresholds: Sequence[float], **kwargs) -> list[dict]:
@@ -204,7 +202,7 @@ def threshold_sweep(detector, data_dir: str | Path, thresholds: Sequence[float],
     memo = _MemoDetector(detector)
     out = []
     for thr in thresholds:
-        r = evaluate_detector(memo, data_dir, float(thr), **kwargs)
+        r = evaluate_detector(memo, data_dir, float(thr), coco_ap=False, **kwargs)
         out.append({k: r[k] for k in ("score_threshold", "precision", "recall", "false_alarms_per_frame",
                                       "true_positives", "false_positives", "ground_truth")})
     return out

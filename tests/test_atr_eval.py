@@ -77,7 +77,7 @@ def test_shipped_model_meets_floor_on_seeded_heldout_frames(eval_set):
 
     cfg = AtrConfig()
     res = evaluate_detector(build_detector(cfg), eval_set, cfg.score_threshold)
-    # Regression floor; the shipped model measured P 0.72, R 0.62, AP50 0.64 on these 40 frames.
+    # Regression floor; the shipped model (v2) measured P 0.70, R 0.57, AP50 0.63 on these 40 frames.
     assert res["precision"] >= 0.55 and res["recall"] >= 0.5, res
     assert res["ap50"] >= 0.5, res
 
@@ -92,14 +92,15 @@ def test_classical_baseline_runs_on_the_same_frames(eval_set):
     assert cnn["ap50"] > res["ap50"]
 
 
-def test_choose_threshold_prefers_recall_at_required_precision_else_f1():
+def test_choose_threshold_prefers_the_goal_then_f1():
     from sim.atr_eval import choose_threshold
 
     sweep = [{"score_threshold": 0.2, "precision": 0.80, "recall": 0.99},
-             {"score_threshold": 0.4, "precision": 0.96, "recall": 0.90},
-             {"score_threshold": 0.6, "precision": 0.99, "recall": 0.70}]
+             {"score_threshold": 0.4, "precision": 0.96, "recall": 0.91},
+             {"score_threshold": 0.5, "precision": 0.97, "recall": 0.90},
+             {"score_threshold": 0.9, "precision": 1.00, "recall": 0.01}]
     assert choose_threshold(sweep)["score_threshold"] == 0.4
-    low = [dict(r, precision=r["precision"] - 0.2) for r in sweep]  # none reaches 0.95
+    low = [dict(r, precision=r["precision"] - 0.2) for r in sweep]  # none reaches the goal
     f1 = [2 * r["precision"] * r["recall"] / (r["precision"] + r["recall"]) for r in low]
     assert choose_threshold(low)["score_threshold"] == low[int(np.argmax(f1))]["score_threshold"]
 

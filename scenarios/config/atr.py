@@ -40,7 +40,8 @@ class AtrConfig(StrictModel):
 
     detector: Literal["cnn", "classical", "none"] = "cnn"
     model_path: str | None = Field(None, description="ONNX model file; None = shipped model")
-    score_threshold: float = Field(0.4, ge=0.0, le=1.0, description="operating threshold")
+    score_threshold: float = Field(0.4, ge=0.0, le=1.0,
+                                   description="operating threshold (validation sweep in models/MODEL_CARD.md)")
     nms_iou: float = Field(0.3, gt=0.0, le=1.0, description="IoU above which boxes are suppressed")
     max_detections: int = Field(50, ge=1, le=1000)
     intra_op_threads: int = Field(1, ge=1, le=64, description="onnxruntime CPU threads")
