@@ -18,7 +18,7 @@ from autonomy.localization import fls_visibility, localize
 from autonomy.messages import NavEstimate
 from autonomy.world_model import CLASS_NAMES, PMHA
 from scenarios.schema import Scenario
-from sim.detection_scoring import match_detections
+from sim.atr_eval import match_frame
 from sim.records import FlsEvent
 from sim.scoring import score_world_model
 from sim.seabed import Seabed
@@ -94,13 +94,14 @@ class Perception:
         gt = [o for o in render.truth.objects if o.visible and o.is_target and o.bbox_xyxy is not None]
         self.n_visible_targets += len(gt)
         gt_boxes = np.array([o.bbox_xyxy for o in gt], dtype=float).reshape(-1, 4)
-        match = match_detections(np.array([d.box_xyxy_px for d in detections], dtype=float).reshape(-1, 4),
-                                 [d.score for d in detections], gt_boxes, MATCH_IOU)
-        event.true_detection = [bool(m >= 0) for m in match]
+        state, gt_hit = match_frame(np.array([d.box_xyxy_px for d in detections], dtype=float).reshape(-1, 4),
+                                    np.array([d.score for d in detections], dtype=float), gt_boxes,
+                                    np.zeros(len(gt), dtype=bool), MATCH_IOU)
+        event.true_detection = [bool(s == 1) for s in state]
         self.n_detections += len(detections)
-        self.n_true += int(np.sum(match >= 0))
-        self.n_false += int(np.sum(match < 0))
-        self.n_hit_targets += len(set(match[match >= 0].tolist()))
+        self.n_true += int(np.sum(state == 1))
+        self.n_false += int(np.sum(state != 1))
+        self.n_hit_targets += int(np.sum(gt_hit))
 
         nav_loc = self._truth_nav(render) if self.nav_source == "truth" else nav
         localized = [localize(d, nav_loc, self.fls.mount_pos_body_m, self.fls.mount_rpy_rad, self.loc_cfg,

@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sim.detection_scoring import box_iou, match_detections
 from sim.scheduler import SensorScheduler
 
 
@@ -39,12 +38,3 @@ def test_rates_and_latency_on_physics_clock():
 def test_bad_rate_rejected():
     with pytest.raises(ValueError, match="rate_hz"):
         SensorScheduler().add("x", 0.0)
-
-
-def test_iou_and_greedy_matching():
-    a = np.array([[0, 0, 10, 10], [20, 20, 30, 30]], float)
-    b = np.array([[5, 0, 15, 10]], float)
-    assert box_iou(a, b)[0, 0] == pytest.approx(50 / 150)
-    match = match_detections(np.array([[0, 0, 10, 10], [1, 0, 11, 10], [50, 50, 60, 60]], float),
-                             [0.5, 0.9, 0.8], np.array([[0, 0, 10, 10]], float), 0.3)
-    assert match.tolist() == [-1, 0, -1]  # the higher-scoring duplicate takes the truth
