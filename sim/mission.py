@@ -22,10 +22,9 @@ from numpy.typing import NDArray
 from autonomy.control.allocation import ThrustAllocator
 from autonomy.control.autopilot import Autopilot, AutopilotParams
 from autonomy.control.setpoint import Setpoint
-from autonomy.frames import rot_from_euler
 from autonomy.guidance.mission import MissionFsm
 from autonomy.guidance.survey import SurveyGuidance
-from autonomy.messages import AltimeterMsg, DepthMsg, Detection, DvlMsg, GpsMsg, ImuMsg, NavEstimate
+from autonomy.messages import AltimeterMsg, DepthMsg, DvlMsg, GpsMsg, ImuMsg, NavEstimate
 from autonomy.navigation import NavigationFilter, NavNoiseModel
 from scenarios.schema import Scenario
 from sim.current import OceanCurrent
@@ -166,7 +165,7 @@ class Mission:
         for obs in self.observers:
             obs.on_start(self)
         self._truth = self.vehicle.truth(self.t_s)
-        return self._record(self._truth, self._nav_for_control(self._truth), "idle")
+        return self._record(self._truth, self.nav_filter.estimate(), "idle")
 
     @property
     def done(self) -> bool:
@@ -188,9 +187,9 @@ class Mission:
         truth = self.vehicle.truth(self.t_s)
         self._truth = truth
         for name, msg in self.scheduler.pop_ready(self.t_s):
-            self._deliver(name, msg, truth)
+            self._deliver(name, msg)
         self.nav_filter.predict(self.t_s)
-        nav = self._nav_for_control(truth)
+        nav = self.nav_filter.estimate()
         sp = setpoint if setpoint is not None else self.fsm.update(self.t_s, nav, self.last_dvl_lock)
         self._setpoint = sp
         self.wrench_body = np.zeros(6) if sp is None else self.autopilot.update(nav, sp, self.autonomy_dt_s)
@@ -224,9 +223,6 @@ class Mission:
                               self.fsm.aborted, self.fsm.abort_reason or "")
 
     # -- internals -------------------------------------------------------------------
-    def _nav_for_control(self, truth: VehicleTruth) -> NavEstimate:
-        return self.nav_filter.estimate()
-
     def _fire(self, name: str, truth: VehicleTruth) -> None:
         if name == "fls":
             render = self.fls.render(truth.t_s, truth.point_ned(self._mount("fls")), truth.R_nb,
@@ -236,7 +232,7 @@ class Mission:
         msg = self.nav_sensors[name].measure(truth, caster=self.caster)
         self.scheduler.push(name, truth.t_s, msg)
 
-    def _deliver(self, name: str, msg, truth: VehicleTruth) -> None:
+    def _deliver(self, name: str, msg) -> None:
         nf = self.nav_filter
         if isinstance(msg, ImuMsg):
             nf.on_imu(msg)
@@ -273,7 +269,3 @@ class Mission:
             obs.on_step(rec)
         return rec
 
-
-def detection_list(detections: Sequence[Detection]) -> list[dict]:
-    return [{"t_s": d.t_s, "class": d.class_name, "score": d.score, "range_m": d.range_m,
-             "azimuth_rad": d.azimuth_rad, "box_xyxy_px": list(map(float, d.box_xyxy_px))} for d in detections]

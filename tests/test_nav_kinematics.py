@@ -28,7 +28,6 @@ class PlaneCaster:
         with np.errstate(divide="ignore", invalid="ignore"):
             dist = ((self.point - origin_ned) @ self.normal) / denom
         hit = (denom < 0.0) & (dist > 0.0) & (dist <= max_range_m)
-        n = len(dirs)
         return RayHits(
             dist_m=np.where(hit, dist, np.inf),
             normal_ned=np.where(hit[:, None], self.normal, 0.0),

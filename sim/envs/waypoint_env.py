@@ -22,7 +22,6 @@ import gymnasium as gym
 import mujoco
 import numpy as np
 from gymnasium import spaces
-from numpy.typing import NDArray
 
 from autonomy.control.allocation import ThrustAllocator
 from autonomy.control.autopilot import Autopilot, AutopilotParams
