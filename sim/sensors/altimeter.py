@@ -8,13 +8,14 @@ from numpy.typing import ArrayLike
 from autonomy.messages import AltimeterMsg
 from scenarios.config.nav_sensors import AltimeterConfig
 from sim.sensors.noise import dropped
+from sim.sensors.base import HullSensor
 from sim.sensors.raycast import RayCaster
 from sim.truth import VehicleTruth
 
 _BEAM_BODY = np.array([[0.0, 0.0, 1.0]])
 
 
-class AltimeterSensor:
+class AltimeterSensor(HullSensor):
     """Range (m) along the body-down beam from ``mount_pos_body_m`` to the first surface hit.
 
     ``altitude_m`` is that slant range; it equals the altitude when the vehicle is level.
@@ -27,11 +28,7 @@ class AltimeterSensor:
     def __init__(self, cfg: AltimeterConfig, mount_pos_body_m: ArrayLike, rng: np.random.Generator):
         if cfg.min_range_m >= cfg.max_range_m:
             raise ValueError("sensors.altimeter: min_range_m must be below max_range_m")
-        self.cfg = cfg
-        self.rate_hz = cfg.rate_hz
-        self.latency_s = cfg.latency_s
-        self.mount_pos_body_m = np.asarray(mount_pos_body_m, dtype=float).reshape(3)
-        self._rng = rng
+        super().__init__(cfg, mount_pos_body_m, rng)
 
     def measure(self, truth: VehicleTruth, *, caster: RayCaster | None = None, noise: bool = True) -> AltimeterMsg:
         if caster is None:

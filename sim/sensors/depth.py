@@ -7,21 +7,18 @@ from numpy.typing import ArrayLike
 
 from autonomy.messages import DepthMsg
 from scenarios.config.nav_sensors import DepthConfig
+from sim.sensors.base import HullSensor
 from sim.sensors.raycast import RayCaster
 from sim.truth import VehicleTruth
 
 
-class DepthSensor:
+class DepthSensor(HullSensor):
     """Depth (m, down positive) of the sensor at ``mount_pos_body_m`` (FRD) plus white noise."""
 
     name = "depth"
 
     def __init__(self, cfg: DepthConfig, mount_pos_body_m: ArrayLike, rng: np.random.Generator):
-        self.cfg = cfg
-        self.rate_hz = cfg.rate_hz
-        self.latency_s = cfg.latency_s
-        self.mount_pos_body_m = np.asarray(mount_pos_body_m, dtype=float).reshape(3)
-        self._rng = rng
+        super().__init__(cfg, mount_pos_body_m, rng)
 
     def measure(self, truth: VehicleTruth, *, caster: RayCaster | None = None, noise: bool = True) -> DepthMsg:
         depth_m = float(truth.point_ned(self.mount_pos_body_m)[2])

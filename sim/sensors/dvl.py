@@ -11,6 +11,7 @@ from autonomy.messages import DvlMsg
 from autonomy.navigation.dvl_geometry import janus_beam_dirs_body
 from scenarios.config.nav_sensors import DvlConfig
 from sim.sensors.noise import dropped, white_noise
+from sim.sensors.base import HullSensor
 from sim.sensors.raycast import RayCaster
 from sim.truth import VehicleTruth
 
@@ -27,7 +28,7 @@ def fitted_slope_rad(points_ned: np.ndarray) -> float:
     return float(np.arccos(np.clip(abs(normal[2]), 0.0, 1.0)))
 
 
-class DvlSensor:
+class DvlSensor(HullSensor):
     """Bottom-track DVL at ``mount_pos_body_m`` (FRD).
 
     Each beam measures the radial velocity ``b_i . v_mount`` of the transducer over the
@@ -48,16 +49,12 @@ class DvlSensor:
     def __init__(self, cfg: DvlConfig, mount_pos_body_m: ArrayLike, rng: np.random.Generator):
         if cfg.min_altitude_m >= cfg.max_altitude_m:
             raise ValueError("sensors.dvl: min_altitude_m must be below max_altitude_m")
-        self.cfg = cfg
-        self.rate_hz = cfg.rate_hz
-        self.latency_s = cfg.latency_s
-        self.mount_pos_body_m = np.asarray(mount_pos_body_m, dtype=float).reshape(3)
+        super().__init__(cfg, mount_pos_body_m, rng)
         self.beam_dirs_body = janus_beam_dirs_body(
             math.radians(cfg.beam_angle_deg), math.radians(cfg.beam_azimuth_offset_deg)
         )
         self.max_slant_range_m = cfg.max_altitude_m / math.cos(math.radians(cfg.beam_angle_deg))
         self._cos_max_incidence = math.cos(math.radians(cfg.max_incidence_deg))
-        self._rng = rng
         self._scale_error = float(white_noise(rng, cfg.scale_error))
 
     def _no_lock(self, t_s: float, ranges_m: np.ndarray) -> DvlMsg:

@@ -8,11 +8,12 @@ from numpy.typing import ArrayLike
 from autonomy.messages import GpsMsg
 from scenarios.config.nav_sensors import GpsConfig
 from sim.sensors.noise import dropped, white_noise
+from sim.sensors.base import HullSensor
 from sim.sensors.raycast import RayCaster
 from sim.truth import VehicleTruth
 
 
-class GpsSensor:
+class GpsSensor(HullSensor):
     """North/east of the antenna at ``mount_pos_body_m`` (FRD) in the mission NED frame.
 
     No fix (``valid=False``, NaN position) while the antenna is deeper than
@@ -22,11 +23,7 @@ class GpsSensor:
     name = "gps"
 
     def __init__(self, cfg: GpsConfig, mount_pos_body_m: ArrayLike, rng: np.random.Generator):
-        self.cfg = cfg
-        self.rate_hz = cfg.rate_hz
-        self.latency_s = cfg.latency_s
-        self.mount_pos_body_m = np.asarray(mount_pos_body_m, dtype=float).reshape(3)
-        self._rng = rng
+        super().__init__(cfg, mount_pos_body_m, rng)
 
     def measure(self, truth: VehicleTruth, *, caster: RayCaster | None = None, noise: bool = True) -> GpsMsg:
         antenna_ned = truth.point_ned(self.mount_pos_body_m)

@@ -11,6 +11,7 @@ from autonomy.frames import wrap_angle
 from autonomy.messages import ImuMsg
 from scenarios.config.nav_sensors import ImuConfig
 from sim.sensors.noise import RandomWalkBias, white_noise
+from sim.sensors.base import HullSensor
 from sim.sensors.raycast import RayCaster
 from sim.truth import VehicleTruth
 
@@ -23,7 +24,7 @@ def _cross(a, b):
     return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
 
 
-class ImuSensor:
+class ImuSensor(HullSensor):
     """Strapdown IMU + AHRS at ``mount_pos_body_m`` (FRD, m).
 
     Measurement model (``noise=True``):
@@ -36,11 +37,7 @@ class ImuSensor:
     name = "imu"
 
     def __init__(self, cfg: ImuConfig, mount_pos_body_m: ArrayLike, rng: np.random.Generator):
-        self.cfg = cfg
-        self.rate_hz = cfg.rate_hz
-        self.latency_s = cfg.latency_s
-        self.mount_pos_body_m = np.asarray(mount_pos_body_m, dtype=float).reshape(3)
-        self._rng = rng
+        super().__init__(cfg, mount_pos_body_m, rng)
         rp = math.radians(cfg.roll_pitch_bias_deg)
         self._attitude_bias = RandomWalkBias(
             rng, [rp, rp, cfg.heading_bias_rad], [0.0, 0.0, cfg.heading_random_walk_rad_per_sqrt_s]
