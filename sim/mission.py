@@ -184,7 +184,8 @@ class Mission:
                 truth = self.vehicle.truth(self.t_s)
                 for name in due:
                     self._fire(name, truth)
-        truth = self.vehicle.truth(self.t_s)
+        if truth.t_s != self.t_s:  # not already taken for a sensor on the last substep
+            truth = self.vehicle.truth(self.t_s)
         self._truth = truth
         for name, msg in self.scheduler.pop_ready(self.t_s):
             self._deliver(name, msg)
@@ -225,7 +226,7 @@ class Mission:
     # -- internals -------------------------------------------------------------------
     def _fire(self, name: str, truth: VehicleTruth) -> None:
         if name == "fls":
-            render = self.fls.render(truth.t_s, truth.point_ned(self._mount("fls")), truth.R_nb,
+            render = self.fls.render(truth.t_s, truth.point_ned(self.fls.mount_pos_body_m), truth.R_nb,
                                      self.caster, self.world.objects)
             self.scheduler.push(name, truth.t_s, render)
             return
