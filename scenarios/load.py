@@ -39,63 +39,100 @@ def list_scenarios() -> dict[str, str]:
 
 
 def resolve_path(name_or_path: str | Path) -> Path:
-    """A shipped scenario name (``cssn_lawnmower``) or a path to a YAML file."""
-    p = Path(name_or_path)
-    if p.suffix in (".yaml", ".yml") or p.exists() or "/" in str(name_or_path):
+    """A shipped scenario name (``cssn_lawnmower``) or a path to a YAML file.
+
+    Raises:
+        ScenarioError: the path does not exist or is a folder, or the name is not shipped.
+    """
+    text = str(name_or_path)
+    if not text.strip():
+        raise ScenarioError("scenario: must be a shipped scenario name or a YAML file path, got an empty string")
+    p = Path(text).expanduser()
+    if p.is_dir():
+        raise ScenarioError(f"{p}: is a directory; give a scenario YAML file or a shipped scenario name")
+    if p.suffix in (".yaml", ".yml") or p.exists() or "/" in text or "\\" in text:
         if not p.is_file():
             raise ScenarioError(f"{p}: scenario file not found")
         return p
-    shipped = scenarios_dir() / f"{name_or_path}.yaml"
+    shipped = scenarios_dir() / f"{text}.yaml"
     if not shipped.is_file():
         names = ", ".join(list_scenarios()) or "none"
-        raise ScenarioError(f"{name_or_path}: no such scenario file or shipped scenario (shipped: {names})")
+        raise ScenarioError(f"{text}: no such scenario file or shipped scenario (shipped: {names})")
     return shipped
 
 
 def _parse_override(item: str, source: str) -> tuple[list[str], Any]:
     if "=" not in item:
-        raise ScenarioError(f"{source}: override {item!r} must look like key.path=value")
+        raise ScenarioError(f"{source} {item}: must look like key.path=value (e.g. --set seed=3)")
     key, raw = item.split("=", 1)
     key = key.strip()
     if not key or any(not part for part in key.split(".")):
-        raise ScenarioError(f"{source}: override {item!r} has an empty key")
+        raise ScenarioError(f"{source} {item}: has an empty key (must look like key.path=value)")
     try:
         value = yaml.safe_load(raw) if raw.strip() else ""
     except yaml.YAMLError as exc:
-        raise ScenarioError(f"{source}: override {key}: cannot parse value {raw!r}: {exc}") from None
+        problem = str(getattr(exc, "problem", "") or exc).splitlines()[0]
+        raise ScenarioError(f"{source} {item}: cannot parse the value {raw!r} as YAML ({problem})") from None
     return key.split("."), value
 
 
+def _list_index(node: list, part: str, item: str, where: str) -> int:
+    if not part.lstrip("-").isdigit():
+        raise ScenarioError(f"--set {item}: {where} is a list; use an index 0 to {len(node) - 1}, got {part!r}")
+    index = int(part)
+    if not 0 <= index < len(node):
+        raise ScenarioError(f"--set {item}: {where} has {len(node)} entr{'y' if len(node) == 1 else 'ies'} "
+                            f"(index 0 to {len(node) - 1}), got index {index}")
+    return index
+
+
 def apply_overrides(data: dict[str, Any], overrides: list[str] | tuple[str, ...], source: str) -> dict[str, Any]:
-    """Apply ``key.path=value`` overrides (values parsed as YAML) to a raw mapping."""
+    """Apply ``key.path=value`` overrides (values parsed as YAML) to a raw mapping.
+
+    Raises:
+        ScenarioError: an override is malformed, indexes past a list, or goes through a
+            value that is not a mapping; the message names the ``--set`` argument.
+    """
     for item in overrides:
-        path, value = _parse_override(item, source)
+        path, value = _parse_override(item, "--set")
         node: Any = data
-        for i, part in enumerate(path[:-1]):
+        for i, part in enumerate(path):
+            where = ".".join(path[:i]) or "the scenario"
+            last = i == len(path) - 1
             if isinstance(node, list):
-                if not part.isdigit() or int(part) >= len(node):
-                    raise ScenarioError(f"{source}: override {'.'.join(path)}: {'.'.join(path[: i + 1])} is not a valid list index")
-                node = node[int(part)]
-                continue
-            if not isinstance(node, dict):
-                raise ScenarioError(f"{source}: override {'.'.join(path)}: {'.'.join(path[:i])} is not a mapping")
-            node = node.setdefault(part, {})
-        last = path[-1]
-        if isinstance(node, list):
-            if not last.isdigit() or int(last) >= len(node):
-                raise ScenarioError(f"{source}: override {'.'.join(path)}: not a valid list index")
-            node[int(last)] = value
-        elif isinstance(node, dict):
-            node[last] = value
-        else:
-            raise ScenarioError(f"{source}: override {'.'.join(path)}: parent is not a mapping")
+                index = _list_index(node, part, item, where)
+                if last:
+                    node[index] = value
+                else:
+                    node = node[index]
+            elif isinstance(node, dict):
+                if last:
+                    node[part] = value
+                else:
+                    if node.get(part) is None:
+                        node[part] = {}
+                    node = node[part]
+            else:
+                raise ScenarioError(f"--set {item}: {where} is a value ({node!r}), not a mapping or list")
     return data
 
 
-def _format_validation_error(exc: ValidationError, source: str) -> str:
+def _override_for(loc: str, overrides: list[str] | tuple[str, ...]) -> str | None:
+    """The ``--set`` item that set the value at dotted ``loc`` (or a key above it), if any."""
+    for item in reversed(overrides):
+        key = item.split("=", 1)[0].strip()
+        if loc == key or loc.startswith(key + ".") or key.startswith(loc + "."):
+            return item
+    return None
+
+
+def _format_validation_error(exc: ValidationError, source: str, overrides: list[str] | tuple[str, ...] = ()) -> str:
     lines = [f"{source}: invalid scenario ({exc.error_count()} error{'s' if exc.error_count() != 1 else ''})"]
     for err in exc.errors(include_url=False):
         loc = ".".join(str(p) for p in err["loc"]) or "(top level)"
+        item = _override_for(loc, overrides)
+        if item is not None:
+            loc = f"{loc} (from --set {item})"
         kind = err["type"]
         msg = err["msg"]
         if kind == "extra_forbidden":
@@ -138,31 +175,93 @@ def _allowed_keys(loc: tuple[Any, ...]) -> list[str]:
     return list(model.model_fields) if isinstance(model, type) and issubclass(model, BaseModel) else []
 
 
+def _read_text(path: Path) -> str:
+    try:
+        raw = path.read_bytes()
+    except IsADirectoryError:
+        raise ScenarioError(f"{path}: is a directory; give a scenario YAML file") from None
+    except OSError as exc:
+        raise ScenarioError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    if b"\0" in raw:
+        raise ScenarioError(f"{path}: is a binary file, not a YAML scenario")
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ScenarioError(f"{path}: is not UTF-8 text (byte {exc.start}); a scenario is a YAML text file") from None
+
+
 def load_scenario(name_or_path: str | Path, overrides: list[str] | tuple[str, ...] = ()) -> Scenario:
-    """Read a scenario once into a frozen, validated :class:`Scenario`."""
+    """Read a scenario once into a frozen, validated :class:`Scenario`.
+
+    Raises:
+        ScenarioError: the file is missing, a folder, binary, empty or not YAML; an
+            override is malformed; a value is out of range or not finite; a placement
+            is impossible (see :mod:`scenarios.placement`); or the ATR model file named
+            by ``autonomy.atr.model_path`` does not exist.
+    """
     path = resolve_path(name_or_path)
     source = str(path)
+    text = _read_text(path)
     try:
-        data = yaml.safe_load(path.read_text())
+        data = yaml.safe_load(text)
     except yaml.YAMLError as exc:
-        raise ScenarioError(f"{source}: not valid YAML: {exc}") from None
-    except OSError as exc:
-        raise ScenarioError(f"{source}: cannot read: {exc.strerror}") from None
+        raise ScenarioError(f"{source}: not valid YAML: {' '.join(str(exc).split())}") from None
     if data is None:
-        data = {}
+        raise ScenarioError(f"{source}: the file is empty (a scenario needs at least a world, a vehicle "
+                            "and a survey; start from a shipped one: auvsim validate cssn_lawnmower)")
     if not isinstance(data, dict):
-        raise ScenarioError(f"{source}: top level must be a mapping, got {type(data).__name__}")
+        raise ScenarioError(f"{source}: top level must be a mapping of keys, got {type(data).__name__}")
     data = apply_overrides(data, list(overrides), source)
     data.setdefault("name", path.stem)
     try:
-        return Scenario.model_validate(data)
+        scenario = Scenario.model_validate(data)
     except ValidationError as exc:
-        raise ScenarioError(_format_validation_error(exc, source)) from None
+        raise ScenarioError(_format_validation_error(exc, source, overrides)) from None
+    check_scenario(scenario, source, overrides)
+    return scenario
+
+
+def check_scenario(scenario: Scenario, source: str, overrides: list[str] | tuple[str, ...] = ()) -> None:
+    """Checks across keys that field validation cannot make: placements and files.
+
+    Raises:
+        ScenarioError: listing every problem found, one per line.
+    """
+    from scenarios.placement import placement_problems
+
+    problems = placement_problems(scenario)
+    atr = scenario.autonomy.atr
+    if atr.detector == "cnn" and atr.model_path is not None:
+        model = Path(atr.model_path).expanduser()
+        if not model.is_file():
+            problems.append(f"autonomy.atr.model_path: {model}: no such file")
+        else:
+            from autonomy.atr.cnn_detector import CnnDetector
+            from autonomy.atr.model_file import ModelFileError
+
+            try:
+                CnnDetector(model)
+            except ModelFileError as exc:
+                problems.append(f"autonomy.atr.model_path: {exc}")
+    for k, problem in enumerate(problems):
+        for item in overrides:
+            parts = item.split("=", 1)[0].strip().split(".")
+            prefixes = [".".join(parts[:n]) for n in range(len(parts), 0, -1)]
+            if any(problem.startswith((p + ":", p + " (")) or f" and {p} (" in problem for p in prefixes[:-1]
+                   or prefixes):
+                problems[k] = f"{problem} (from --set {item})"
+                break
+    if problems:
+        lines = [f"{source}: impossible scenario ({len(problems)} problem{'s' if len(problems) != 1 else ''})"]
+        lines += [f"  {p}" for p in problems]
+        raise ScenarioError("\n".join(lines))
 
 
 def scenario_from_dict(data: dict[str, Any], source: str = "<dict>") -> Scenario:
     """Validate an in-memory mapping (tests, gym envs) with the same error format."""
     try:
-        return Scenario.model_validate(data)
+        scenario = Scenario.model_validate(data)
     except ValidationError as exc:
         raise ScenarioError(_format_validation_error(exc, source)) from None
+    check_scenario(scenario, source)
+    return scenario

@@ -11,7 +11,6 @@ Figures, for the target classes (``opi`` by default):
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import io
 import json
@@ -27,6 +26,7 @@ from autonomy.atr.nms import box_iou
 from autonomy.messages import FlsFrame
 from autonomy.sonar_geometry import FanGeometry
 from sim.dataset.coco_io import ANNOTATIONS_FILE, coco_bbox_to_xyxy, xyxy_to_coco_bbox
+from sim.dataset.errors import DatasetError, require_dataset
 
 DEFAULT_RANGE_BANDS_M = (0.0, 10.0, 20.0, 30.0, math.inf)
 MATCH_IOU = 0.5
@@ -82,18 +82,20 @@ def evaluate_detector(detector, data_dir: str | Path, score_threshold: float,
     from pycocotools.coco import COCO
     from pycocotools.cocoeval import COCOeval
 
-    data_dir = Path(data_dir)
+    data_dir = require_dataset(data_dir, "--data")
+    if max_images is not None and max_images < 1:
+        raise DatasetError(f"--max-images: must be >= 1, got {max_images}")
     ann_path = data_dir / ANNOTATIONS_FILE
-    if not ann_path.is_file():
-        raise FileNotFoundError(f"eval-atr: no {ANNOTATIONS_FILE} in {data_dir} (make one with `auvsim dataset`)")
     with contextlib.redirect_stdout(io.StringIO()):
         coco_gt = COCO(str(ann_path))
     name_to_cat = {c["name"]: c["id"] for c in coco_gt.loadCats(coco_gt.getCatIds())}
     missing = [c for c in target_classes if c not in name_to_cat]
     if missing:
-        raise ValueError(f"eval-atr: classes {missing} not in {ann_path} (has {sorted(name_to_cat)})")
+        raise DatasetError(f"--data {data_dir}: classes {missing} not in {ann_path} (it has {sorted(name_to_cat)})")
     target_cats = [name_to_cat[c] for c in target_classes]
     img_ids = sorted(coco_gt.getImgIds())[:max_images]
+    if not img_ids:
+        raise DatasetError(f"--data {data_dir}: the dataset holds no images")
     bands = list(range_bands_m)
     n_bands = len(bands) - 1
     tp = fp = n_gt = 0
@@ -107,7 +109,7 @@ def evaluate_detector(detector, data_dir: str | Path, score_threshold: float,
         rec = coco_gt.loadImgs(img_id)[0]
         fan = cv2.imread(str(data_dir / rec["file_name"]), cv2.IMREAD_GRAYSCALE)
         if fan is None:
-            raise FileNotFoundError(f"eval-atr: cannot read {data_dir / rec['file_name']}")
+            raise DatasetError(f"--data {data_dir}: cannot read image {rec['file_name']} (dataset damaged)")
         frame = frame_from_record(rec, fan)
         t0 = time.perf_counter()
         dets = detector.detect(frame, score_threshold=min_score)
@@ -232,75 +234,6 @@ def ensure_heldout(seed: int = HELDOUT_SEED, n_frames: int = HELDOUT_FRAMES, wor
     generate_dataset(out, n_frames, seed=seed, workers=workers, randomization=HELDOUT_RANDOMIZATION,
                      progress=progress)
     return out
-
-
-def evaluate(detector_kind: str = "cnn", data_dir: str | Path | None = None, model_path: str | None = None,
-             score_threshold: float | None = None, max_images: int | None = None) -> dict:
-    """Evaluate the ``cnn`` or ``classical`` detector (as :func:`build_detector` builds it)."""
-    from autonomy.atr import build_detector
-    from scenarios.config.atr import AtrConfig
-
-    cfg = AtrConfig(detector=detector_kind, model_path=model_path, intra_op_threads=1,
-                    **({} if score_threshold is None else {"score_threshold": score_threshold}))
-    data = Path(data_dir) if data_dir is not None else ensure_heldout()
-    res = evaluate_detector(build_detector(cfg), data, cfg.score_threshold, max_images=max_images)
-    res.update(detector=detector_kind, data=str(data))
-    return res
-
-
-def add_parser(subparsers) -> argparse.ArgumentParser:
-    """Register ``eval-atr`` on an argparse ``subparsers`` object."""
-    p = subparsers.add_parser("eval-atr", help="evaluate the ATR detector on a held-out set")
-    p.add_argument("--data", default=None, help="dataset directory (default: generate the held-out set)")
-    p.add_argument("--detector", choices=["cnn", "classical"], default="cnn")
-    p.add_argument("--model", default=None, help="ONNX model (default: the shipped one)")
-    p.add_argument("--threshold", type=float, default=None, help="operating threshold (default: AtrConfig's)")
-    p.add_argument("--max-images", type=int, default=None)
-    p.add_argument("--json", action="store_true", help="print the figures as JSON")
-    p.add_argument("--sweep", action="store_true",
-                   help="print precision/recall over thresholds 0.10-0.90 and the chosen operating point "
-                        "(highest recall at precision >= 0.95, else best F1); use on a validation set")
-    p.set_defaults(func=eval_main)
-    return p
-
-
-def _fmt(v) -> str:
-    return "-" if v is None else (f"{v:.3f}" if isinstance(v, float) else str(v))
-
-
-def eval_main(args: argparse.Namespace) -> int:
-    """Entry point for ``auvsim eval-atr``."""
-    if getattr(args, "sweep", False):
-        from autonomy.atr import build_detector
-        from scenarios.config.atr import AtrConfig
-
-        cfg = AtrConfig(detector=args.detector, model_path=args.model, intra_op_threads=1)
-        data = Path(args.data) if args.data is not None else ensure_heldout()
-        sweep = threshold_sweep(build_detector(cfg), data, np.round(np.arange(0.10, 0.91, 0.025), 3),
-                                max_images=args.max_images)
-        best = choose_threshold(sweep)
-        if args.json:
-            print(json.dumps({"data": str(data), "sweep": sweep, "chosen": best}, indent=1))
-            return 0
-        print(f"eval-atr sweep {args.detector} on {data}")
-        for r in sweep:
-            mark = " <- chosen" if r is best else ""
-            print(f"  thr {r['score_threshold']:.3f}  precision {r['precision']:.3f}  recall {r['recall']:.3f}  "
-                  f"FA/frame {r['false_alarms_per_frame']:.3f}{mark}")
-        return 0
-    res = evaluate(args.detector, args.data, args.model, args.threshold, args.max_images)
-    if args.json:
-        print(json.dumps(res, indent=1))
-        return 0
-    print(f"eval-atr {res['detector']} on {res['data']} ({res['frames']} frames, classes {res['classes']})")
-    for k in ("score_threshold", "precision", "recall", "false_alarms_per_frame", "ap50", "ap50_95", "frames_per_s"):
-        print(f"  {k:24s} {_fmt(res[k])}")
-    print("  range band       gt   recall   det  precision")
-    for b in res["by_range_band"]:
-        lo, hi = b["range_m"]
-        print(f"  {lo:5.0f}-{'inf' if hi is None else f'{hi:.0f}':>4s} m  {b['ground_truth']:5d}  {_fmt(b['recall']):>7s}"
-              f"  {b['detections']:4d}  {_fmt(b['precision']):>9s}")
-    return 0
 
 
 def bench_atr(data_dir: str | Path | None = None, n_frames: int = 50, repeats: int = 3) -> dict:

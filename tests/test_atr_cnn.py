@@ -9,6 +9,7 @@ from autonomy.atr import SHIPPED_MODEL_PATH, build_detector
 from autonomy.atr.classical import ClassicalDetector
 from autonomy.atr.cnn_detector import CnnDetector
 from autonomy.atr.detector import NullDetector
+from autonomy.atr.model_file import ModelFileError
 from autonomy.messages import FlsFrame
 from autonomy.sonar_geometry import FanGeometry
 from scenarios.config.atr import AtrConfig
@@ -90,9 +91,9 @@ def test_detect_returns_messages_in_fan_pixels(tiny_model):
 
 def test_missing_model_file_is_named(tmp_path):
     missing = tmp_path / "nope.onnx"
-    with pytest.raises(FileNotFoundError, match="nope.onnx"):
+    with pytest.raises(ModelFileError, match="nope.onnx.*no such file"):
         CnnDetector(missing)
-    with pytest.raises(FileNotFoundError, match="nope.onnx"):
+    with pytest.raises(ModelFileError, match="nope.onnx.*no such file"):
         build_detector(AtrConfig(model_path=str(missing)))
 
 

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import argparse
 import json
 
 import numpy as np
@@ -14,7 +13,7 @@ from autonomy.atr.cnn_detector import CnnDetector  # noqa: E402
 from sim.atr_eval import evaluate_detector  # noqa: E402
 from sim.dataset.generate import RenderSettings, generate_dataset  # noqa: E402
 from sim.dataset.randomization import Randomization  # noqa: E402
-from sim.training.train import TrainParams, add_parser, train_atr  # noqa: E402
+from sim.training.train import TrainParams, train_atr  # noqa: E402
 
 FAST = Randomization(range_max_m=(12.0, 16.0), n_targets=(1, 3), n_distractors=(0, 1), frames_per_scene=3,
                      seabed_kinds=("plane",))
@@ -53,11 +52,6 @@ def test_training_reduces_the_loss(tiny_dataset, tmp_path):
     assert heat[-1] < 0.7 * heat[0], heat  # about 0.5-0.57 of the first epoch
 
 
-def test_cli_parser_and_bad_input_size(tmp_path):
-    parser = argparse.ArgumentParser()
-    sub = parser.add_subparsers()
-    add_parser(sub)
-    args = parser.parse_args(["train-atr", "--data", "d", "--out", "m.onnx", "--input", "100x200"])
-    assert args.input == "100x200" and callable(args.func)
+def test_train_on_a_folder_without_annotations_names_it(tmp_path):
     with pytest.raises(FileNotFoundError, match="annotations.json"):
         train_atr(tmp_path, tmp_path / "x.onnx", TrainParams(), log=lambda *_: None)

@@ -57,6 +57,7 @@ def test_terrain_mesh_raycast_matches_depth_lookup(kind):
     scn = load_scenario("cssn_lawnmower", [f"world.seabed.kind={kind}", "world.seabed.extent_m=30",
                                            "world.seabed.mesh_resolution_m=0.5", "world.seabed.roughness_m=0.1",
                                            "world.seabed.ripple_amplitude_m=0.2", "world.basin.shape=none",
+                                           "vehicle.initial_pos_ned=[-4, 17, 0.3]",
                                            "world.targets=[]"])
     world = build_world(scn, with_vehicle=False)
     rng = np.random.default_rng(0)
@@ -71,7 +72,7 @@ def test_terrain_mesh_raycast_matches_depth_lookup(kind):
 
 
 def test_rough_seabed_is_seeded():
-    over = ["world.seabed.kind=rough", "world.seabed.extent_m=20"]
+    over = ["world.seabed.kind=rough", "world.seabed.extent_m=20", "vehicle.initial_pos_ned=[-4, 17, 0.3]"]
     a = build_world(load_scenario("cssn_lawnmower", over), with_vehicle=False).seabed.depth_grid_m
     b = build_world(load_scenario("cssn_lawnmower", over), with_vehicle=False).seabed.depth_grid_m
     c = build_world(load_scenario("cssn_lawnmower", over + ["seed=1"]), with_vehicle=False).seabed.depth_grid_m

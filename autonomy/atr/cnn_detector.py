@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 
 from autonomy.atr.centernet_decode import decode_centernet
 from autonomy.atr.detector import check_frame, to_detections
+from autonomy.atr.model_file import ModelFileError
 from autonomy.atr.nms import nms
 from autonomy.messages import Detection, FlsFrame
 
@@ -46,7 +47,7 @@ class CnnDetector:
 
         self.model_path = Path(model_path)
         if not self.model_path.is_file():
-            raise FileNotFoundError(f"ATR model file not found: {self.model_path}")
+            raise ModelFileError(f"ATR model file {self.model_path}: no such file")
         opts = ort.SessionOptions()
         opts.intra_op_num_threads = int(intra_op_threads)
         opts.inter_op_num_threads = 1
@@ -56,10 +57,11 @@ class CnnDetector:
             self._session = ort.InferenceSession(str(self.model_path), sess_options=opts,
                                                  providers=["CPUExecutionProvider"])
         except Exception as exc:  # onnxruntime raises several private exception types
-            raise ValueError(f"ATR model file {self.model_path} is not a valid ONNX model: {exc}") from exc
+            first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+            raise ModelFileError(f"ATR model file {self.model_path}: not a valid ONNX model ({first})") from None
         meta = self._session.get_modelmeta().custom_metadata_map
         if meta.get("auvsim_atr_format") != MODEL_FORMAT:
-            raise ValueError(
+            raise ModelFileError(
                 f"ATR model file {self.model_path}: metadata auvsim_atr_format is "
                 f"{meta.get('auvsim_atr_format')!r}, expected {MODEL_FORMAT!r}"
             )
@@ -68,17 +70,17 @@ class CnnDetector:
             self.stride = int(meta["stride"])
             self.fan_hw = (int(meta["fan_height_px"]), int(meta["fan_width_px"]))
         except (KeyError, ValueError) as exc:
-            raise ValueError(f"ATR model file {self.model_path}: bad or missing metadata ({exc})") from exc
+            raise ModelFileError(f"ATR model file {self.model_path}: bad or missing metadata ({exc})") from exc
         inputs = self._session.get_inputs()
         if len(inputs) != 1 or inputs[0].name != INPUT_NAME or len(inputs[0].shape) != 4:
-            raise ValueError(f"ATR model file {self.model_path}: expected one input {INPUT_NAME!r} (1, 1, H, W)")
+            raise ModelFileError(f"ATR model file {self.model_path}: expected one input {INPUT_NAME!r} (1, 1, H, W)")
         shape = inputs[0].shape
         if not all(isinstance(v, int) for v in shape[1:]) or shape[1] != 1:
-            raise ValueError(f"ATR model file {self.model_path}: input must be (1, 1, H, W) with fixed H, W; got {shape}")
+            raise ModelFileError(f"ATR model file {self.model_path}: input must be (1, 1, H, W) with fixed H, W; got {shape}")
         self.input_hw = (int(shape[2]), int(shape[3]))
         out_names = tuple(o.name for o in self._session.get_outputs())
         if set(OUTPUT_NAMES) - set(out_names):
-            raise ValueError(f"ATR model file {self.model_path}: outputs {out_names}, expected {OUTPUT_NAMES}")
+            raise ModelFileError(f"ATR model file {self.model_path}: outputs {out_names}, expected {OUTPUT_NAMES}")
         self.score_threshold = float(score_threshold)
         self.nms_iou = float(nms_iou)
         self.max_detections = int(max_detections)

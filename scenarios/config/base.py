@@ -14,6 +14,10 @@ NonNegFloat = Annotated[float, Field(ge=0.0)]
 
 
 class StrictModel(BaseModel):
-    """Frozen config block; unknown keys are errors."""
+    """Frozen config block; unknown keys, NaN and infinity are errors.
 
-    model_config = ConfigDict(extra="forbid", frozen=True, validate_default=True)
+    A field that means "no limit" by infinity opts in with ``Field(allow_inf_nan=True)``
+    and a bound (``gt``/``ge``) that NaN fails.
+    """
+
+    model_config = ConfigDict(extra="forbid", frozen=True, validate_default=True, allow_inf_nan=False)

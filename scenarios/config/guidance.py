@@ -89,9 +89,9 @@ class PidConfig(StrictModel):
     kp: NonNegFloat = 0.0
     ki: NonNegFloat = 0.0
     kd: NonNegFloat = 0.0
-    integral_limit: NonNegFloat = Field(float("inf"), description="max |ki * integral|, output units")
-    output_limit: PositiveFloat = Field(float("inf"), description="max |output|")
-    output_rate_limit: PositiveFloat = Field(float("inf"), description="max |d output/dt| per s")
+    integral_limit: NonNegFloat = Field(float("inf"), allow_inf_nan=True, description="max |ki * integral|, output units")
+    output_limit: PositiveFloat = Field(float("inf"), allow_inf_nan=True, description="max |output|")
+    output_rate_limit: PositiveFloat = Field(float("inf"), allow_inf_nan=True, description="max |d output/dt| per s")
     derivative_filter_tau_s: NonNegFloat = Field(0.0, le=60.0, description="first-order filter on D")
 
 

@@ -16,7 +16,6 @@ scene index), never on the number of workers.
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import os
@@ -27,8 +26,10 @@ import numpy as np
 
 from scenarios.config.fls import FlsConfig
 from sim.dataset.coco_io import ANNOTATIONS_FILE, IMAGES_DIR, LABELS_DIR, write_atomic, write_coco, yolo_lines
+from sim.dataset.errors import DatasetError
 from sim.dataset.randomization import (HELDOUT_RANDOMIZATION, TRAIN_RANDOMIZATION, WIDE_RANDOMIZATION,
                                       Randomization, SceneSpec, sample_scene)
+from sim.outputs.run_dir import check_output_dir, write_marker
 from sim.rng import component_rng
 
 GENERATOR_VERSION = "1.2.0"
@@ -170,11 +171,15 @@ def generate_dataset(out_dir: str | Path, n_frames: int, seed: int = 0, workers:
 
     ``workers``: local processes (default: all cores; 1 = in this process). ``use_ray``:
     distribute scenes with Ray (``ray_address`` None starts a local instance).
-    Raises ``ValueError`` if ``out_dir`` holds a dataset made with other parameters.
+    Raises:
+        DatasetError: ``n_frames`` < 1, or ``out_dir`` holds a dataset made with other
+            parameters.
+        OutputDirError: ``out_dir`` is protected, a file, not creatable, or holds files
+            that are not an auvsim dataset.
     """
     if n_frames < 1:
-        raise ValueError(f"dataset: --n must be >= 1, got {n_frames}")
-    out_dir = Path(out_dir)
+        raise DatasetError(f"--n: must be >= 1, got {n_frames}")
+    out_dir = check_output_dir(out_dir, kind="dataset", resume=True)
     (out_dir / IMAGES_DIR).mkdir(parents=True, exist_ok=True)
     (out_dir / PARTS_DIR).mkdir(exist_ok=True)
     manifest = _manifest(n_frames, seed, randomization, settings)
@@ -184,9 +189,10 @@ def generate_dataset(out_dir: str | Path, n_frames: int, seed: int = 0, workers:
         old.pop("complete", None)
         if old != manifest:
             diff = sorted(k for k in set(old) | set(manifest) if old.get(k) != manifest.get(k))
-            raise ValueError(f"dataset: {out_dir} holds a dataset made with other parameters "
-                             f"(differs in {diff}); use a new --out directory")
+            raise DatasetError(f"--out {out_dir}: holds a dataset made with other parameters "
+                               f"(differs in {', '.join(diff)}); use a new --out folder")
     write_atomic(man_path, json.dumps({**manifest, "complete": False}, indent=1))
+    write_marker(out_dir, "dataset")
     fps = randomization.frames_per_scene
     n_scenes = math.ceil(n_frames / fps)
     rz_json = randomization.model_dump_json()
@@ -239,32 +245,3 @@ def _run_ray(jobs: list[tuple], address: str | None, bar) -> None:
     finally:
         if started:
             ray.shutdown()
-
-
-def add_parser(subparsers) -> argparse.ArgumentParser:
-    """Register ``dataset`` on an argparse ``subparsers`` object."""
-    p = subparsers.add_parser("dataset", help="render a labelled, domain-randomised FLS dataset")
-    p.add_argument("--n", type=int, required=True, help="number of frames")
-    p.add_argument("--out", required=True, help="output directory (re-run to resume)")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--workers", type=int, default=None, help="local processes (default: all cores)")
-    p.add_argument("--ray", nargs="?", const="", default=None, metavar="ADDRESS",
-                   help="distribute with Ray (local instance, or the cluster at ADDRESS)")
-    p.add_argument("--randomization", choices=sorted(RANDOMIZATION_PRESETS), default="train",
-                   help="randomisation ranges preset (default %(default)s)")
-    p.add_argument("--heldout", action="store_true",
-                   help="use the held-out (distribution-shifted) randomisation ranges")
-    p.add_argument("--no-progress", action="store_true")
-    p.set_defaults(func=dataset_main)
-    return p
-
-
-def dataset_main(args: argparse.Namespace) -> int:
-    """Entry point for ``auvsim dataset``."""
-    preset = "heldout" if getattr(args, "heldout", False) else getattr(args, "randomization", "train")
-    rz = RANDOMIZATION_PRESETS[preset]
-    path = generate_dataset(args.out, args.n, seed=args.seed, workers=args.workers,
-                            use_ray=args.ray is not None, ray_address=args.ray or None, randomization=rz,
-                            progress=not getattr(args, "no_progress", False))
-    print(f"dataset: wrote {path}")
-    return 0

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import argparse
 import json
 import time
 from dataclasses import asdict, dataclass
@@ -232,43 +231,3 @@ def train_atr(data_dir: str | Path | list, out_path: str | Path, params: TrainPa
                "out": str(out_path), "stopped_on_time": stopped_early}
     log(f"train-atr: wrote {out_path} after {summary['seconds']:.0f} s")
     return summary
-
-
-def add_parser(subparsers) -> argparse.ArgumentParser:
-    """Register ``train-atr`` on an argparse ``subparsers`` object."""
-    p = subparsers.add_parser("train-atr", help="train the ATR CNN on a dataset and export ONNX")
-    p.add_argument("--data", required=True,
-                   help="dataset directory written by `auvsim dataset` (comma-separated: several, concatenated)")
-    p.add_argument("--out", required=True, help="output ONNX file")
-    p.add_argument("--epochs", type=int, default=TrainParams.epochs)
-    p.add_argument("--batch-size", type=int, default=TrainParams.batch_size)
-    p.add_argument("--lr", type=float, default=TrainParams.lr)
-    p.add_argument("--width", type=int, default=TrainParams.width, help="base channel width")
-    p.add_argument("--input", default=f"{DEFAULT_INPUT_HW[0]}x{DEFAULT_INPUT_HW[1]}",
-                   help="model input HxW, multiples of 16 (default %(default)s)")
-    p.add_argument("--crop", default="128x224", help="training crop HxW in input px, or 'none'")
-    p.add_argument("--max-minutes", type=float, default=TrainParams.max_minutes)
-    p.add_argument("--threads", type=int, default=TrainParams.threads)
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--size-loss-weight", type=float, default=TrainParams.size_loss_weight)
-    p.add_argument("--light-heads", action="store_true", help="depthwise-separable heads (faster inference)")
-    p.add_argument("--classes", default=None, help="comma-separated class names (default: all in data)")
-    p.set_defaults(func=train_main)
-    return p
-
-
-def train_main(args: argparse.Namespace) -> int:
-    """Entry point for ``auvsim train-atr``."""
-    try:
-        hh, ww = (int(v) for v in str(args.input).lower().split("x"))
-    except ValueError:
-        raise SystemExit(f"train-atr: --input must look like 240x448, got {args.input!r}")
-    crop = None if str(args.crop).lower() == "none" else tuple(int(v) for v in str(args.crop).lower().split("x"))
-    params = TrainParams(input_hw=(hh, ww), crop_hw=crop, width=args.width, epochs=args.epochs, batch_size=args.batch_size,
-                         lr=args.lr, max_minutes=args.max_minutes, threads=args.threads, seed=args.seed,
-                         size_loss_weight=getattr(args, "size_loss_weight", TrainParams.size_loss_weight),
-                         light_heads=bool(getattr(args, "light_heads", False)),
-                         classes=tuple(args.classes.split(",")) if args.classes else None)
-    dirs = [d for d in str(args.data).split(",") if d]
-    train_atr(dirs if len(dirs) > 1 else dirs[0], args.out, params)
-    return 0

@@ -1,0 +1,173 @@
+"""Placement checks a scenario must pass before anything is built.
+
+Field validation checks each value alone; these checks relate values to each other: the
+vehicle starts in the water, above the seabed, inside the seabed patch and the basin
+walls; each target sits in the water, not above the surface nor buried below the seabed,
+inside the patch and the walls; no two targets overlap. Depths are NED z (m, positive
+down); the seabed depth is the plane (or slope) through ``seabed.depth_m`` at
+``seabed.center_ne_m``; rough and ripple seabeds are allowed their relief on top.
+"""
+
+from __future__ import annotations
+
+import math
+from importlib import resources
+
+import numpy as np
+import yaml
+
+from scenarios.schema import Scenario
+
+# Relief allowed around the mean plane of a rough seabed, in rms heights (a Gaussian field
+# exceeds 4 sigma on about 6e-5 of its area).
+ROUGH_RELIEF_SIGMAS = 4.0
+# How far above the surface (negative depth) a vehicle may start, m.
+MAX_START_ABOVE_SURFACE_M = 1.0
+
+
+def seabed_mean_depth_m(scenario: Scenario, n_m: float, e_m: float) -> float:
+    """Depth (NED z, m) of the seabed's mean plane under (north, east)."""
+    c = scenario.world.seabed
+    if c.kind == "plane" or c.slope_deg == 0.0:
+        return float(c.depth_m)
+    az = math.radians(c.slope_azimuth_deg)
+    k = math.tan(math.radians(c.slope_deg))
+    return float(c.depth_m + k * ((n_m - c.center_ne_m[0]) * math.cos(az) + (e_m - c.center_ne_m[1]) * math.sin(az)))
+
+
+def seabed_relief_m(scenario: Scenario) -> float:
+    """Largest expected height of the seabed above or below its mean plane, m."""
+    c = scenario.world.seabed
+    if c.kind == "rough":
+        return ROUGH_RELIEF_SIGMAS * c.roughness_m
+    if c.kind == "ripple":
+        return c.ripple_amplitude_m
+    return 0.0
+
+
+def _target_height_m(t) -> float:
+    """Height of a target above its base (upright), m."""
+    return {"half_sphere": t.radius_m, "truncated_cone": t.height_m, "cylinder": t.height_m,
+            "box": t.size_m[2], "tyre": 2.0 * t.tube_radius_m}[t.shape]
+
+
+def _target_footprint(t) -> np.ndarray:
+    """Convex (k, 2) north-east polygon that holds the target's footprint on the seabed."""
+    n0, e0 = t.pos_ned[0], t.pos_ned[1]
+    roll, pitch, yaw = (math.radians(a) for a in t.rpy_deg)
+    upright = abs(roll) < 1e-9 and abs(pitch) < 1e-9
+    if t.shape == "box" and upright:
+        hx, hy = 0.5 * t.size_m[0], 0.5 * t.size_m[1]
+        local = np.array([[hx, hy], [-hx, hy], [-hx, -hy], [hx, -hy]])
+    else:
+        if upright:
+            r = t.radius_m
+        else:  # tilted: the sphere around the base centre that holds the whole object
+            half_extent = {"box": 0.5 * float(np.linalg.norm(t.size_m[:2]))}.get(t.shape, t.radius_m)
+            r = math.hypot(half_extent, _target_height_m(t))
+        a = np.linspace(0.0, 2.0 * math.pi, 24, endpoint=False)
+        # The circumscribed 24-gon holds the circle.
+        local = (r / math.cos(math.pi / 24)) * np.c_[np.cos(a), np.sin(a)]
+    c, s = math.cos(yaw), math.sin(yaw)
+    rot = np.array([[c, -s], [s, c]])
+    return local @ rot.T + np.array([n0, e0])
+
+
+def _inscribed_footprint(t) -> np.ndarray:
+    """Convex polygon inside the target's footprint (for overlap: both must be certain)."""
+    poly = _target_footprint(t)
+    if t.shape == "box" and abs(t.rpy_deg[0]) < 1e-9 and abs(t.rpy_deg[1]) < 1e-9:
+        return poly
+    centre = np.array(t.pos_ned[:2])
+    radius = t.radius_m if t.shape != "box" else 0.5 * min(t.size_m[0], t.size_m[1])
+    a = np.linspace(0.0, 2.0 * math.pi, 24, endpoint=False)
+    return centre + radius * np.c_[np.cos(a), np.sin(a)]
+
+
+def convex_polygons_overlap(a: np.ndarray, b: np.ndarray, tol_m: float = 1e-6) -> bool:
+    """Whether two convex polygons ((k, 2) vertices in order) overlap by more than ``tol_m``.
+
+    Separating-axis theorem: they are apart iff some edge normal separates them.
+    """
+    for poly in (a, b):
+        edges = np.roll(poly, -1, axis=0) - poly
+        normals = np.c_[-edges[:, 1], edges[:, 0]]
+        normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+        pa, pb = a @ normals.T, b @ normals.T
+        if np.any((pa.max(axis=0) <= pb.min(axis=0) + tol_m) | (pb.max(axis=0) <= pa.min(axis=0) + tol_m)):
+            return False
+    return True
+
+
+def _inside_basin(scenario: Scenario, n_m: float, e_m: float, margin_m: float) -> bool:
+    b = scenario.world.basin
+    if b.shape == "rectangular":
+        return (abs(n_m - b.center_ne_m[0]) <= 0.5 * b.size_ne_m[0] - margin_m
+                and abs(e_m - b.center_ne_m[1]) <= 0.5 * b.size_ne_m[1] - margin_m)
+    if b.shape == "circular":
+        return math.hypot(n_m - b.center_ne_m[0], e_m - b.center_ne_m[1]) <= b.radius_m - margin_m
+    return True
+
+
+def _inside_patch(scenario: Scenario, n_m: float, e_m: float) -> bool:
+    c = scenario.world.seabed
+    half = 0.5 * c.extent_m
+    return abs(n_m - c.center_ne_m[0]) <= half and abs(e_m - c.center_ne_m[1]) <= half
+
+
+def vehicle_half_height_m(model: str) -> float:
+    """Half the vertical envelope of a vehicle preset, m (from its ``params.yaml``)."""
+    try:
+        text = (resources.files("sim") / "assets" / model / "params.yaml").read_text()
+        return 0.5 * float(yaml.safe_load(text)["envelope_m"][2])
+    except (OSError, KeyError, TypeError, ValueError, yaml.YAMLError):
+        return 0.0
+
+
+def placement_problems(scenario: Scenario) -> list[str]:
+    """Every impossible placement in ``scenario``, one message each (empty if none)."""
+    problems: list[str] = []
+    relief = seabed_relief_m(scenario)
+    basin = scenario.world.basin
+    wall_margin = 0.5 * basin.wall_thickness_m
+
+    n, e, d = scenario.vehicle.initial_pos_ned
+    key = "vehicle.initial_pos_ned"
+    if not _inside_patch(scenario, n, e):
+        problems.append(f"{key}: ({n:g}, {e:g}) m lies outside the seabed patch "
+                        f"(world.seabed: {scenario.world.seabed.extent_m:g} m square centred at "
+                        f"{tuple(scenario.world.seabed.center_ne_m)})")
+    elif not _inside_basin(scenario, n, e, wall_margin):
+        problems.append(f"{key}: ({n:g}, {e:g}) m lies outside the basin walls (world.basin)")
+    else:
+        bed = seabed_mean_depth_m(scenario, n, e)
+        half_h = vehicle_half_height_m(scenario.vehicle.model)
+        if d + half_h > bed - relief:
+            problems.append(f"{key}: depth {d:g} m puts the hull (half height {half_h:.2f} m) into the seabed "
+                            f"at {bed - relief:.2f} m there")
+    if d < -MAX_START_ABOVE_SURFACE_M:
+        problems.append(f"{key}: depth {d:g} m is above the surface (NED z is positive down)")
+
+    targets = scenario.world.targets
+    for i, t in enumerate(targets):
+        key = f"world.targets.{i} ({t.name})"
+        tn, te, tz = t.pos_ned
+        if not _inside_patch(scenario, tn, te):
+            problems.append(f"{key}: ({tn:g}, {te:g}) m lies outside the seabed patch")
+            continue
+        if not _inside_basin(scenario, tn, te, wall_margin):
+            problems.append(f"{key}: ({tn:g}, {te:g}) m lies outside the basin walls (world.basin)")
+        bed = seabed_mean_depth_m(scenario, tn, te)
+        top = tz - _target_height_m(t)
+        if tz < 0.0:
+            problems.append(f"{key}: base depth {tz:g} m is above the surface (NED z is positive down; "
+                            f"the seabed is at {bed:.2f} m there)")
+        elif top > bed + relief + 1e-6:
+            problems.append(f"{key}: buried below the seabed (its top at {top:.2f} m, the seabed at {bed:.2f} m)")
+    polys = [_inscribed_footprint(t) for t in targets]
+    for i in range(len(targets)):
+        for j in range(i + 1, len(targets)):
+            if convex_polygons_overlap(polys[i], polys[j]):
+                problems.append(f"world.targets.{i} ({targets[i].name}) and world.targets.{j} ({targets[j].name}) "
+                                "overlap")
+    return problems

@@ -1,0 +1,24 @@
+"""Errors a user can cause, reported by the CLI as one line with exit status 2."""
+
+from __future__ import annotations
+
+
+class CliError(Exception):
+    """A user error: the message names the argument, key or file and what is allowed."""
+
+
+EXIT_OK = 0
+EXIT_INTERNAL_ERROR = 1
+EXIT_USAGE = 2
+EXIT_MISSION_ABORTED = 3
+EXIT_INTERRUPTED = 130
+
+
+def user_error_types() -> tuple[type[BaseException], ...]:
+    """Exception types that mean bad input (one line, exit 2), not a bug."""
+    from autonomy.atr.model_file import ModelFileError
+    from scenarios.load import ScenarioError
+    from sim.dataset.errors import DatasetError
+    from sim.outputs.run_dir import OutputDirError
+
+    return (CliError, ScenarioError, OutputDirError, DatasetError, ModelFileError)

@@ -1,0 +1,80 @@
+"""``auvsim eval-atr``: precision, recall and AP of the ATR detector on a held-out set."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import numpy as np
+
+from sim.cli.args import positive_int, probability
+
+
+def _fmt(v) -> str:
+    return "-" if v is None else (f"{v:.3f}" if isinstance(v, float) else str(v))
+
+
+def _detector_config(args: argparse.Namespace):
+    from autonomy.atr.build import model_path
+    from autonomy.atr.model_file import ModelFileError
+    from scenarios.config.atr import AtrConfig
+
+    cfg = AtrConfig(detector=args.detector, model_path=args.model, intra_op_threads=1,
+                    **({} if args.threshold is None else {"score_threshold": args.threshold}))
+    if args.detector == "cnn" and not model_path(cfg).is_file():
+        raise ModelFileError(f"--model {args.model}: no such file")
+    return cfg
+
+
+def _cmd_eval(args: argparse.Namespace) -> int:
+    from autonomy.atr import build_detector
+    from sim.atr_eval import choose_threshold, ensure_heldout, evaluate_detector, threshold_sweep
+    from sim.dataset.errors import require_dataset
+
+    cfg = _detector_config(args)
+    data = require_dataset(args.data, "--data") if args.data is not None else None
+    detector = build_detector(cfg)
+    data = data if data is not None else ensure_heldout()
+    if args.sweep:
+        sweep = threshold_sweep(detector, data, np.round(np.arange(0.10, 0.91, 0.025), 3),
+                                max_images=args.max_images)
+        best = choose_threshold(sweep)
+        if args.json:
+            print(json.dumps({"data": str(data), "sweep": sweep, "chosen": best}, indent=1))
+            return 0
+        print(f"eval-atr sweep {args.detector} on {data}")
+        for r in sweep:
+            mark = " <- chosen" if r is best else ""
+            print(f"  thr {r['score_threshold']:.3f}  precision {r['precision']:.3f}  recall {r['recall']:.3f}  "
+                  f"FA/frame {r['false_alarms_per_frame']:.3f}{mark}")
+        return 0
+    res = evaluate_detector(detector, Path(data), cfg.score_threshold, max_images=args.max_images)
+    res.update(detector=args.detector, data=str(data))
+    if args.json:
+        print(json.dumps(res, indent=1))
+        return 0
+    print(f"eval-atr {res['detector']} on {res['data']} ({res['frames']} frames, classes {res['classes']})")
+    for k in ("score_threshold", "precision", "recall", "false_alarms_per_frame", "ap50", "ap50_95", "frames_per_s"):
+        print(f"  {k:24s} {_fmt(res[k])}")
+    print("  range band       gt   recall   det  precision")
+    for b in res["by_range_band"]:
+        lo, hi = b["range_m"]
+        print(f"  {lo:5.0f}-{'inf' if hi is None else f'{hi:.0f}':>4s} m  {b['ground_truth']:5d}  {_fmt(b['recall']):>7s}"
+              f"  {b['detections']:4d}  {_fmt(b['precision']):>9s}")
+    return 0
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("eval-atr", help="evaluate the ATR detector on a held-out set")
+    p.add_argument("--data", default=None, help="dataset folder (default: generate the held-out set)")
+    p.add_argument("--detector", choices=["cnn", "classical"], default="cnn")
+    p.add_argument("--model", default=None, help="ONNX model (default: the shipped one)")
+    p.add_argument("--threshold", type=probability, default=None,
+                   help="operating threshold, 0 to 1 (default: the detector config's)")
+    p.add_argument("--max-images", type=positive_int, default=None)
+    p.add_argument("--json", action="store_true", help="print the figures as JSON")
+    p.add_argument("--sweep", action="store_true",
+                   help="print precision/recall over thresholds 0.10-0.90 and the chosen operating point "
+                        "(highest recall at precision >= 0.95, else best F1); use on a validation set")
+    p.set_defaults(func=_cmd_eval)

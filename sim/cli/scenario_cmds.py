@@ -1,0 +1,42 @@
+"""``auvsim scenarios`` and ``auvsim validate``."""
+
+from __future__ import annotations
+
+import argparse
+
+from scenarios.load import list_scenarios, load_scenario
+
+DEFAULT_SCENARIO = "cssn_lawnmower"
+
+
+def add_scenario_args(p: argparse.ArgumentParser, *, positional: bool = True) -> None:
+    """The scenario (positional, optional) and repeatable ``--set`` overrides."""
+    if positional:
+        p.add_argument("scenario", nargs="?", default=DEFAULT_SCENARIO,
+                       help=f"shipped scenario name or YAML path (default: {DEFAULT_SCENARIO})")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="dotted override, e.g. --set vehicle.mass_kg=36 (repeatable; values parsed as YAML)")
+
+
+def _cmd_scenarios(args: argparse.Namespace) -> int:
+    for name, desc in list_scenarios().items():
+        print(f"{name:28s} {desc}")
+    return 0
+
+
+def _cmd_validate(args: argparse.Namespace) -> int:
+    import yaml
+
+    scenario = load_scenario(args.scenario, args.overrides)
+    print(yaml.safe_dump(scenario.model_dump(mode="json"), sort_keys=False), end="")
+    return 0
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("scenarios", help="list the shipped scenarios")
+    p.set_defaults(func=_cmd_scenarios)
+
+    p = sub.add_parser("validate", help="load a scenario and print it fully resolved, or the error")
+    p.add_argument("scenario", help="shipped scenario name or YAML path")
+    add_scenario_args(p, positional=False)
+    p.set_defaults(func=_cmd_validate)

@@ -1,0 +1,34 @@
+"""The error raised for dataset folders and dataset requests a user got wrong."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+
+class DatasetError(ValueError):
+    """A dataset folder is missing, incomplete, foreign, or made with other parameters.
+
+    The message names the folder or argument and what is allowed.
+    """
+
+
+def require_dataset(path: str | Path, arg: str = "--data") -> Path:
+    """A finished dataset folder written by ``auvsim dataset``; returns it resolved.
+
+    Raises:
+        DatasetError: ``path`` does not exist, is not a folder, or has no
+            ``annotations.json`` (not a dataset, or generation did not finish).
+    """
+    from sim.dataset.coco_io import ANNOTATIONS_FILE
+
+    p = Path(path).expanduser()
+    if not str(path).strip():
+        raise DatasetError(f"{arg}: must name a dataset folder, got an empty string")
+    if not p.exists():
+        raise DatasetError(f"{arg} {p}: no such folder")
+    if not p.is_dir():
+        raise DatasetError(f"{arg} {p}: is a file, expected a dataset folder written by `auvsim dataset`")
+    if not (p / ANNOTATIONS_FILE).is_file():
+        raise DatasetError(f"{arg} {p}: no {ANNOTATIONS_FILE} here (not a dataset folder, or its generation "
+                           "did not finish: rerun `auvsim dataset` with the same arguments to complete it)")
+    return p.resolve()

@@ -1,0 +1,165 @@
+"""Fly a mission and write its results into a run folder.
+
+Results are written into a hidden ``.<name>.partial`` folder next to the output folder and
+moved into place only when complete (:class:`sim.outputs.run_dir.StagedOutput`), so a
+failed or interrupted run never leaves half-written results that look finished, and an
+earlier run being replaced is removed only once the new one is in place.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from scenarios.schema import Scenario
+from sim.map_plot import plot_map
+from sim.mission import Mission
+from sim.outputs.progress import MissionProgress
+from sim.outputs.run_dir import StagedOutput, check_output_dir
+from sim.trajectory_log import TrajectoryLog
+
+METRICS_DECIMALS = 4
+
+
+def _json_default(obj: Any) -> Any:
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, (np.floating, np.integer, np.bool_)):
+        return obj.item()
+    raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
+
+
+def _clean(obj: Any, decimals: int | None) -> Any:
+    """NaN/inf -> None (standard JSON); floats rounded to ``decimals`` when given."""
+    if isinstance(obj, float):
+        if not math.isfinite(obj):
+            return None
+        return round(obj, decimals) if decimals is not None else obj
+    if isinstance(obj, dict):
+        return {k: _clean(v, decimals) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_clean(v, decimals) for v in obj]
+    return obj
+
+
+def write_json(path: Path, data: Any, decimals: int | None = None) -> None:
+    """Write ``data`` as indented standard JSON (NaN -> null), floats rounded to ``decimals``."""
+    plain = json.loads(json.dumps(data, default=_json_default))
+    path.write_text(json.dumps(_clean(plain, decimals), indent=2) + "\n")
+
+
+def planned_length_s(mission: Mission) -> float:
+    """Planned mission length, s: start delay plus the survey path at the survey speed.
+
+    Used as the 100 % of the progress display; capped by the scenario's duration.
+    """
+    scn = mission.scenario
+    survey = scn.autonomy.guidance.survey
+    wps = np.asarray(mission.waypoints_ne, dtype=float).reshape(-1, 2)
+    start = np.asarray(scn.vehicle.initial_pos_ned[:2], dtype=float)
+    path_m = float(np.linalg.norm(wps[0] - start) + np.linalg.norm(np.diff(wps, axis=0), axis=1).sum()) \
+        if len(wps) else 0.0
+    # Turns, the dive and the approach to each leg take about a tenth longer than the straight path.
+    planned = scn.autonomy.guidance.mission.start_delay_s + 1.1 * path_m / max(survey.speed_mps, 1e-6)
+    return float(min(planned, scn.duration_s))
+
+
+def collect_metrics(mission: Mission, log: TrajectoryLog) -> dict[str, Any]:
+    """The figures of a finished mission (navigation, detections, world model)."""
+    s = mission.summary()
+    metrics: dict[str, Any] = {
+        "scenario": mission.scenario.name,
+        "seed": mission.seed,
+        "nav_source": mission.nav_source,
+        "sim_time_s": s.sim_time_s,
+        "wall_time_s": s.wall_time_s,
+        "real_time_factor": s.sim_time_s / s.wall_time_s if s.wall_time_s > 0 else None,
+        "distance_travelled_m": log.distance_travelled_m(),
+        "mission": {"finished": s.finished, "aborted": s.aborted, "abort_reason": s.abort_reason,
+                    "final_mode": mission.fsm.mode},
+        "navigation": log.navigation_metrics(),
+        "perception": {"fls_frames": mission.n_fls_frames},
+    }
+    if mission.perception is not None:
+        metrics["perception"].update(mission.perception.detection_metrics())
+        wm = mission.perception.world_model_metrics()
+        n_all = len(mission.perception.world_objects())
+        n_targets = n_all - int(wm.get("objects_not_target", 0))
+        wm["world_model_json_objects"] = n_all
+        wm["note"] = (f"world_model.json holds all {n_all} objects the world model keeps; {n_targets} it classifies "
+                      f"as targets are scored against the true targets (objects, matched, missed, false); "
+                      f"{n_all - n_targets} it classifies as not targets (rocks, clutter) are listed there "
+                      "but not scored")
+        metrics["world_model"] = wm
+    return metrics
+
+
+class _ProgressObserver:
+    """Feeds the mission's step records to a :class:`MissionProgress`."""
+
+    def __init__(self, progress: MissionProgress) -> None:
+        self.progress = progress
+
+    def on_start(self, mission: Any) -> None:
+        self.progress.start()
+
+    def on_step(self, record: Any) -> None:
+        self.progress.update(record.t_s, record.mode)
+
+    def on_fls(self, event: Any) -> None:
+        pass
+
+    def on_end(self, mission: Any) -> None:
+        self.progress.close(mission.t_s)
+
+
+def run_mission(
+    scenario: Scenario, out: str | Path, *, nav_source: str = "estimate", rerun: bool = True,
+    progress: bool = True, overwrite: bool = False,
+) -> dict[str, Any]:
+    """Run ``scenario`` and write metrics.json, trajectory.csv, world_model.json, map.png
+    (and recording.rrd) into ``out``. Returns the metrics.
+
+    Raises:
+        OutputDirError: ``out`` is protected, a file, not creatable, or holds files that
+            are not an earlier run (or an earlier run and ``overwrite`` is False). Raised
+            before the mission starts; nothing is written then.
+    """
+    out_dir = check_output_dir(out, kind="run", overwrite=overwrite)
+    staged = StagedOutput(out_dir, kind="run")
+    with staged as partial:
+        log = TrajectoryLog()
+        observers: list[Any] = [log]
+        if rerun:
+            from sim.rerun_recording import RerunRecorder
+
+            observers.append(RerunRecorder(partial / "recording.rrd"))
+        mission = Mission(scenario, nav_source=nav_source, observers=observers)
+        mission.observers.append(_ProgressObserver(MissionProgress(scenario.name, planned_length_s(mission),
+                                                                   enabled=progress)))
+        mission.reset()
+        mission.run(progress=False)
+
+        metrics = collect_metrics(mission, log)
+        log.write_csv(partial / "trajectory.csv")
+        estimates, rejected = [], []
+        if mission.perception is not None:
+            write_json(partial / "world_model.json", mission.perception.world_model_json())
+            targets = mission.perception.target_objects()
+            estimates = [(f"{o.id}", o.pos_ned, o.cov_ned) for o in targets]
+            target_ids = {o.id for o in targets}
+            rejected = [o.pos_ned for o in mission.perception.world_objects() if o.id not in target_ids]
+        plot_map(
+            partial / "map.png",
+            true_pos_ned=log.true_pos_ned, est_pos_ned=log.est_pos_ned, waypoints_ne=mission.waypoints_ne,
+            targets=[(o.name, o.centroid_ned, o.is_target) for o in mission.world.objects],
+            estimates=estimates, rejected_ned=rejected,
+            title=f"{scenario.name} seed {mission.seed} (nav: {nav_source})",
+        )
+        write_json(partial / "metrics.json", metrics, decimals=METRICS_DECIMALS)
+        staged.commit()
+    return metrics

@@ -1,0 +1,244 @@
+"""Bad input gets one clear line naming the culprit, exit status 2, no traceback, and
+nothing outside the output folder changes (sentinel files all around it)."""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from sim.cli import main
+
+SHORT_RUN = ["--set", "duration_s=4", "--no-rerun", "--detector", "none", "--quiet"]
+
+
+def _snapshot(root: Path) -> dict[str, str]:
+    """Every file and folder below ``root`` -> content hash (folders: 'dir')."""
+    out = {}
+    for p in sorted(root.rglob("*")):
+        rel = str(p.relative_to(root))
+        out[rel] = "dir" if p.is_dir() else hashlib.sha256(p.read_bytes()).hexdigest()
+    return out
+
+
+@pytest.fixture
+def sandbox(tmp_path, monkeypatch):
+    """A working folder with sentinel files next to, above and below where outputs go."""
+    work = tmp_path / "work"
+    (work / "src").mkdir(parents=True)
+    (work / "keep.txt").write_text("x")
+    (work / "src" / "module.py").write_text("print('hi')\n")
+    (tmp_path / "sibling.txt").write_text("y")
+    (work / "a_file").write_text("not a folder")
+    monkeypatch.chdir(work)
+    return tmp_path
+
+
+def _run(argv, capsys) -> tuple[int, str]:
+    code = main(argv)
+    err = capsys.readouterr().err
+    return code, err
+
+
+def _assert_clean_error(code: int, err: str, *culprits: str) -> None:
+    assert code == 2, err
+    assert "Traceback" not in err, err
+    assert err.strip(), "no message"
+    first = err.strip().splitlines()[0]
+    for c in culprits:
+        assert c in err, f"{c!r} not named in: {err}"
+    assert first.startswith("auvsim "), first
+
+
+@pytest.mark.parametrize("out", [".", "", "..", "~", "/"])
+def test_out_that_would_lose_data_is_refused(sandbox, capsys, out):
+    before = _snapshot(sandbox)
+    code, err = _run(["run", "--out", out, "--overwrite", *SHORT_RUN], capsys)
+    _assert_clean_error(code, err, "--out")
+    assert "refusing" in err or "empty string" in err
+    assert _snapshot(sandbox) == before
+
+
+def test_out_that_contains_the_working_directory_is_refused(sandbox, capsys):
+    before = _snapshot(sandbox)
+    code, err = _run(["run", "--out", str(sandbox), "--overwrite", *SHORT_RUN], capsys)
+    _assert_clean_error(code, err, "contains the current directory")
+    assert _snapshot(sandbox) == before
+
+
+@pytest.mark.parametrize("out,why", [("a_file", "is a file"), ("/proc/x", "cannot create"),
+                                     ("src", "not an auvsim run output")])
+def test_out_that_cannot_be_written_is_named(sandbox, capsys, out, why):
+    before = _snapshot(sandbox)
+    code, err = _run(["run", "--out", out, "--overwrite", *SHORT_RUN], capsys)
+    _assert_clean_error(code, err, "--out", why)
+    assert _snapshot(sandbox) == before
+
+
+def test_overwrite_replaces_only_an_earlier_run_and_only_when_complete(sandbox, capsys):
+    assert main(["run", "--out", "runs/a", *SHORT_RUN]) == 0
+    first = (sandbox / "work/runs/a/metrics.json").read_text()
+    assert (sandbox / "work/runs/a/.auvsim-output").is_file()
+    code, err = _run(["run", "--out", "runs/a", *SHORT_RUN], capsys)
+    _assert_clean_error(code, err, "--overwrite")
+    assert (sandbox / "work/runs/a/metrics.json").read_text() == first
+    assert main(["run", "--out", "runs/a", "--overwrite", "--seed", "5", *SHORT_RUN]) == 0
+    assert '"seed": 5' in (sandbox / "work/runs/a/metrics.json").read_text()
+    leftovers = [p.name for p in (sandbox / "work/runs").iterdir()]
+    assert leftovers == ["a"], leftovers
+    assert (sandbox / "work/keep.txt").read_text() == "x"
+
+
+def test_a_failed_run_keeps_the_earlier_one(sandbox, capsys, monkeypatch):
+    assert main(["run", "--out", "runs/a", *SHORT_RUN]) == 0
+    before = _snapshot(sandbox)
+    import sim.outputs.mission_outputs as mo
+
+    def broken(*a, **k):
+        raise RuntimeError("plot failed")
+
+    monkeypatch.setattr(mo, "plot_map", broken)
+    code = main(["run", "--out", "runs/a", "--overwrite", *SHORT_RUN])
+    assert code == 1
+    assert _snapshot(sandbox) == before  # the earlier run is intact, no partial folder left
+
+
+@pytest.mark.parametrize("content,why", [(b"\x00\x01binary", "binary"), (b"", "empty"),
+                                         (b"\xff\xfe name: x", "UTF-8"), (b"a: [1, 2", "not valid YAML")])
+def test_bad_scenario_files(sandbox, capsys, content, why):
+    path = sandbox / "work" / "bad.yaml"
+    path.write_bytes(content)
+    code, err = _run(["run", str(path), "--out", "runs/x", *SHORT_RUN], capsys)
+    _assert_clean_error(code, err, "bad.yaml", why)
+    assert not (sandbox / "work/runs").exists()
+
+
+def test_scenario_that_is_a_directory(sandbox, capsys):
+    code, err = _run(["validate", str(sandbox / "work" / "src")], capsys)
+    _assert_clean_error(code, err, "src", "is a directory")
+
+
+@pytest.mark.parametrize("override,named", [
+    ("vehicle.initial_pos_ned=[.nan, 0, 0.3]", "vehicle.initial_pos_ned.0"),
+    ("world.current.velocity_ned_mps=[.inf, 0, 0]", "world.current.velocity_ned_mps.0"),
+    ("world.targets.0.pos_ned=[.nan, 10, 4]", "world.targets.0.pos_ned.0"),
+    ("vehicle.initial_pos_ned=[1e12, 0, 0.3]", "outside the seabed patch"),
+    ("vehicle.initial_pos_ned=[30, 0, 0.3]", "outside the basin walls"),
+    ("vehicle.initial_pos_ned=[8, 0, 3.9]", "into the seabed"),
+    ("world.targets.0.pos_ned=[0, 10, -1]", "above the surface"),
+    ("world.targets.0.pos_ned=[0, 10, 7]", "buried below the seabed"),
+    ("world.targets.1.pos_ned=[0, 10.4, 4]", "overlap"),
+    ("world.targets.9.radius_m=1", "has 6 entries"),
+    ("world.targets.x.radius_m=1", "index 0 to 5"),
+    ("seed=-1", "seed"),
+    ("autonomy.atr.model_path=/no/such/model.onnx", "autonomy.atr.model_path"),
+    ("nokey", "key.path=value"),
+])
+def test_values_that_would_break_the_run_are_rejected_at_load(capsys, override, named):
+    code, err = _run(["validate", "cssn_lawnmower", "--set", override], capsys)
+    _assert_clean_error(code, err, named, "--set")
+
+
+def test_corrupt_model_is_named_by_its_key(sandbox, capsys):
+    bad = sandbox / "work" / "corrupt.onnx"
+    bad.write_bytes(b"not a protobuf at all")
+    code, err = _run(["validate", "cssn_lawnmower", "--set", f"autonomy.atr.model_path={bad}"], capsys)
+    _assert_clean_error(code, err, "autonomy.atr.model_path", "corrupt.onnx", "not a valid ONNX model")
+
+
+def test_shipped_scenarios_pass_the_placement_checks(capsys):
+    from scenarios.load import list_scenarios
+
+    for name in list_scenarios():
+        assert main(["validate", name]) == 0, capsys.readouterr().err
+
+
+@pytest.mark.parametrize("argv,named", [
+    (["eval-atr", "--data", "/no/such/folder"], "--data"),
+    (["eval-atr", "--data", "."], "annotations.json"),
+    (["eval-atr", "--model", "/no/such.onnx", "--data", "."], "--model"),
+    (["eval-atr", "--threshold", "5"], "--threshold"),
+    (["eval-atr", "--max-images", "0"], "--max-images"),
+    (["dataset", "--n", "0", "--out", "ds"], "--n"),
+    (["dataset", "--n", "-5", "--out", "ds"], "--n"),
+    (["dataset", "--n", "2", "--out", "a_file"], "is a file"),
+    (["dataset", "--n", "2", "--out", "/proc/x"], "cannot create"),
+    (["dataset", "--n", "2", "--out", "."], "current directory"),
+    (["dataset", "--n", "2", "--out", "src"], "not an auvsim dataset"),
+    (["train-atr", "--data", "/no/such/folder", "--out", "m.onnx"], "--data"),
+    (["train-atr", "--data", "src", "--out", "m.onnx"], "annotations.json"),
+    (["train-atr", "--data", "d", "--out", "m.onnx", "--input", "100x200"], "--input"),
+    (["run", "--seed", "-3", "--out", "r"], "--seed"),
+    (["bench", "nothing"], "invalid choice"),
+])
+def test_command_arguments(sandbox, capsys, argv, named):
+    before = _snapshot(sandbox)
+    code, err = _run(argv, capsys)
+    _assert_clean_error(code, err, named)
+    assert _snapshot(sandbox) == before
+
+
+def test_train_atr_without_torch_says_how_to_install(sandbox):
+    code = ("import sys; sys.modules['torch'] = None\n"
+            "from sim.cli import main\n"
+            "sys.exit(main(['train-atr', '--data', 'x', '--out', 'm.onnx']))\n")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=sandbox / "work")
+    assert proc.returncode == 2, proc.stderr
+    assert "Traceback" not in proc.stderr
+    assert "pip install 'auvsim[train]'" in proc.stderr
+
+
+def test_aborted_mission_says_so_and_exits_3(sandbox, capsys):
+    code = main(["run", "--out", "runs/ab", "--set", "duration_s=15", "--set", "autonomy.guidance.mission.start_delay_s=0",
+                 "--set", "autonomy.guidance.mission.safe_depth_min_m=0.05",
+                 "--set", "autonomy.guidance.mission.safe_depth_max_m=0.4", "--no-rerun", "--detector", "none", "--quiet"])
+    captured = capsys.readouterr()
+    assert code == 3
+    assert "ABORTED: depth" in captured.err
+    assert (sandbox / "work/runs/ab/metrics.json").is_file()
+
+
+def test_console_summary_is_rounded_and_says_n_a(sandbox, capsys):
+    assert main(["run", "--out", "runs/s", *SHORT_RUN]) == 0
+    out = capsys.readouterr().out
+    assert "nan" not in out
+    assert "mean error n/a" in out  # no detector: nothing matched
+    import json
+
+    metrics = json.loads((sandbox / "work/runs/s/metrics.json").read_text())
+    assert metrics["sim_time_s"] == 4.0
+    assert "world_model.json holds all" in metrics["world_model"]["note"]
+
+
+def test_progress_without_a_terminal_is_a_line_every_few_percent(sandbox):
+    proc = subprocess.run([sys.executable, "-m", "sim.cli", "run", "--out", "runs/p", "--set", "duration_s=30",
+                           "--no-rerun", "--detector", "none"], capture_output=True, text=True,
+                          cwd=sandbox / "work")
+    assert proc.returncode == 0, proc.stderr
+    lines = [ln for ln in proc.stderr.splitlines() if "% of the planned" in ln]
+    assert 1 <= len(lines) <= 11, proc.stderr
+
+
+def test_sigint_leaves_no_partial_folder(sandbox):
+    env = dict(os.environ, PYTHONUNBUFFERED="1")
+    proc = subprocess.Popen([sys.executable, "-m", "sim.cli", "run", "--out", "runs/i", "--set", "duration_s=600",
+                             "--no-rerun", "--detector", "none"], cwd=sandbox / "work", env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    partial = sandbox / "work/runs/.i.partial"
+    deadline = time.monotonic() + 60
+    while not partial.exists() and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert partial.exists(), "the run never started"
+    time.sleep(1.0)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err
+    assert not partial.exists()
+    assert not (sandbox / "work/runs/i").exists()
