@@ -4,13 +4,13 @@ The checks here read ``sim/assets/feelhippo/params.yaml`` as plain YAML and comp
 independently of the simulator's code path:
 
 * translational added mass = Lamb's ellipsoid coefficients (Lamb 1932, Hydrodynamics,
-  sec. 114; Imlay 1961, DTMB report 1528; Fossen 2021, sec. 8.4.2) for the ellipsoid with the envelope's axis ratios,
-  times the displaced water, the elliptic integrals evaluated here by quadrature;
+  sec. 114; Imlay 1961, DTMB report 1528; Fossen 2021, Handbook of Marine Craft
+  Hydrodynamics and Motion Control, sec. 8.4.2) for the ellipsoid with the envelope's axis
+  ratios, times the displaced water; the elliptic integrals evaluated here by quadrature;
 * rotational added inertia and rotational quadratic damping by strip theory over the
-  envelope's faces (Newman 1977, Marine Hydrodynamics, ch. 4 and 7; Fossen 2021, Handbook
-  of Marine Craft Hydrodynamics and Motion Control, ch. 8);
+  envelope's faces (Newman 1977, Marine Hydrodynamics, ch. 4 and 7);
 * the static pitch stability at speed: the metacentric restoring W z_g - B z_b (N m/rad)
-  must exceed the Munk coefficient (Z_wdot - X_udot) U^2 (the Munk moment, Fossen 2021, ch. 8), else a
+  must exceed the Munk coefficient (Z_wdot - X_udot) U^2 (Newman 1977, ch. 4), else a
   hull flying level at U is statically unstable in pitch.
 """
 
