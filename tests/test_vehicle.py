@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
+from autonomy.control.allocation import thrust_to_command
 from scenarios.config.vehicle import ThrusterOverrides, VehicleConfig
 from scenarios.config.world import CurrentConfig
 from sim.current import OceanCurrent
@@ -149,6 +150,47 @@ def test_roll_and_pitch_disturbances_decay():
     # Amplitude envelope shrinks second by second.
     per_s = np.abs(roll).reshape(-1, 20).max(axis=1)
     assert np.all(np.diff(per_s[:6]) < 0.0)
+
+
+def test_feelhippo_flies_level_at_steady_surge_up_to_full_speed():
+    """Open loop, shipped preset: constant surge commands giving steady speeds from ~0.3 to
+    ~1 m/s, heave thruster trimming the net buoyancy (as when holding depth). Once steady,
+    pitch stays within +-2 deg at every speed (the earlier added-mass estimate rocked
+    +-10 deg at 1 m/s: Munk moment above the metacentric restoring)."""
+    p = load_vehicle_params(VehicleConfig(model="feelhippo"))
+    trim = float(thrust_to_command([0.0, 0.0, 0.0, p.buoyancy_n - p.weight_n], p.layout)[3])
+    assert 0.0 < trim < 0.5
+    speeds = []
+    for c in (0.3, 0.6, 0.85, 1.0):
+        model, data, dyn = make_sim(p)
+        dyn.reset([0, 0, 10.0], [0, 0, 0])
+        rec = run(model, data, dyn, [c, c, 0.0, trim], 40.0, record_every=20)
+        steady = [tr for t, tr in rec if t >= 20.0]
+        u = np.array([tr.nu[0] for tr in steady])
+        pitch_deg = np.degrees([tr.rpy_rad[1] for tr in steady])
+        assert np.max(np.abs(pitch_deg)) < 2.0, f"cmd {c}: u {u[-1]:.3f} m/s, pitch {pitch_deg.min():.2f}..{pitch_deg.max():.2f} deg"
+        assert np.ptp(u) < 0.01  # steady
+        speeds.append(u[-1])
+    assert speeds[0] < 0.35 and speeds[-1] > 0.97
+
+
+def test_rising_hull_pitch_balances_munk_against_restoring():
+    """Untrimmed (0.75 % positive) at full surge the hull rises at a steady w < 0; its steady
+    nose-down pitch is where the Munk moment balances the metacentric restoring:
+    (Z_wdot - X_udot) u w = (W z_g - B z_b) sin(theta) (no current, q = 0)."""
+    p = load_vehicle_params(VehicleConfig(model="feelhippo"))
+    model, data, dyn = make_sim(p)
+    dyn.reset([0, 0, 10.0], [0, 0, 0])
+    rec = run(model, data, dyn, [1.0, 1.0, 0.0, 0.0], 40.0, record_every=200)
+    tr = rec[-1][1]
+    u, w = tr.nu[0], tr.nu[2]
+    assert u > 0.97 and -0.1 < w < -0.02
+    A = np.diag(p.added_mass)
+    restoring = p.weight_n * p.r_bg_m[2] - p.buoyancy_n * p.r_bb_m[2]
+    theta = math.asin((A[2] - A[0]) * u * w / restoring)
+    assert tr.rpy_rad[1] == pytest.approx(theta, rel=0.01)
+    assert abs(math.degrees(theta)) < 2.0
+    assert abs(rec[-2][1].rpy_rad[1] - tr.rpy_rad[1]) < 1e-4  # steady
 
 
 # ------------------------------------------------------------- independent integration

@@ -153,7 +153,7 @@ def test_bad_parameter_files_name_file_and_key(tmp_path):
     bad.write_text(good.replace("mass_kg: 35.0", "mass_kg: -1"))
     with pytest.raises(VehicleParamsError, match="mass_kg"):
         load_params_file(bad)
-    bad.write_text(good.replace("added_mass: [18.0, 28.0, 40.0, 0.8, 0.8, 0.6]", "added_mass: [1, 2]"))
+    bad.write_text(good.replace("added_mass: [16.3, 14.5, 22.7, 1.08, 1.02, 0.99]", "added_mass: [1, 2]"))
     with pytest.raises(VehicleParamsError, match="added_mass"):
         load_params_file(bad)
     bad.write_text(good.replace("  gps:", "  gpsx:"))
