@@ -18,9 +18,9 @@ from autonomy.localization import fls_visibility, localize
 from autonomy.messages import NavEstimate
 from autonomy.world_model import CLASS_NAMES, PMHA
 from scenarios.schema import Scenario
-from sim.atr_eval import match_frame
+from sim.evaluation.detection_matching import match_frame
 from sim.records import FlsEvent
-from sim.scoring import score_world_model
+from sim.evaluation.world_model_score import score_world_model
 from sim.seabed import Seabed
 from sim.sensors.fls import FlsRender, FlsSensor
 

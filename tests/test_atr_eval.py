@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from autonomy.atr.detector import to_detections
-from sim.atr_eval import evaluate_detector, match_frame
+from sim.evaluation.atr_metrics import evaluate_detector
+from sim.evaluation.detection_matching import match_frame
 from sim.dataset.coco_io import coco_bbox_to_xyxy
 from sim.dataset.generate import RenderSettings, generate_dataset
 from sim.dataset.randomization import HELDOUT_RANDOMIZATION
@@ -93,7 +94,7 @@ def test_classical_baseline_runs_on_the_same_frames(eval_set):
 
 
 def test_choose_threshold_prefers_the_goal_then_f1():
-    from sim.atr_eval import choose_threshold
+    from sim.evaluation.atr_metrics import choose_threshold
 
     sweep = [{"score_threshold": 0.2, "precision": 0.80, "recall": 0.99},
              {"score_threshold": 0.4, "precision": 0.96, "recall": 0.91},
@@ -106,7 +107,7 @@ def test_choose_threshold_prefers_the_goal_then_f1():
 
 
 def test_threshold_sweep_matches_separate_evaluations(eval_set):
-    from sim.atr_eval import threshold_sweep
+    from sim.evaluation.atr_metrics import threshold_sweep
 
     det = _OracleDetector(eval_set, extra_false=1)  # true boxes score 0.9..0.8, the false one last
     sweep = threshold_sweep(det, eval_set, [0.5, 0.85, 0.95], max_images=10)

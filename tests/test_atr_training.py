@@ -10,7 +10,7 @@ import pytest
 pytest.importorskip("torch", reason="torch not installed: training needs the `train` extra")
 
 from autonomy.atr.cnn_detector import CnnDetector  # noqa: E402
-from sim.atr_eval import evaluate_detector  # noqa: E402
+from sim.evaluation.atr_metrics import evaluate_detector  # noqa: E402
 from sim.dataset.generate import RenderSettings, generate_dataset  # noqa: E402
 from sim.dataset.randomization import Randomization  # noqa: E402
 from sim.training.train import TrainParams, train_atr  # noqa: E402

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from matplotlib.colors import to_rgb
 
-from sim.map_plot import AXES_HEIGHT_IN, AXES_WIDTH_IN, STYLES, axes_size_in, build_map_figure, plot_map
+from sim.outputs.map_plot import AXES_HEIGHT_IN, AXES_WIDTH_IN, STYLES, axes_size_in, build_map_figure, plot_map
 
 
 def lawnmower(width_e_m: float, height_n_m: float, spacing_m: float = 8.0) -> tuple[np.ndarray, np.ndarray]:

@@ -7,7 +7,7 @@ import itertools
 import numpy as np
 import pytest
 
-from sim.scoring import gospa, match, score_world_model
+from sim.evaluation.world_model_score import gospa, match, score_world_model
 
 TRUTHS = [(0.0, 0.0), (10.0, 0.0), (20.0, 0.0)]
 ESTIMATES = [(0.0, 1.0), (10.0, 0.5), (50.0, 50.0)]

@@ -13,7 +13,7 @@ from autonomy.localization import LocalizedDetection
 from autonomy.world_model import PMHA
 from autonomy.world_model.anchor import Anchor, predicted_cov
 from scenarios.config.world_model import WorldModelConfig
-from sim.scoring import score_world_model
+from sim.evaluation.world_model_score import score_world_model
 
 TRUTHS = np.array([[0, 10, 4], [0, 20, 4], [0, 25, 4], [-8, 10, 4], [-7, 15, 4], [-8, 22, 4]], float)
 REGION = ([-20.0, 0.0, 3.0], [10.0, 35.0, 5.0])

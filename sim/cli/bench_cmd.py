@@ -19,7 +19,7 @@ BENCHES: dict[str, tuple[str, str, str]] = {
     "mission": ("sim.bench_mission", "run", "closed-loop mission, sensors and FLS included"),
     "pmha": ("sim.bench_pmha", "run", "PMHA world-model update time"),
     "gym": ("sim.bench_gym", "run", "gymnasium environment step rate"),
-    "atr": ("sim.atr_eval", "bench_atr", "ATR inference frame rate (CNN and classical)"),
+    "atr": ("sim.evaluation.atr_metrics", "bench_atr", "ATR inference frame rate (CNN and classical)"),
 }
 
 

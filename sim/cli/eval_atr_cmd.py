@@ -29,7 +29,7 @@ def _detector_config(args: argparse.Namespace):
 
 def _cmd_eval(args: argparse.Namespace) -> int:
     from autonomy.atr import build_detector
-    from sim.atr_eval import choose_threshold, ensure_heldout, evaluate_detector, threshold_sweep
+    from sim.evaluation.atr_metrics import choose_threshold, ensure_heldout, evaluate_detector, threshold_sweep
     from sim.dataset.errors import require_dataset
 
     cfg = _detector_config(args)

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from scenarios.schema import Scenario
-from sim.map_plot import plot_map
+from sim.outputs.map_plot import plot_map
 from sim.mission import Mission
 from sim.outputs.progress import MissionProgress
 from sim.outputs.run_dir import StagedOutput, check_output_dir

@@ -1,8 +1,8 @@
-"""``auvsim eval-atr``: detector evaluation on a labelled FLS dataset.
+"""Detector evaluation on a labelled FLS dataset (``auvsim eval-atr``, ``auvsim bench atr``).
 
 Figures, for the target classes (``opi`` by default):
 - precision, recall, false alarms per frame at the operating threshold (greedy matching by
-  score at IoU >= 0.5; detections on ``iscrowd`` (barely visible) objects are ignored);
+  score at IoU >= ``DETECTION_MATCH_IOU`` (0.5); detections on ``iscrowd`` (barely visible) objects are ignored);
 - AP50 and AP50:95 from ``pycocotools`` COCOeval (the COCO reference implementation);
 - the same precision/recall split by range band (ground truth by its true range,
   detections by their reference-point range);
@@ -22,14 +22,13 @@ from typing import Sequence
 import cv2
 import numpy as np
 
-from autonomy.atr.nms import box_iou
 from autonomy.messages import FlsFrame
 from autonomy.sonar_geometry import FanGeometry
 from sim.dataset.coco_io import ANNOTATIONS_FILE, coco_bbox_to_xyxy, xyxy_to_coco_bbox
 from sim.dataset.errors import DatasetError, require_dataset
+from sim.evaluation.detection_matching import match_frame
 
 DEFAULT_RANGE_BANDS_M = (0.0, 10.0, 20.0, 30.0, math.inf)
-MATCH_IOU = 0.5
 
 
 def frame_from_record(image_rec: dict, fan: np.ndarray) -> FlsFrame:
@@ -39,29 +38,6 @@ def frame_from_record(image_rec: dict, fan: np.ndarray) -> FlsFrame:
                        float(g["fov_rad"]), float(g["m_per_px"]), float(g["apex_x_px"]), float(g["apex_y_px"]))
     return FlsFrame(t_s=float(image_rec.get("t_s", 0.0)), polar=np.zeros((0, 0), np.uint8), fan=fan, geometry=geom,
                     mount_pos_body_m=np.zeros(3), mount_rpy_rad=np.zeros(3))
-
-
-def match_frame(det_boxes: np.ndarray, det_scores: np.ndarray, gt_boxes: np.ndarray, gt_crowd: np.ndarray,
-                iou_threshold: float = MATCH_IOU) -> tuple[np.ndarray, np.ndarray]:
-    """Greedy matching by decreasing score.
-
-    Returns (det_state (N,) with 1 true, 0 false, -1 ignored; gt_matched (M,) bool).
-    """
-    n, m = det_boxes.shape[0], gt_boxes.shape[0]
-    state = np.zeros(n, dtype=np.int64)
-    matched = np.zeros(m, dtype=bool)
-    if n == 0:
-        return state, matched
-    iou = box_iou(det_boxes, gt_boxes) if m else np.zeros((n, 0))
-    for i in np.argsort(-det_scores, kind="stable"):
-        cand = np.where(~matched & ~gt_crowd & (iou[i] >= iou_threshold), iou[i], -1.0)
-        if m and cand.max() >= iou_threshold:
-            j = int(np.argmax(cand))
-            matched[j] = True
-            state[i] = 1
-        elif m and np.any(gt_crowd & (iou[i] >= iou_threshold)):
-            state[i] = -1
-    return state, matched
 
 
 def _pr(tp: int, fp: int, n_gt: int) -> tuple[float, float]:
