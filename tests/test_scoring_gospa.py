@@ -1,4 +1,4 @@
-"""Scoring: GOSPA against REFERENCE.md worked examples and brute force; matching."""
+"""Scoring: GOSPA against worked examples of [Rahmathullah2017] and brute force; matching."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""REMUS 100 preset: steady surge speed vs propeller rpm against REFERENCE.md section 5.
+"""REMUS 100 preset: steady surge speed vs propeller rpm against Fossen's MSS library figures (docs/references.md [FossenMSS]).
 
 The reference table comes from Fossen's REMUS 100 simulator, whose propeller thrust
 depends on the advance speed. Assumptions of that model, restated here:

@@ -1,6 +1,6 @@
 """Forward-looking sonar config.
 
-``preset`` picks the hardware (REFERENCE.md section 2); every geometry field left at ``None``
+``preset`` picks the hardware (docs/references.md [BlueViewM900], [ARIS3000]); every geometry field left at ``None``
 takes the preset's value, so a scenario overrides only what it changes. Levels are in dB;
 intensities are linear power. Acoustic constants marked "estimate" are ours, not datasheet.
 """

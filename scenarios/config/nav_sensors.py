@@ -1,6 +1,6 @@
 """Navigation sensor configs: IMU/AHRS (+ FOG heading), DVL, depth, altimeter, GPS.
 
-Defaults follow FeelHippo's suite (REFERENCE.md section 1): Orientus AHRS with a KVH DSP 1760
+Defaults follow FeelHippo's suite (docs/references.md [P000] Table IV): Orientus AHRS with a KVH DSP 1760
 single-axis FOG for heading, Nortek DVL1000 (bottom track + pressure), surface-only GPS.
 Noise figures are our estimates of datasheet-class values, not measured on the vehicle.
 All noise terms are 1-sigma; "bias" terms are the sigma of a per-run constant drawn once.

@@ -39,7 +39,7 @@ class LocalizationConfig(StrictModel):
 
 
 class WorldModelConfig(StrictModel):
-    """Probabilistic multiple hypothesis anchoring (paper 000 section V, REFERENCE.md 6).
+    """Probabilistic multiple hypothesis anchoring (paper 000 section V; docs/references.md [P000]).
 
     Each measurement of a scan is a new object, an existing anchor or clutter. The origin
     priors are the anchoring authors' defaults; with Poisson new/clutter counts they are
