@@ -3,7 +3,9 @@
 Rays: ``azimuth_columns`` x ``elevation_rays`` directions, fixed in the sonar frame of
 :mod:`autonomy.sonar_frame`, rotated into NED with one matmul per frame; surface edges are
 located by bisection (``edge_refine_iters`` extra casts of one ray per edge)
-(:mod:`sim.sensors.sonar.ray_fan`). Each column becomes an echo line
+(:mod:`sim.sensors.sonar.ray_fan`). Objects the base rays sample coarsely (a small sphere
+between two elevation rays) are sampled by finer sub-columns over their bounding spheres, so
+each echoes, is labelled and has its nearest range resolved. Each column becomes an echo line
 (:mod:`sim.sensors.sonar.echo_lines`), the lines pass the echo chain (spreading, absorption,
 azimuth beam pattern, speckle, noise, TVG, gain; :mod:`sim.sensors.sonar.echo_chain`) and are
 resampled into the fan image. Ground truth comes from the same rays
@@ -39,10 +41,11 @@ from sim.sensors.sonar.ground_truth import (
     label_bins,
     visible_fraction,
 )
-from sim.sensors.sonar.ray_fan import RayFan
+from sim.sensors.sonar.ray_fan import RayFan, RayTable, column_neighbours
 from sim.truth import VehicleTruth
 
 FloatArray = NDArray[np.float64]
+OBJECT_RAYS_ACROSS = 8  # rays across an object (each way) where the base rays are sparser
 
 
 @dataclass(frozen=True, slots=True)
@@ -137,9 +140,10 @@ class FlsSensor:
         g, cfg = self.geometry, self.cfg
         origin = np.asarray(pos_ned, dtype=float).reshape(3)
         R_ns = np.asarray(R_nb, dtype=float) @ self.R_bs
-        base_rays, base = self.rays.cast(caster, origin, R_ns, g.range_max_m)
-        rays, segments = self.rays.refine_edges(caster, origin, R_ns, base_rays, g.range_max_m, g.window_far_m,
-                                                cfg.edge_refine_iters)
+        base_rays, _ = self.rays.cast(caster, origin, R_ns, g.range_max_m)
+        sampled, owner, pairs = self._add_object_rays(base_rays, caster, origin, R_ns, objects)
+        rays, segments = self.rays.refine_edges(caster, origin, R_ns, sampled, g.range_max_m, g.window_far_m,
+                                                cfg.edge_refine_iters, pairs)
         strength = ray_strength(rays, cfg.scattering_exponent, g.vertical_beamwidth_rad,
                                 self.rays.elevation_step_rad)
         echoes = echo_segments(rays, segments, strength, self.rays.range_slope(rays, R_ns), g.window_near_m,
@@ -154,10 +158,8 @@ class FlsSensor:
         polar_u8 = self.echo.display(intensity)
         fan_u8 = self._remap.image(polar_u8)
 
-        in_win = (base.dist_m >= g.window_near_m) & (base.dist_m <= g.window_far_m) & (base.object_id >= 0)
-        hits_per_obj = np.bincount(base.object_id[in_win], minlength=1 + max((int(o.id) for o in objects), default=0))
-        objs = tuple(self._object_truth(o, origin, R_ns, base_rays.dirs, base.object_id,
-                                        int(hits_per_obj[int(o.id)]), extents.get(int(o.id)), caster)
+        in_win = (sampled.dist >= g.window_near_m) & (sampled.dist <= g.window_far_m)
+        objs = tuple(self._object_truth(o, origin, R_ns, sampled, owner, in_win, extents.get(int(o.id)), caster)
                      for o in objects)
         frame = FlsFrame(t_s=float(t_s), polar=polar_u8, fan=fan_u8, geometry=self.fan_geometry,
                          mount_pos_body_m=self.mount_pos_body_m.copy(), mount_rpy_rad=self.mount_rpy_rad.copy())
@@ -166,13 +168,57 @@ class FlsSensor:
         return FlsRender(frame=frame, truth=truth, mean_intensity=mean, intensity=intensity)
 
     # -- internals --------------------------------------------------------------------------
-    def _object_truth(self, obj: SceneObjectLike, origin: FloatArray, R_ns: FloatArray, dirs: FloatArray,
-                      first_obj: NDArray[np.int64], n_hit: int, extent: tuple[int, int, int, int] | None,
-                      caster: RayCaster) -> SonarObjectTruth:
-        """Truth record of ``obj``; ``first_obj`` (n_rays,) first-hit object of each ray of
-        ``dirs`` and ``n_hit`` how many of them hit ``obj`` inside the range window."""
+    def _add_object_rays(self, base: RayTable, caster: RayCaster, origin: FloatArray, R_ns: FloatArray,
+                         objects: Sequence[SceneObjectLike]
+                         ) -> tuple[RayTable, NDArray[np.int64], tuple[NDArray[np.intp], NDArray[np.intp]] | None]:
+        """Sample objects the base rays sample coarsely with finer sub-columns
+        (:meth:`RayFan.strip_rays` on the caster's bounding sphere of each object in the range
+        window, if the caster offers one), so that an object between two base rays still
+        echoes, is labelled and has its nearest range resolved.
+
+        Returns:
+            The base rays followed by the new rays; per row the object whose sphere it samples
+            (-1 for a base ray, -2 for a sub-column ray at a base elevation); and the elevation
+            intervals to form echoes from (``None``: the base rays' own).
+        """
+        g = self.geometry
+        n0 = len(base.dist)
+        if not objects or not hasattr(caster, "object_bounding_sphere"):
+            return base, np.full(n0, -1, dtype=np.int64), None
+        spheres = []
+        for o in objects:
+            centre, radius = caster.object_bounding_sphere(int(o.id))
+            v = np.asarray(centre, dtype=float) - origin
+            dist = float(np.linalg.norm(v))
+            if dist - radius <= g.window_far_m and dist + radius >= g.window_near_m:
+                spheres.append((int(o.id), R_ns.T @ v, float(radius)))
+        strips = self.rays.strip_rays(spheres, OBJECT_RAYS_ACROSS)
+        if strips.empty:
+            return base, np.full(n0, -1, dtype=np.int64), None
+        extra = self.rays.cast_rays(caster, origin, R_ns, strips.col, strips.az, strips.phi, strips.weight,
+                                    g.range_max_m)
+        sampled = base.concat(extra)
+        owner = np.concatenate([np.full(n0, -1, dtype=np.int64), np.where(strips.owner < 0, -2, strips.owner)])
+        # the replaced columns' base rays leave the echo chains
+        chain = np.ones(len(sampled.dist), dtype=bool)
+        chain[:n0] = ~np.isin(base.col, strips.columns)
+        rows = np.flatnonzero(chain)
+        a, b = column_neighbours(sampled.col[rows], sampled.az[rows], sampled.phi[rows])
+        return sampled, owner, (rows[a], rows[b])
+
+    def _object_truth(self, obj: SceneObjectLike, origin: FloatArray, R_ns: FloatArray, sampled: RayTable,
+                      owner: NDArray[np.int64], in_win: NDArray[np.bool_],
+                      extent: tuple[int, int, int, int] | None, caster: RayCaster) -> SonarObjectTruth:
+        """Truth record of ``obj`` from the sampled rays (``owner``: the object whose sphere each
+        samples, -1 for base rays, -2 for sub-column rays at base elevations; ``in_win``: the hit
+        lies in the range window). The object is counted on the base rays and on the rays of its
+        own sphere only: two even samplings of its cone, whatever other objects were refined."""
         g = self.geometry
         k = int(obj.id)
+        own = (owner < 0) | (owner == k)
+        first_obj = sampled.obj[own]
+        n_hit = int(np.count_nonzero((first_obj == k) & in_win[own]))
+        dirs = sampled.dirs[own]
         pos = np.asarray(obj.centroid_ned, dtype=float)
         rng_m, az, el = centroid_polar(pos, origin, R_ns)
         in_fov = bool(abs(az) <= 0.5 * g.fov_rad and abs(el) <= 0.5 * g.vertical_beamwidth_rad

@@ -31,11 +31,13 @@ def ray_strength(rays: RayTable, scattering_exponent: float, elevation_beamwidth
 
     ``reflectivity |cos(incidence)|^scattering_exponent`` (Lambert's law at exponent 2) times
     the two-way elevation beam pattern at the ray's elevation, divided by the base elevation
-    step. Returns (N,); 0 where nothing was hit.
+    step, times the ray's share of its column's azimuth strip. Returns (N,); 0 where nothing
+    was hit.
     """
     cos_inc = np.abs(row_dot(rays.dirs, rays.normal))
-    return rays.refl * cos_inc ** scattering_exponent * two_way_beam_power(
+    strength = rays.refl * cos_inc ** scattering_exponent * two_way_beam_power(
         rays.phi, elevation_beamwidth_rad) / elevation_step_rad
+    return strength * rays.weight
 
 
 @dataclass(frozen=True, slots=True)

@@ -59,8 +59,12 @@ class RayTable:
     """Flat table of N cast rays.
 
     Attributes:
-        col: (N,) column index of each ray.
+        col: (N,) column (echo line) of each ray.
+        az: (N,) azimuth of the ray in the sonar frame (rad): its column's, or a sub-column's
+            inside the column's azimuth strip.
         phi: (N,) elevation in the sonar frame (rad, down > 0).
+        weight: (N,) share of its column's azimuth strip the ray's chain stands for (1 for a
+            base ray, ``1 / n`` for one of n sub-columns).
         dirs: (N, 3) unit direction (NED).
         dist: (N,) distance to the first hit (m, ``inf`` where nothing was hit).
         normal: (N, 3) surface normal at the hit (NED).
@@ -69,7 +73,9 @@ class RayTable:
     """
 
     col: NDArray[np.intp]
+    az: FloatArray
     phi: FloatArray
+    weight: FloatArray
     dirs: FloatArray
     dist: FloatArray
     normal: FloatArray
@@ -77,8 +83,9 @@ class RayTable:
     obj: NDArray[np.int64]
 
     @classmethod
-    def from_hits(cls, hits: RayHits, dirs: FloatArray, col: NDArray[np.intp], phi: FloatArray) -> "RayTable":
-        return cls(col, phi, dirs, hits.dist_m, hits.normal_ned, hits.reflectivity, hits.object_id)
+    def from_hits(cls, hits: RayHits, dirs: FloatArray, col: NDArray[np.intp], az: FloatArray, phi: FloatArray,
+                  weight: FloatArray) -> "RayTable":
+        return cls(col, az, phi, weight, dirs, hits.dist_m, hits.normal_ned, hits.reflectivity, hits.object_id)
 
     def take(self, idx: NDArray[np.intp]) -> "RayTable":
         return RayTable(*(getattr(self, f)[idx] for f in self.__slots__))
@@ -123,6 +130,44 @@ class Segments:
     connected: NDArray[np.bool_]
 
 
+def column_neighbours(col: NDArray[np.intp], az: FloatArray, phi: FloatArray
+                      ) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """Pairs of rows that are elevation neighbours on one chain (same column and azimuth).
+
+    Args:
+        col: (N,) column of each ray; az: (N,) its azimuth; phi: (N,) its elevation.
+
+    Returns:
+        ``(a, b)``: row indices with ``phi[a] <= phi[b]``, consecutive on their chain.
+    """
+    order = np.lexsort((phi, az, col))
+    a, b = order[:-1], order[1:]
+    same = (col[a] == col[b]) & (az[a] == az[b])
+    return a[same], b[same]
+
+
+@dataclass(frozen=True, slots=True)
+class StripRays:
+    """Rays that replace some columns by finer sub-columns (:meth:`RayFan.strip_rays`).
+
+    Attributes:
+        columns: (K,) the columns replaced.
+        col, az, phi, weight: (M,) the new rays (see :class:`RayTable`).
+        owner: (M,) object id whose sphere a ray samples, -1 for a ray at a base elevation.
+    """
+
+    columns: NDArray[np.intp]
+    col: NDArray[np.intp]
+    az: FloatArray
+    phi: FloatArray
+    weight: FloatArray
+    owner: NDArray[np.int64]
+
+    @property
+    def empty(self) -> bool:
+        return len(self.col) == 0
+
+
 class RayFan:
     """A sonar's base rays: ``len(column_azimuths_rad)`` columns x ``len(elevations_rad)`` rays.
 
@@ -143,12 +188,15 @@ class RayFan:
         if len(self.elevations_rad) < 2 or not np.all(np.diff(self.elevations_rad) > 0.0):
             raise ValueError("elevations_rad must hold at least two increasing values")
         self.n_cols, self.n_el = len(self.column_azimuths_rad), len(self.elevations_rad)
-        self._col_cos, self._col_sin = np.cos(self.column_azimuths_rad), np.sin(self.column_azimuths_rad)
         self.elevation_step_rad = float(self.elevations_rad[1] - self.elevations_rad[0])
         az, el = np.meshgrid(self.column_azimuths_rad, self.elevations_rad, indexing="ij")
         self.dirs_sonar = ray_directions_sonar(az, el).reshape(-1, 3)  # (n_cols * n_el, 3)
         self.ray_col = np.repeat(np.arange(self.n_cols), self.n_el)
+        self.ray_az = np.repeat(self.column_azimuths_rad, self.n_el)
         self.ray_phi = np.tile(self.elevations_rad, self.n_cols)
+        self._ray_weight = np.ones(self.n_rays)
+        self.column_width_rad = (float(self.column_azimuths_rad[1] - self.column_azimuths_rad[0])
+                                 if self.n_cols > 1 else 0.0)
         e = np.arange(self.n_el - 1)
         self._pair_a = (np.arange(self.n_cols)[:, None] * self.n_el + e[None, :]).ravel()
 
@@ -166,21 +214,118 @@ class RayFan:
         """
         dirs = self.dirs_sonar @ R_ns.T
         hits = caster.cast(origin_ned, dirs, max_range_m)
-        return RayTable.from_hits(hits, dirs, self.ray_col, self.ray_phi), hits
+        return RayTable.from_hits(hits, dirs, self.ray_col, self.ray_az, self.ray_phi, self._ray_weight), hits
+
+    def strip_rays(self, spheres: list[tuple[int, FloatArray, float]], rays_across: int,
+                   max_sub_columns: int = 8) -> StripRays:
+        """Finer rays over spheres that the base rays sample coarsely (small objects between them).
+
+        A sphere (object id, centre (3,) in the sonar frame, radius m) subtending ``2 beta``
+        with ``2 beta < rays_across * max(elevation step, column width)`` is sampled at the
+        spacing ``s = 2 beta / rays_across``: every column whose azimuth strip (its width
+        about its azimuth) overlaps the sphere's azimuth extent is replaced by ``n`` evenly
+        spaced sub-columns (``n = ceil(width / s)``, at most ``max_sub_columns``, the largest
+        over the spheres it meets) of weight ``1 / n``. Each sub-column carries the base
+        elevations plus, where the sub-column's azimuth plane cuts a sphere's cone of directions,
+        that chord's elevations inside the base elevation span at spacing ``s``, cell-centred.
+        A direction ``d(a, phi)`` lies in the cone when ``d . u >= cos(beta)`` (``u`` the unit
+        direction to the centre, ``sin(beta) = radius / distance``); ``d . u = rho cos(phi - psi)``
+        with ``rho = |(cos a u_x + sin a u_y, u_z)|`` and ``psi = atan2(u_z, cos a u_x + sin a u_y)``,
+        so the chord is ``psi +- acos(cos(beta) / rho)``.
+
+        Returns:
+            The replaced columns and the rays of their sub-columns (empty when no sphere needs
+            finer rays, or the sonar is inside a sphere).
+        """
+        el0, el1 = float(self.elevations_rad[0]), float(self.elevations_rad[-1])
+        width = self.column_width_rad
+        coarse = max(self.elevation_step_rad, width)
+        needs: list[tuple[int, FloatArray, float, float]] = []  # (id, u, cos beta, spacing)
+        n_sub: dict[int, int] = {}
+        for oid, centre, radius in spheres:
+            c = np.asarray(centre, dtype=float).reshape(3)
+            dist = float(np.linalg.norm(c))
+            if not dist > radius:
+                continue
+            u = c / dist
+            beta = float(np.arcsin(radius / dist))
+            el_c = float(np.arcsin(np.clip(u[2], -1.0, 1.0)))
+            if 2.0 * beta >= rays_across * coarse or el_c - beta > el1 or el_c + beta < el0:
+                continue
+            spacing = 2.0 * beta / rays_across
+            cos_el = np.cos(el_c)
+            half_az = np.pi if cos_el <= np.sin(beta) else float(np.arcsin(np.sin(beta) / cos_el))
+            az_c = float(np.arctan2(u[1], u[0]))
+            lo_gap = np.abs(np.angle(np.exp(1j * (self.column_azimuths_rad - az_c))))
+            cols = np.flatnonzero(lo_gap <= half_az + 0.5 * width)
+            if cols.size == 0:
+                continue
+            n = int(min(max(np.ceil(width / spacing), 1), max_sub_columns))
+            for c_i in cols.tolist():
+                n_sub[c_i] = max(n_sub.get(c_i, 1), n)
+            needs.append((int(oid), u, float(np.cos(beta)), spacing))
+        if not needs:
+            z = np.zeros(0)
+            return StripRays(np.zeros(0, dtype=np.intp), z.astype(np.intp), z, z, z, z.astype(np.int64))
+        columns = np.array(sorted(n_sub), dtype=np.intp)
+        counts = np.array([n_sub[c] for c in columns.tolist()])
+        sub_col = np.repeat(columns, counts)
+        starts = np.repeat(np.cumsum(counts) - counts, counts)
+        j = np.arange(len(sub_col)) - starts
+        n_of = np.repeat(counts, counts)
+        sub_az = self.column_azimuths_rad[sub_col] + ((j + 0.5) / n_of - 0.5) * width
+        sub_w = 1.0 / n_of
+        # every sub-column carries the base elevations
+        col = [np.repeat(sub_col, self.n_el)]
+        az = [np.repeat(sub_az, self.n_el)]
+        phi = [np.tile(self.elevations_rad, len(sub_col))]
+        weight = [np.repeat(sub_w, self.n_el)]
+        owner = [np.full(len(sub_col) * self.n_el, -1, dtype=np.int64)]
+        ca, sa = np.cos(sub_az), np.sin(sub_az)
+        for oid, u, cos_beta, spacing in needs:
+            A = ca * u[0] + sa * u[1]
+            rho = np.hypot(A, u[2])
+            cut = np.flatnonzero(rho > cos_beta)
+            psi = np.arctan2(u[2], A[cut])
+            delta = np.arccos(cos_beta / rho[cut])
+            lo = np.maximum(psi - delta, el0)
+            hi = np.minimum(psi + delta, el1)
+            ok = hi > lo
+            cut, lo, hi = cut[ok], lo[ok], hi[ok]
+            n = np.maximum(np.ceil((hi - lo) / spacing), 1).astype(np.intp)
+            first = np.repeat(np.cumsum(n) - n, n)
+            k = np.arange(int(n.sum())) - first
+            nn = np.repeat(n, n)
+            col.append(np.repeat(sub_col[cut], n))
+            az.append(np.repeat(sub_az[cut], n))
+            phi.append(np.repeat(lo, n) + np.repeat(hi - lo, n) * (k + 0.5) / nn)
+            weight.append(np.repeat(sub_w[cut], n))
+            owner.append(np.full(int(n.sum()), oid, dtype=np.int64))
+        return StripRays(columns, np.concatenate(col), np.concatenate(az), np.concatenate(phi),
+                         np.concatenate(weight), np.concatenate(owner))
+
+    def cast_rays(self, caster: RayCaster, origin_ned: FloatArray, R_ns: FloatArray, col: NDArray[np.intp],
+                  az: FloatArray, phi: FloatArray, weight: FloatArray, max_range_m: float) -> RayTable:
+        """Cast rays (M,) of columns ``col`` at azimuths ``az`` and elevations ``phi`` (rad)."""
+        v = ray_directions_sonar(az, phi) @ R_ns.T
+        return RayTable.from_hits(caster.cast(origin_ned, v, max_range_m), v, col, az, phi, weight)
 
     def refine_edges(self, caster: RayCaster, origin_ned: FloatArray, R_ns: FloatArray, rays: RayTable,
-                     max_range_m: float, window_far_m: float, iters: int) -> tuple[RayTable, Segments]:
-        """Split the base elevation intervals at surface edges.
+                     max_range_m: float, window_far_m: float, iters: int,
+                     pairs: tuple[NDArray[np.intp], NDArray[np.intp]] | None = None) -> tuple[RayTable, Segments]:
+        """Split elevation intervals at surface edges.
 
-        Intervals whose ends are not on one surface, not both misses, and not both beyond
-        ``window_far_m`` are bisected ``iters`` times (:meth:`bisect`); each becomes three
-        intervals: upper ray -> last point on its surface, that point -> first point past the
-        edge, that point -> lower ray.
+        The intervals are ``pairs`` (rows of ``rays``, upper then lower ray of each; default
+        the base rays' neighbours, for a table holding the base rays only). Intervals whose ends
+        are not on one surface, not both misses, and not both beyond ``window_far_m`` are
+        bisected ``iters`` times (:meth:`bisect`); each becomes three intervals: upper ray ->
+        last point on its surface, that point -> first point past the edge, that point ->
+        lower ray.
 
         Returns:
             The ray table with the refinement rays appended, and the intervals.
         """
-        pa, pb = self._pair_a, self._pair_a + 1
+        pa, pb = (self._pair_a, self._pair_a + 1) if pairs is None else pairs
         same = rays.same_surface(pa, pb)
         both_miss = ~np.isfinite(rays.dist[pa]) & ~np.isfinite(rays.dist[pb])
         near_enough = np.minimum(rays.dist[pa], rays.dist[pb]) <= window_far_m
@@ -218,9 +363,8 @@ class RayFan:
             if act.size == 0:
                 break
             lo_a, hi_a = lo.take(act), hi.take(act)
-            phi = 0.5 * (lo_a.phi + hi_a.phi)
-            v = ray_directions_sonar(self.column_azimuths_rad[lo_a.col], phi) @ R_ns.T
-            mid = RayTable.from_hits(caster.cast(origin_ned, v, max_range_m), v, lo_a.col, phi)
+            mid = self.cast_rays(caster, origin_ned, R_ns, lo_a.col, lo_a.az, 0.5 * (lo_a.phi + hi_a.phi),
+                                 lo_a.weight, max_range_m)
             with_lo = same_surface(lo_a.dist, lo_a.normal, lo_a.obj, lo_a.dirs, mid.dist, mid.normal, mid.obj,
                                    mid.dirs)
             with_lo |= ~np.isfinite(lo_a.dist) & ~np.isfinite(mid.dist)
@@ -239,8 +383,7 @@ class RayFan:
         n_s = rays.normal @ R_ns  # normals in the sonar frame
         sp = np.sin(rays.phi)
         # d(dir)/dphi = [-cos a sin phi, -sin a sin phi, cos phi] in the sonar frame
-        n_dphi = n_s[:, 2] * np.cos(rays.phi) - (n_s[:, 0] * self._col_cos[rays.col]
-                                                 + n_s[:, 1] * self._col_sin[rays.col]) * sp
+        n_dphi = n_s[:, 2] * np.cos(rays.phi) - (n_s[:, 0] * np.cos(rays.az) + n_s[:, 1] * np.sin(rays.az)) * sp
         n_d = row_dot(rays.normal, rays.dirs)
         with np.errstate(divide="ignore", invalid="ignore"):
             slope = -np.where(np.isfinite(rays.dist), rays.dist, 0.0) * n_dphi / n_d

@@ -102,3 +102,35 @@ def test_box_face_is_one_surface_its_edge_is_not():
     same = base.same_surface(np.arange(24), np.arange(1, 25))
     on_face = np.isfinite(base.dist[:-1]) & np.isfinite(base.dist[1:])
     np.testing.assert_array_equal(same, on_face)
+
+
+def test_strip_rays_sample_a_small_sphere_between_base_rays():
+    """A 0.2 m sphere 20 m ahead between two base rays 1.33 deg apart and two columns 0.36 deg
+    apart: the columns its azimuth extent overlaps become sub-columns whose weights sum to one,
+    and about rays_across rays hit it each way."""
+    el = np.linspace(np.deg2rad(-10), np.deg2rad(10), 16)
+    cols = np.deg2rad(np.arange(-5, 6) * 0.36)
+    fan = RayFan(cols, el)
+    mid = 0.5 * (el[8] + el[9])
+    centre = 20.0 * np.array([np.cos(mid) * np.cos(0.003), np.cos(mid) * np.sin(0.003), np.sin(mid)])
+    caster = AnalyticCaster(None, spheres=(AnalyticSphere(centre, 0.1, 5),))
+    base, _ = fan.cast(caster, np.zeros(3), np.eye(3), 50.0)
+    assert not (base.obj == 5).any()  # the base rays miss it
+    strips = fan.strip_rays([(5, centre, 0.1)], 8)
+    beta = np.arcsin(0.1 / 20.0)
+    az_c = np.arctan2(centre[1], centre[0])
+    overlap = np.abs(cols - az_c) <= np.arcsin(np.sin(beta) / np.cos(mid)) + 0.5 * fan.column_width_rad
+    np.testing.assert_array_equal(strips.columns, np.flatnonzero(overlap))
+    for c in strips.columns:
+        on = strips.col == c
+        subs, first = np.unique(strips.az[on], return_index=True)
+        assert strips.weight[on][first].sum() == pytest.approx(1.0)
+        assert np.all(np.abs(subs - cols[c]) <= 0.5 * fan.column_width_rad)
+    rays = fan.cast_rays(caster, np.zeros(3), np.eye(3), strips.col, strips.az, strips.phi, strips.weight, 50.0)
+    hit = rays.obj == 5
+    assert hit.any() and np.all(strips.owner[hit] == 5)
+    n_sub_across = len(np.unique(rays.az[hit]))
+    n_el_across = np.bincount(np.unique(rays.az[hit], return_inverse=True)[1]).max()
+    assert 6 <= n_sub_across <= 10 and 6 <= n_el_across <= 10
+    # a sphere the base rays already sample densely needs none
+    assert fan.strip_rays([(6, np.array([5.0, 0.0, 0.0]), 1.0)], 8).empty
