@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -28,15 +28,6 @@ def test_point_target_two_way_loss(range_m, alpha_db_per_m, two_way_tl_db):
     assert 10 * np.log10(tvg_gain(range_m, 40.0, alpha_db_per_m)) == pytest.approx(two_way_tl_db, abs=1e-9)
 
 
-@dataclass(frozen=True)
-class _Obj:
-    id: int
-    name: str
-    class_name: str
-    is_target: bool
-    centroid_ned: np.ndarray
-
-
 @pytest.mark.parametrize("alpha_db_per_m", [0.0, 0.25])
 def test_sphere_echo_falls_with_range_as_the_sonar_equation(alpha_db_per_m):
     """A sphere's echo level (target strength fixed) falls 40 log10(r2 / r1) + 2 alpha (r2 - r1)
@@ -47,7 +38,7 @@ def test_sphere_echo_falls_with_range_as_the_sonar_equation(alpha_db_per_m):
     for r in (6.0, 12.0):
         c = np.array([r, 0.0, 0.0])
         caster = AnalyticCaster(None, spheres=(AnalyticSphere(c, 0.3, 0),))
-        out = s.render(0.0, np.zeros(3), np.eye(3), caster, [_Obj(0, "s", "opi", True, c)], noise=False)
+        out = s.render(0.0, np.zeros(3), np.eye(3), caster, [SimpleNamespace(id=0, name="s", class_name="opi", is_target=True, centroid_ned=c)], noise=False)
         level.append(10 * np.log10(out.mean_intensity.astype(float).sum()))
     want = 40 * np.log10(2.0) + 2 * alpha_db_per_m * 6.0
     assert level[0] - level[1] == pytest.approx(want, abs=0.3)
