@@ -36,6 +36,8 @@ class Seabed:
         return self.depth_grid_m is not None
 
     def _plane_depth(self, n_m: NDArray, e_m: NDArray) -> NDArray:
+        """Depth of the mean surface: ``depth_m`` at ``center_ne_m``, falling by ``tan(slope)`` per
+        metre along ``slope_azimuth_deg`` (downhill) for a slope."""
         c = self.cfg
         if c.kind != "slope":
             return np.full(np.broadcast(n_m, e_m).shape, c.depth_m)

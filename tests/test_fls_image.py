@@ -1,4 +1,4 @@
-"""FLS image formation pieces against numerical oracles, speckle statistics, presets and config."""
+"""FLS assembly: speckle statistics on a rendered seabed, presets, config and ray columns."""
 
 from __future__ import annotations
 
@@ -7,76 +7,10 @@ import pytest
 from pydantic import ValidationError
 from scipy import integrate, stats
 
-from autonomy.sonar_geometry import FanGeometry
 from scenarios.config.fls import FlsConfig
 from sim.sensors.analytic_caster import AnalyticCaster
 from sim.sensors.fls import FlsSensor
-from sim.sensors.fls_image import (
-    FanRemap,
-    azimuth_kernel,
-    spread_segments,
-    to_uint8_db,
-    tvg_gain,
-    two_way_beam_power,
-)
 from sim.sensors.fls_presets import resolve_geometry
-
-
-def test_spread_segments_matches_integration(rng):
-    n_rows, n_bins = 3, 40
-    row = rng.integers(0, n_rows, 200)
-    ua = rng.uniform(-5, 45, 200)
-    ub = ua + rng.exponential(4.0, 200) * rng.choice([-1, 1], 200)
-    ub[:20] = ua[:20]  # points
-    e = rng.uniform(0.1, 2.0, 200)
-    got = spread_segments(n_rows, n_bins, row, ua, ub, e)
-    want = np.zeros((n_rows, n_bins))
-    for r, a, b, w in zip(row, ua, ub, e):
-        lo, hi = min(a, b), max(a, b)
-        if hi - lo < 1e-9:
-            if 0 <= np.floor(lo) < n_bins:
-                want[r, int(np.floor(lo))] += w
-            continue
-        for k in range(n_bins):
-            overlap = max(0.0, min(hi, k + 1) - max(lo, k))
-            want[r, k] += w * overlap / (hi - lo)
-    assert np.allclose(got, want, atol=1e-9)
-
-
-def test_beam_pattern_half_power_and_side_lobe():
-    bw = np.deg2rad(1.0)
-    assert 10 * np.log10(two_way_beam_power(bw / 2, bw)) == pytest.approx(-6.02, abs=0.02)
-    x = np.linspace(0.6 * bw, 3 * bw, 5001)
-    p = two_way_beam_power(x, bw)
-    # first side lobe of a uniform aperture: -13.26 dB one way, doubled two way
-    interior = (p[1:-1] > p[:-2]) & (p[1:-1] > p[2:])
-    assert 10 * np.log10(p[1:-1][interior][0]) == pytest.approx(-26.5, abs=0.1)
-    k = azimuth_kernel(np.deg2rad(0.18), bw, 3.0)
-    assert k.sum() == pytest.approx(1.0) and np.argmax(k) == len(k) // 2 and np.allclose(k, k[::-1])
-
-
-def test_fan_remap_puts_a_cell_at_its_polar_position():
-    fan = FanGeometry.fit(400, 300, 1.0, 20.0, np.deg2rad(90))
-    az = np.deg2rad(-45) + (np.arange(100) + 0.5) * np.deg2rad(0.9)
-    remap = FanRemap(fan, az, 1.0, 0.1, 190)
-    polar = np.zeros((100, 190), np.uint8)
-    polar[70, 120] = 255
-    x, y = fan.polar_to_pixel(1.0 + 120.5 * 0.1, az[70])
-    img = remap.image(polar)
-    ys, xs = np.nonzero(img)
-    assert np.hypot(np.average(xs, weights=img[ys, xs]) - x, np.average(ys, weights=img[ys, xs]) - y) < 1.0
-    labels = remap.labels(polar.astype(np.int16) // 255 * 5 - 1, fill=-1)
-    assert set(np.unique(labels).tolist()) <= {-1, 4}
-    assert remap.image(np.full((100, 190), 9, np.uint8))[0, 0] == 0  # outside the fan
-
-
-def test_tvg_and_display_mapping():
-    r = np.array([1.0, 10.0, 100.0])
-    assert 10 * np.log10(tvg_gain(r, 20.0, 0.0)) == pytest.approx([0.0, 20.0, 40.0])
-    assert 10 * np.log10(tvg_gain(r, 0.0, 0.5)) == pytest.approx(r)  # 2 alpha r
-    img = np.array([[1.0, 1e-5, 1e-2]], np.float32)
-    u8 = to_uint8_db(img, np.ones(3, np.float32), gain_db=0.0, dynamic_range_db=50.0)
-    assert u8.tolist() == [[255, 0, 153]]  # -20 dB of a 50 dB range
 
 
 def flat_seabed_render(speckle: str, seed: int, **kw):

@@ -150,13 +150,6 @@ def test_fls_visibility_predicate():
     np.testing.assert_array_equal(vis(pts), [True, False, False, False])
 
 
-def test_mount_convention_matches_the_fls_renderer():
-    from sim.sensors.fls import mount_rotation
-
-    for rpy in [(0.0, 0.35, 0.0), (0.05, -0.2, 0.3)]:
-        np.testing.assert_allclose(sonar_to_body_rotation(rpy), mount_rotation(rpy), atol=1e-15)
-
-
 def test_batched_points_equal_the_scalar_chain():
     from autonomy.localization.geolocate import relative_points_ned
 

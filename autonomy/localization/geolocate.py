@@ -21,6 +21,7 @@ from autonomy.localization.sonar_projection import (
     sonar_to_body_rotation,
 )
 from autonomy.messages import Detection, NavEstimate
+from autonomy.sonar_frame import mount_euler_zyx, spherical_to_sonar
 from autonomy.sonar_geometry import FanGeometry
 from scenarios.config.world_model import LocalizationConfig
 
@@ -101,8 +102,8 @@ def relative_points_ned(
     r, a = x[:, 0], x[:, 1]
     R_nb = _rotations_zyx(x[:, 3:6])
     k = len(x)
-    # sonar->body: Rz(yaw) Ry(-tilt) Rx(roll), the convention of sonar_to_body_rotation
-    R_bs = _rotations_zyx(np.column_stack([np.full(k, mount_roll_rad), -x[:, 6], np.full(k, mount_yaw_rad)]))
+    R_bs = _rotations_zyx(mount_euler_zyx(np.column_stack([np.full(k, mount_roll_rad), x[:, 6],
+                                                           np.full(k, mount_yaw_rad)])))
     R_ns = R_nb @ R_bs
     lever = R_nb @ np.asarray(mount_pos_body_m, dtype=float)
     if use_seabed:
@@ -112,7 +113,7 @@ def relative_points_ned(
         phi = np.arcsin(np.clip(sonar_alt / (r * np.hypot(A, B)), -1.0, 1.0)) - np.arctan2(A, B)
     else:
         phi = np.zeros(k)
-    p_s = np.stack([r * np.cos(a) * np.cos(phi), r * np.sin(a) * np.cos(phi), r * np.sin(phi)], axis=-1)
+    p_s = spherical_to_sonar(r, a, phi)
     return lever + np.einsum("kij,kj->ki", R_ns, p_s)
 
 

@@ -1,14 +1,10 @@
 """FLS polar measurements -> points in the sonar, body and NED frames (paper 000, eqs. 3-6).
 
-Sonar frame: x along the boresight, y starboard, z down. A point at range ``r``, azimuth
-``a`` (starboard > 0) and elevation ``phi`` (down > 0) is ``r [cos a cos phi, sin a cos phi,
-sin phi]``. The image keeps (r, a) only: eq. 4 takes ``phi = 0``; eqs. 5-6 recover ``phi``
-from the altitude ``h`` assuming a flat seabed, ``r sin(gamma + phi) = h`` for a sonar tilted
-down by ``gamma`` on a level vehicle looking straight ahead. :func:`flat_seabed_elevation`
+The sonar frame, its mount rotation and the spherical <-> Cartesian mapping are those of
+:mod:`autonomy.sonar_frame` (re-exported here). The image keeps (r, a) only: eq. 4 takes
+``phi = 0``; eqs. 5-6 recover ``phi`` from the altitude ``h`` assuming a flat seabed,
+``r sin(gamma + phi) = h`` for a sonar tilted down by ``gamma`` on a level vehicle looking straight ahead. :func:`flat_seabed_elevation`
 solves the same condition for any azimuth and attitude (it reduces to eq. 5 at ``a = 0``).
-
-Mount convention: ``mount_rpy_rad = (roll, tilt, yaw)`` of the sonar w.r.t. the body with the
-tilt positive *down*, so the boresight in body FRD is ``[cos tilt, 0, sin tilt]``.
 """
 
 from __future__ import annotations
@@ -16,31 +12,19 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from autonomy.frames import rot_x, rot_y, rot_z
+from autonomy.sonar_frame import sonar_to_body_rotation, sonar_to_spherical, spherical_to_sonar
 
 FloatArray = NDArray[np.float64]
 
-
-def sonar_to_body_rotation(mount_rpy_rad: ArrayLike) -> FloatArray:
-    """Sonar->body rotation ``R_bs`` (3, 3) from (roll, tilt down > 0, yaw) in radians."""
-    roll, tilt, yaw = np.asarray(mount_rpy_rad, dtype=float)
-    return rot_z(yaw) @ rot_y(-tilt) @ rot_x(roll)
-
-
-def spherical_to_sonar(range_m: ArrayLike, azimuth_rad: ArrayLike, elevation_rad: ArrayLike) -> FloatArray:
-    """Eqs. 3/6: (r, a, phi) -> sonar-frame points, shape (..., 3), metres."""
-    r = np.asarray(range_m, dtype=float)
-    a = np.asarray(azimuth_rad, dtype=float)
-    e = np.asarray(elevation_rad, dtype=float)
-    ce = np.cos(e)
-    return np.stack(np.broadcast_arrays(r * np.cos(a) * ce, r * np.sin(a) * ce, r * np.sin(e)), axis=-1)
-
-
-def sonar_to_spherical(p_sonar: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """Inverse of :func:`spherical_to_sonar`: points (..., 3) -> (range, azimuth, elevation)."""
-    p = np.asarray(p_sonar, dtype=float)
-    x, y, z = p[..., 0], p[..., 1], p[..., 2]
-    return np.sqrt(x * x + y * y + z * z), np.arctan2(y, x), np.arctan2(z, np.hypot(x, y))
+__all__ = [
+    "flat_seabed_elevation",
+    "flat_seabed_point_sonar",
+    "planar_point_sonar",
+    "sonar_to_body_rotation",
+    "sonar_to_spherical",
+    "spherical_to_sonar",
+    "tilt_level_flat_seabed_elevation",
+]
 
 
 def planar_point_sonar(range_m: ArrayLike, azimuth_rad: ArrayLike) -> FloatArray:

@@ -14,7 +14,9 @@ class SeabedConfig(StrictModel):
     are trimesh triangle meshes (never height fields: their ray casts are ~10x slower)."""
 
     kind: Literal["plane", "slope", "rough", "ripple"] = "plane"
-    depth_m: PositiveFloat = Field(4.0, le=11000.0, description="depth at the NED origin")
+    depth_m: PositiveFloat = Field(
+        4.0, le=11000.0, description="depth (m) of the mean seabed surface at center_ne_m, the patch centre "
+        "(a slope passes through it; elsewhere the depth follows the slope)")
     slope_deg: float = Field(0.0, ge=0.0, lt=45.0)
     slope_azimuth_deg: float = Field(0.0, ge=-360.0, le=360.0, description="downhill direction")
     roughness_m: NonNegFloat = Field(0.05, le=5.0, description="rms height of rough seabed")
@@ -23,7 +25,7 @@ class SeabedConfig(StrictModel):
     ripple_wavelength_m: PositiveFloat = 1.0
     ripple_azimuth_deg: float = Field(0.0, ge=-360.0, le=360.0)
     extent_m: PositiveFloat = Field(120.0, le=5000.0, description="side of the square patch")
-    center_ne_m: Vec2 = (0.0, 0.0)
+    center_ne_m: Vec2 = Field((0.0, 0.0), description="north/east centre (m) of the patch, where the depth is depth_m")
     mesh_resolution_m: PositiveFloat = Field(0.5, ge=0.05, le=10.0)
     reflectivity: Probability = 0.3
 

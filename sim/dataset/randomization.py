@@ -1,4 +1,5 @@
-"""Domain-randomisation ranges and the sampling of one dataset scene (pure numpy)."""
+"""Domain-randomisation ranges and the sampling of one dataset scene (numpy; object meshes
+from :mod:`sim.target_meshes` to rest each object on the seabed)."""
 
 from __future__ import annotations
 
@@ -8,8 +9,10 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import Field, model_validator
 
+from autonomy.frames import rot_from_euler
 from scenarios.config.base import StrictModel
 from scenarios.config.world import BasinConfig, SeabedConfig, TargetConfig
+from sim.target_meshes import target_mesh
 
 Range = tuple[float, float]
 TARGET_CLASS = "opi"
@@ -183,11 +186,29 @@ def _object(rng: np.random.Generator, name: str, pos_ne: np.ndarray, seabed_dept
     burial = 0.0
     if rng.random() < rz.burial_probability:
         burial = _u(rng, rz.burial_fraction) * height
-    z = float(seabed_depth(pos_ne[0], pos_ne[1])) + burial
-    if shape == "cylinder" and not is_target:
-        z += kw["radius_m"]  # the base centre of a lying cylinder sits one radius above the bed
-    return TargetConfig(name=name, shape=shape, pos_ned=(float(pos_ne[0]), float(pos_ne[1]), z),
-                        rpy_deg=rpy, reflectivity=refl, **kw)
+    at_origin = TargetConfig(name=name, shape=shape, pos_ned=(float(pos_ne[0]), float(pos_ne[1]), 0.0),
+                             rpy_deg=rpy, reflectivity=refl, **kw)
+    z = resting_depth(at_origin, seabed_depth) + burial
+    return TargetConfig(**{**at_origin.model_dump(), "pos_ned": (float(pos_ne[0]), float(pos_ne[1]), z)})
+
+
+def resting_depth(target: TargetConfig, seabed_depth) -> float:
+    """Base depth (NED z, m) at which ``target``, posed at its north/east and attitude, rests on
+    the seabed: its mesh touches the bed and nowhere goes below it.
+
+    Args:
+        target: the object (its ``pos_ned`` depth is ignored).
+        seabed_depth: ``depth(n_m, e_m) -> z`` of the seabed, vectorised.
+
+    Returns:
+        ``min over mesh vertices v of (seabed depth under v - v_z)`` for the object posed with its
+        base at depth 0: a lying cylinder's axis ends up one radius above a flat bed, a tilted
+        rock's lowest corner on it.
+    """
+    R = rot_from_euler(*np.deg2rad(target.rpy_deg))
+    v = target_mesh(target).vertices @ R.T
+    v[:, :2] += np.asarray(target.pos_ned[:2], dtype=float)
+    return float(np.min(np.asarray(seabed_depth(v[:, 0], v[:, 1]), dtype=float) - v[:, 2]))
 
 
 def sample_scene(index: int, rng: np.random.Generator, rz: Randomization, seabed_depth_fn) -> SceneSpec:

@@ -1,117 +1,51 @@
-"""Forward-looking sonar (FLS) sensor: ray sampling, image formation and exact ground truth.
+"""Forward-looking sonar (FLS): the sonar parts of :mod:`sim.sensors.sonar` assembled into a fan.
 
-Rays: ``azimuth_columns`` x ``elevation_rays`` directions, fixed in the sonar frame
-(x boresight, y starboard, z down; azimuth a positive to starboard, elevation phi positive
-down: ``[cos a cos phi, sin a cos phi, sin phi]``), rotated into NED with one matmul per
-frame. Where two neighbouring rays of a column do not lie on one continuous surface
-(a silhouette, a shadow edge) the edge is located by bisection (``edge_refine_iters``
-extra casts of one ray per edge), so shadows and object outlines are sharp with few rays.
-Intensities come from :mod:`sim.sensors.fls_image`.
-
-Ground truth comes from the same rays: a polar/fan instance mask (object id where an
-object's returns land, -1 elsewhere) and per object its box, visible fraction, and the
-true polar position of its centroid. The visible fraction of object k is
-``(base rays whose first hit is k) / (base rays that hit k when k is cast alone)``; the
-second count re-casts, against k's geoms alone, only the base rays inside k's bounding cone
-whose first hit is not k (those that hit k hit it alone at the same range)
-(:meth:`sim.sensors.raycast.IsolatingRayCaster.cast_isolated`), so it is exact for the
-ray grid and cheap (hundreds of rays per object in view; none when k is not hit).
+Rays: ``azimuth_columns`` x ``elevation_rays`` directions, fixed in the sonar frame of
+:mod:`autonomy.sonar_frame`, rotated into NED with one matmul per frame; surface edges are
+located by bisection (``edge_refine_iters`` extra casts of one ray per edge)
+(:mod:`sim.sensors.sonar.ray_fan`). Objects the base rays sample coarsely (a small sphere
+between two elevation rays) are sampled by finer sub-columns over their bounding spheres, so
+each echoes, is labelled and has its nearest range resolved. Each column becomes an echo line
+(:mod:`sim.sensors.sonar.echo_lines`), the lines pass the echo chain (spreading, absorption,
+azimuth beam pattern, speckle, noise, TVG, gain; :mod:`sim.sensors.sonar.echo_chain`) and are
+resampled into the fan image. Ground truth comes from the same rays
+(:mod:`sim.sensors.sonar.ground_truth`): a polar/fan instance mask and, per object, its box,
+visible fraction and the true polar position of its centroid.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
-from functools import cached_property
-from typing import Protocol
+from dataclasses import dataclass
 
 import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from autonomy.frames import rot_from_euler
 from autonomy.guidance.lawnmower import fls_swath_width_m
 from autonomy.messages import FlsFrame
+from autonomy.sonar_frame import sonar_to_body_rotation
 from autonomy.sonar_geometry import FanGeometry
 from scenarios.config.fls import FlsConfig
-from sim.sensors.fls_image import (
-    FanRemap,
-    add_speckle_and_noise,
-    apply_azimuth_pattern,
-    azimuth_kernel,
-    spread_segments,
-    to_uint8_db,
-    transmission_gain,
-    tvg_gain,
-    two_way_beam_power,
-)
 from sim.sensors.fls_presets import FlsGeometry, resolve_geometry
-from sim.sensors.raycast import BACKGROUND_ID, RayCaster, RayHits
+from sim.sensors.raycast import RayCaster
+from sim.sensors.sonar.beam_pattern import azimuth_kernel
+from sim.sensors.sonar.display import FanRemap
+from sim.sensors.sonar.echo_chain import EchoChain
+from sim.sensors.sonar.echo_lines import echo_segments, ray_strength
+from sim.sensors.sonar.ground_truth import (
+    SceneObjectLike,
+    SonarGroundTruth,
+    SonarObjectTruth,
+    centroid_polar,
+    label_bins,
+    visible_fraction,
+)
+from sim.sensors.sonar.ray_fan import RayFan, RayTable, column_neighbours
 from sim.truth import VehicleTruth
 
 FloatArray = NDArray[np.float64]
-SURFACE_CHORD_SIN = 0.75  # max |chord . normal| / |chord| for two hits to count as one surface
-
-
-class SceneObjectLike(Protocol):
-    id: int
-    name: str
-    class_name: str
-    is_target: bool
-    centroid_ned: FloatArray
-
-
-@dataclass(frozen=True, slots=True)
-class FlsObjectTruth:
-    """Ground truth of one scene object in one frame.
-
-    ``bbox_xyxy`` is the fan-image box (px) of the object's returns, widened by half the
-    horizontal beam width and one range bin (the beam pattern spreads returns that far);
-    ``None`` when no return of it reaches the image. ``visible`` = some of its returns are in
-    the image and ``visible_fraction >= min_visible_fraction`` (occluded or out-of-beam
-    objects are listed with ``visible=False``). Range/azimuth/elevation are of the centroid
-    in the sonar frame at capture.
-    """
-
-    id: int
-    name: str
-    class_name: str
-    is_target: bool
-    visible: bool
-    visible_fraction: float
-    n_rays_hit: int
-    in_fov: bool
-    bbox_xyxy: FloatArray | None
-    bbox_polar: tuple[int, int, int, int] | None  # beam0, bin0, beam1, bin1 (inclusive)
-    range_m: float
-    azimuth_rad: float
-    elevation_rad: float
-    pos_ned: FloatArray
-
-
-@dataclass(frozen=True)
-class FlsGroundTruth:
-    """Per-frame truth: instance masks (object id, -1 = no object), objects, sonar pose.
-
-    ``mask_fan`` (height_px, width_px) is remapped from ``mask_polar`` on first access.
-    """
-
-    t_s: float
-    mask_polar: NDArray[np.int16]  # (n_beams, n_bins)
-    objects: tuple[FlsObjectTruth, ...]
-    pos_ned: FloatArray  # (3,) sonar head
-    R_ns: FloatArray  # (3, 3) sonar frame -> NED
-    fan_remap: FanRemap = field(repr=False, compare=False)
-
-    @cached_property
-    def mask_fan(self) -> NDArray[np.int16]:
-        return self.fan_remap.labels(self.mask_polar, fill=BACKGROUND_ID)
-
-    def object(self, object_id: int) -> FlsObjectTruth:
-        for o in self.objects:
-            if o.id == object_id:
-                return o
-        raise KeyError(f"object {object_id} not in this frame's truth")
+OBJECT_RAYS_ACROSS = 8  # rays across an object (each way) where the base rays are sparser
 
 
 @dataclass(frozen=True, slots=True)
@@ -124,38 +58,9 @@ class FlsRender:
     """
 
     frame: FlsFrame
-    truth: FlsGroundTruth
+    truth: SonarGroundTruth
     mean_intensity: NDArray[np.float32]
     intensity: NDArray[np.float32]
-
-
-def sonar_ray_dirs(azimuth_rad: ArrayLike, elevation_rad: ArrayLike) -> FloatArray:
-    """Unit directions in the sonar frame, (..., 3)."""
-    a = np.asarray(azimuth_rad, dtype=float)
-    p = np.asarray(elevation_rad, dtype=float)
-    cp = np.cos(p)
-    return np.stack([np.cos(a) * cp, np.sin(a) * cp, np.sin(p)], axis=-1)
-
-
-def mount_rotation(mount_rpy_rad: ArrayLike) -> FloatArray:
-    """Sonar->body rotation from (roll, tilt, yaw); tilt is a pitch *down* of the boresight."""
-    roll, tilt, yaw = np.asarray(mount_rpy_rad, dtype=float)
-    return rot_from_euler(roll, -tilt, yaw)
-
-
-def _same_surface(d_a, n_a, o_a, v_a, d_b, n_b, o_b, v_b) -> NDArray[np.bool_]:
-    """True where hits a and b lie on one continuous surface: same object, and the chord
-    between them runs along both surface normals' tangent planes (no step/edge between)."""
-    both = np.isfinite(d_a) & np.isfinite(d_b) & (o_a == o_b)
-    chord = np.where(both, d_b, 0.0)[:, None] * v_b
-    chord -= np.where(both, d_a, 0.0)[:, None] * v_a
-    tol = SURFACE_CHORD_SIN * np.sqrt(_rowdot(chord, chord)) + 1e-9
-    return both & (np.abs(_rowdot(chord, n_a)) <= tol) & (np.abs(_rowdot(chord, n_b)) <= tol)
-
-
-def _rowdot(a: FloatArray, b: FloatArray) -> FloatArray:
-    """Row-wise dot products of two (N, 3) arrays."""
-    return np.einsum("ij,ij->i", a, b)
 
 
 class FlsSensor:
@@ -181,35 +86,22 @@ class FlsSensor:
         self.mount_pos_body_m = np.asarray(mount_pos_body_m, dtype=float).reshape(3)
         rpy = (0.0, np.deg2rad(cfg.tilt_deg), 0.0) if mount_rpy_rad is None else mount_rpy_rad
         self.mount_rpy_rad = np.asarray(rpy, dtype=float).reshape(3)
-        self.R_bs = mount_rotation(self.mount_rpy_rad)
+        self.R_bs = sonar_to_body_rotation(self.mount_rpy_rad)
         self.rng = rng if rng is not None else np.random.default_rng(0)
 
         self.n_bins = g.n_bins
-        self._col_az = g.column_azimuths_rad()
-        self._col_cos, self._col_sin = np.cos(self._col_az), np.sin(self._col_az)
-        self._phi = g.elevations_rad()
-        self._n_cols, self._n_el = len(self._col_az), len(self._phi)
-        self._dphi = float(self._phi[1] - self._phi[0])
-        az, el = np.meshgrid(self._col_az, self._phi, indexing="ij")
-        self._dirs_s = sonar_ray_dirs(az, el).reshape(-1, 3)  # (n_cols * n_el, 3), column-major
-        self._ray_col = np.repeat(np.arange(self._n_cols), self._n_el)
-        self._ray_phi = np.tile(self._phi, self._n_cols)
-        e = np.arange(self._n_el - 1)
-        self._pair_a = (np.arange(self._n_cols)[:, None] * self._n_el + e[None, :]).ravel()
-        self._ray_spacing_rad = max(self._dphi, g.fov_rad / self._n_cols)
-
-        bins_m = g.bin_centres_m()
-        # r^-2 undoes the r_a r_b weighting of segment energies (see _form_columns)
-        self._bin_gain = transmission_gain(bins_m, g.absorption_db_per_m) / np.maximum(bins_m, 1e-3) ** 2
-        self._bin_gain32 = self._bin_gain.astype(np.float32)
-        self._tvg = tvg_gain(bins_m, cfg.tvg_spreading_db_per_decade,
-                             g.absorption_db_per_m if cfg.tvg_absorption else 0.0).astype(np.float32)
-        self._kernel = azimuth_kernel(g.fov_rad / self._n_cols, g.beamwidth_az_rad, cfg.side_lobe_extent_beamwidths)
-        self._noise_power = 10.0 ** (0.1 * cfg.noise_floor_db)
+        self.rays = RayFan(g.column_azimuths_rad(), g.elevations_rad())
+        n_cols = self.rays.n_cols
+        self._ray_spacing_rad = max(self.rays.elevation_step_rad, g.fov_rad / n_cols)
+        self.echo = EchoChain(
+            g.bin_centres_m(), g.absorption_db_per_m, cfg.tvg_spreading_db_per_decade,
+            g.absorption_db_per_m if cfg.tvg_absorption else 0.0, cfg.noise_floor_db, cfg.speckle, cfg.k_shape,
+            cfg.gain_db, cfg.dynamic_range_db,
+            azimuth_kernel(g.fov_rad / n_cols, g.beamwidth_az_rad, cfg.side_lobe_extent_beamwidths))
         beam_az = g.beam_azimuths_rad()
-        self._beam_az = beam_az
-        col_step = g.fov_rad / self._n_cols
-        self._beam_col = np.clip(np.round((beam_az - self._col_az[0]) / col_step), 0, self._n_cols - 1).astype(np.intp)
+        col_az = self.rays.column_azimuths_rad
+        col_step = g.fov_rad / n_cols
+        self._beam_col = np.clip(np.round((beam_az - col_az[0]) / col_step), 0, n_cols - 1).astype(np.intp)
         self._bbox_beam_pad = int(np.ceil(0.5 * g.beamwidth_az_rad / g.beam_spacing_rad))
         w, h = g.fan_size_px
         self.fan_geometry = FanGeometry.fit(w, h, g.window_near_m, g.window_far_m, g.fov_rad)
@@ -219,7 +111,7 @@ class FlsSensor:
     @property
     def n_rays(self) -> int:
         """Base rays per frame (edge refinement adds a few per discontinuity)."""
-        return len(self._dirs_s)
+        return self.rays.n_rays
 
     def swath_width_m(self, altitude_m: float) -> float:
         """Across-track width of flat seabed seen at ``altitude_m`` (level vehicle)."""
@@ -245,219 +137,94 @@ class FlsSensor:
             objects: scene objects to report ground truth for.
             noise: draw speckle and receiver noise (False: expected image).
         """
-        g = self.geometry
+        g, cfg = self.geometry, self.cfg
         origin = np.asarray(pos_ned, dtype=float).reshape(3)
         R_ns = np.asarray(R_nb, dtype=float) @ self.R_bs
-        dirs = self._dirs_s @ R_ns.T
-        base = caster.cast(origin, dirs, g.range_max_m)
-        rays = _RayTable.from_hits(base, dirs, self._ray_col, self._ray_phi)
-        n0 = len(dirs)
-
-        # neighbour pairs along elevation; refine the discontinuities that matter
-        pa, pb = self._pair_a, self._pair_a + 1
-        same = rays.same_surface(pa, pb)
-        both_miss = ~np.isfinite(rays.dist[pa]) & ~np.isfinite(rays.dist[pb])
-        near_enough = np.minimum(rays.dist[pa], rays.dist[pb]) <= g.window_far_m
-        refine = ~same & ~both_miss & near_enough
-        if self.cfg.edge_refine_iters > 0 and refine.any():
-            ra, rb = pa[refine], pb[refine]
-            lo, hi = self._bisect(caster, origin, R_ns, rays, ra, rb)
-            rays = rays.concat(lo).concat(hi)
-            n_ref = len(ra)
-            lo_i = n0 + np.arange(n_ref)
-            hi_i = n0 + n_ref + np.arange(n_ref)
-            keep = ~refine
-            seg_a = np.concatenate([pa[keep], ra, lo_i, hi_i])
-            seg_b = np.concatenate([pb[keep], lo_i, hi_i, rb])
-            new = np.concatenate([ra, lo_i, hi_i]), np.concatenate([lo_i, hi_i, rb])
-            conn = np.concatenate([same[keep], rays.same_surface(*new)])
-        else:
-            seg_a, seg_b, conn = pa, pb, same
-
-        polar_cols, mask_cols, extents = self._form_columns(rays, seg_a, seg_b, conn, R_ns)
-        img = np.multiply(polar_cols, self._bin_gain32[None, :], out=polar_cols)
-        img = apply_azimuth_pattern(img, self._kernel)
-        if self._n_cols != g.n_beams:
-            img = cv2.resize(img, (self.n_bins, g.n_beams), interpolation=cv2.INTER_LINEAR)
-            mask = mask_cols[self._beam_col]
-        else:
-            mask = mask_cols
-        mean = img
-        if noise:
-            intensity = add_speckle_and_noise(mean, self.rng, self.cfg.speckle, self._noise_power,
-                                              k_shape=self.cfg.k_shape, clutter=mask < 0)
-        else:
-            intensity = mean + np.float32(self._noise_power)
-        polar_u8 = to_uint8_db(intensity, self._tvg, self.cfg.gain_db, self.cfg.dynamic_range_db)
+        base_rays, _ = self.rays.cast(caster, origin, R_ns, g.range_max_m)
+        sampled, owner, pairs = self._add_object_rays(base_rays, caster, origin, R_ns, objects)
+        rays, segments = self.rays.refine_edges(caster, origin, R_ns, sampled, g.range_max_m, g.window_far_m,
+                                                cfg.edge_refine_iters, pairs)
+        strength = ray_strength(rays, cfg.scattering_exponent, g.vertical_beamwidth_rad,
+                                self.rays.elevation_step_rad)
+        echoes = echo_segments(rays, segments, strength, self.rays.range_slope(rays, R_ns), g.window_near_m,
+                               g.range_resolution_m)
+        n_cols = self.rays.n_cols
+        mean = self.echo.mean_intensity(echoes.lines(n_cols, self.n_bins, dtype=np.float32))
+        mask, extents = label_bins(echoes, n_cols, self.n_bins)
+        if n_cols != g.n_beams:
+            mean = cv2.resize(mean, (self.n_bins, g.n_beams), interpolation=cv2.INTER_LINEAR)
+            mask = mask[self._beam_col]
+        intensity = self.echo.realise(mean, self.rng, noise=noise, clutter=mask < 0)
+        polar_u8 = self.echo.display(intensity)
         fan_u8 = self._remap.image(polar_u8)
 
-        in_win = (base.dist_m >= g.window_near_m) & (base.dist_m <= g.window_far_m) & (base.object_id >= 0)
-        hits_per_obj = np.bincount(base.object_id[in_win], minlength=1 + max((int(o.id) for o in objects), default=0))
-        objs = tuple(self._object_truth(o, origin, R_ns, dirs, base.object_id, int(hits_per_obj[int(o.id)]),
-                                        extents.get(int(o.id)), caster) for o in objects)
+        in_win = (sampled.dist >= g.window_near_m) & (sampled.dist <= g.window_far_m)
+        objs = tuple(self._object_truth(o, origin, R_ns, sampled, owner, in_win, extents.get(int(o.id)), caster)
+                     for o in objects)
         frame = FlsFrame(t_s=float(t_s), polar=polar_u8, fan=fan_u8, geometry=self.fan_geometry,
                          mount_pos_body_m=self.mount_pos_body_m.copy(), mount_rpy_rad=self.mount_rpy_rad.copy())
-        truth = FlsGroundTruth(t_s=float(t_s), mask_polar=mask, objects=objs, pos_ned=origin.copy(), R_ns=R_ns,
-                               fan_remap=self._remap)
+        truth = SonarGroundTruth(t_s=float(t_s), mask_polar=mask, objects=objs, pos_ned=origin.copy(), R_ns=R_ns,
+                                 fan_remap=self._remap)
         return FlsRender(frame=frame, truth=truth, mean_intensity=mean, intensity=intensity)
 
     # -- internals --------------------------------------------------------------------------
-    def _bisect(self, caster: RayCaster, origin: FloatArray, R_ns: FloatArray, rays: "_RayTable",
-                ia: NDArray[np.intp], ib: NDArray[np.intp]) -> tuple["_RayTable", "_RayTable"]:
-        """Shrink each (ia, ib) elevation interval onto the edge between ia's surface and the next.
+    def _add_object_rays(self, base: RayTable, caster: RayCaster, origin: FloatArray, R_ns: FloatArray,
+                         objects: Sequence[SceneObjectLike]
+                         ) -> tuple[RayTable, NDArray[np.int64], tuple[NDArray[np.intp], NDArray[np.intp]] | None]:
+        """Sample objects the base rays sample coarsely with finer sub-columns
+        (:meth:`RayFan.strip_rays` on the caster's bounding sphere of each object in the range
+        window, if the caster offers one), so that an object between two base rays still
+        echoes, is labelled and has its nearest range resolved.
 
-        An interval stops once both its ends lie beyond the range window (as base pairs beyond
-        it are not refined): what is left of it cannot put energy into the image."""
-        lo, hi = rays.take(ia), rays.take(ib)
-        far = self.geometry.window_far_m
-        for _ in range(self.cfg.edge_refine_iters):
-            act = np.flatnonzero(np.minimum(lo.dist, hi.dist) <= far)
-            if act.size == 0:
-                break
-            lo_a, hi_a = lo.take(act), hi.take(act)
-            phi = 0.5 * (lo_a.phi + hi_a.phi)
-            v = sonar_ray_dirs(self._col_az[lo_a.col], phi) @ R_ns.T
-            mid = _RayTable.from_hits(caster.cast(origin, v, self.geometry.range_max_m), v, lo_a.col, phi)
-            with_lo = _same_surface(lo_a.dist, lo_a.normal, lo_a.obj, lo_a.dirs, mid.dist, mid.normal, mid.obj,
-                                    mid.dirs)
-            with_lo |= ~np.isfinite(lo_a.dist) & ~np.isfinite(mid.dist)
-            if act.size == len(lo.dist):
-                lo, hi = lo_a.where(with_lo, mid), mid.where(with_lo, hi_a)
-            else:
-                lo, hi = lo.put(act, lo_a.where(with_lo, mid)), hi.put(act, mid.where(with_lo, hi_a))
-        return lo, hi
-
-    def _range_slope(self, rays: "_RayTable", R_ns: FloatArray) -> FloatArray:
-        """dr/dphi (m/rad) of each hit along its column, from the surface normal."""
-        n_s = rays.normal @ R_ns  # normals in the sonar frame
-        sp = np.sin(rays.phi)
-        # d(dir)/dphi = [-cos a sin phi, -sin a sin phi, cos phi] in the sonar frame
-        n_dphi = n_s[:, 2] * np.cos(rays.phi) - (n_s[:, 0] * self._col_cos[rays.col]
-                                                 + n_s[:, 1] * self._col_sin[rays.col]) * sp
-        n_d = _rowdot(rays.normal, rays.dirs)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            slope = -np.where(np.isfinite(rays.dist), rays.dist, 0.0) * n_dphi / n_d
-        return np.where(np.isfinite(slope), slope, 0.0)
-
-    def _form_columns(self, rays: "_RayTable", seg_a: NDArray[np.intp], seg_b: NDArray[np.intp],
-                      conn: NDArray[np.bool_], R_ns: FloatArray
-                      ) -> tuple[NDArray[np.float32], NDArray[np.int16], dict]:
-        """Bin segment energies into (n_cols, n_bins) float32, label object returns, and give
-        each labelled object's (col0, col1, bin0, bin1) extent. ``conn``: per segment, whether
-        its two rays lie on one surface (:meth:`_RayTable.same_surface`)."""
+        Returns:
+            The base rays followed by the new rays; per row the object whose sphere it samples
+            (-1 for a base ray, -2 for a sub-column ray at a base elevation); and the elevation
+            intervals to form echoes from (``None``: the base rays' own).
+        """
         g = self.geometry
-        cos_inc = np.abs(_rowdot(rays.dirs, rays.normal))
-        strength = rays.refl * cos_inc ** self.cfg.scattering_exponent * two_way_beam_power(
-            rays.phi, g.vertical_beamwidth_rad) / self._dphi  # energy in units of one base ray
-        rr = np.where(np.isfinite(rays.dist), rays.dist, 0.0)
-        dphi = rays.phi[seg_b] - rays.phi[seg_a]
-        a, b, dc = seg_a[conn], seg_b[conn], dphi[conn]
-        e_conn = 0.5 * (strength[a] + strength[b]) * dc
-        # A convex/concave surface between two rays (a sphere's cap, a cylinder) has its range
-        # extremum inside the segment: locate it with a quadratic r(phi) matched to both ranges
-        # and to the slopes dr/dphi = -r (n . d_phi) / (n . d) at the ends, and split there.
-        slope = self._range_slope(rays, R_ns)
-        ra, rb = rr[a], rr[b]
-        sa, sb = slope[a] * dc, slope[b] * dc
-        dd = ra - rb + sb
-        lin = 0.5 * (sa + sb - 2.0 * dd)
-        quad = 0.5 * (rb - ra - sa + dd)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t_ext = -lin / (2.0 * quad)
-        fold = (sa * sb < 0.0) & (t_ext > 0.0) & (t_ext < 1.0)
-        t_ext = np.where(fold, t_ext, 1.0)
-        r_ext = np.where(fold, ra + lin * t_ext + quad * t_ext ** 2, rb)
-        f = np.flatnonzero(fold)
-        # first part a -> extremum (the whole segment where there is no fold), then extremum -> b
-        seg_r0 = np.concatenate([ra, r_ext[f]])
-        seg_r1 = np.concatenate([r_ext, rb[f]])
-        seg_e = np.concatenate([e_conn * t_ext, e_conn[f] * (1.0 - t_ext[f])])
-        seg_row = np.concatenate([rays.col[a], rays.col[a[f]]])
-        seg_obj = np.concatenate([rays.obj[a], rays.obj[a[f]]])
-        # unconnected ends: each ray keeps half its share of the gap, at its own range
-        d = ~conn
-        ends = np.concatenate([seg_a[d], seg_b[d]])
-        end_e = 0.5 * strength[ends] * np.concatenate([dphi[d], dphi[d]])
-        rows = np.concatenate([seg_row, rays.col[ends]])
-        r0 = np.concatenate([seg_r0, rr[ends]])
-        r1 = np.concatenate([seg_r1, rr[ends]])
-        obj = np.concatenate([seg_obj, rays.obj[ends]])
-        # within a segment the density follows r^-2 (what a flat seabed gives, dphi/dr ~ h / r^2):
-        # spread E * r0 * r1 uniformly and let the per-bin gain apply r^-2
-        energy = np.concatenate([seg_e, end_e]) * r0 * r1
-        ua = (r0 - g.window_near_m) / g.range_resolution_m
-        ub = (r1 - g.window_near_m) / g.range_resolution_m
-        ok = (r0 > 0.0) & (r1 > 0.0) & (energy > 0.0)
-        rows, ua, ub, energy, obj = rows[ok], ua[ok], ub[ok], energy[ok], obj[ok]
-        polar = spread_segments(self._n_cols, self.n_bins, rows, ua, ub, energy, dtype=np.float32)
+        n0 = len(base.dist)
+        if not objects or not hasattr(caster, "object_bounding_sphere"):
+            return base, np.full(n0, -1, dtype=np.int64), None
+        spheres = []
+        for o in objects:
+            centre, radius = caster.object_bounding_sphere(int(o.id))
+            v = np.asarray(centre, dtype=float) - origin
+            dist = float(np.linalg.norm(v))
+            if dist - radius <= g.window_far_m and dist + radius >= g.window_near_m:
+                spheres.append((int(o.id), R_ns.T @ v, float(radius)))
+        strips = self.rays.strip_rays(spheres, OBJECT_RAYS_ACROSS)
+        if strips.empty:
+            return base, np.full(n0, -1, dtype=np.int64), None
+        extra = self.rays.cast_rays(caster, origin, R_ns, strips.col, strips.az, strips.phi, strips.weight,
+                                    g.range_max_m)
+        sampled = base.concat(extra)
+        owner = np.concatenate([np.full(n0, -1, dtype=np.int64), np.where(strips.owner < 0, -2, strips.owner)])
+        # the replaced columns' base rays leave the echo chains
+        chain = np.ones(len(sampled.dist), dtype=bool)
+        chain[:n0] = ~np.isin(base.col, strips.columns)
+        rows = np.flatnonzero(chain)
+        a, b = column_neighbours(sampled.col[rows], sampled.az[rows], sampled.phi[rows])
+        return sampled, owner, (rows[a], rows[b])
 
-        mask = np.full((self._n_cols, self.n_bins), BACKGROUND_ID, dtype=np.int16)
-        extents: dict[int, tuple[int, int, int, int]] = {}
-        ids = np.unique(obj[obj >= 0])
-        windows = []
-        for k in ids:
-            sel = obj == k
-            r, ua_k, ub_k = rows[sel], ua[sel], ub[sel]
-            k0 = int(np.clip(np.floor(min(ua_k.min(), ub_k.min())), 0, self.n_bins - 1))
-            k1 = int(np.clip(np.floor(max(ua_k.max(), ub_k.max())), k0, self.n_bins - 1))
-            windows.append((k, sel, int(r.min()), int(r.max()), k0, k1))
-        if windows:
-            # strongest object per bin, over the union of the objects' windows only
-            u_c0, u_k0 = min(w[2] for w in windows), min(w[4] for w in windows)
-            u_c1, u_k1 = max(w[3] for w in windows), max(w[5] for w in windows)
-            best_u = np.zeros((u_c1 - u_c0 + 1, u_k1 - u_k0 + 1))
-            for k, sel, c0, c1, k0, k1 in windows:
-                r, ua_k, ub_k = rows[sel], ua[sel], ub[sel]
-                e_k = spread_segments(c1 - c0 + 1, k1 - k0 + 1, r - c0, ua_k - k0, ub_k - k0, energy[sel])
-                win = best_u[c0 - u_c0:c1 - u_c0 + 1, k0 - u_k0:k1 - u_k0 + 1]
-                take = e_k > np.maximum(win, 1e-6 * e_k.max())  # ignore cumsum round-off
-                if not take.any():
-                    continue
-                win[take] = e_k[take]
-                mask[c0:c1 + 1, k0:k1 + 1][take] = k
-                rows_k = np.flatnonzero(take.any(axis=1))
-                bins_k = np.flatnonzero(take.any(axis=0))
-                extents[int(k)] = (c0 + int(rows_k[0]), c0 + int(rows_k[-1]), k0 + int(bins_k[0]),
-                                   k0 + int(bins_k[-1]))
-        return polar, mask, extents
-
-    def _object_truth(self, obj: SceneObjectLike, origin: FloatArray, R_ns: FloatArray, dirs: FloatArray,
-                      first_obj: NDArray[np.int64], n_hit: int, extent: tuple[int, int, int, int] | None,
-                      caster: RayCaster) -> FlsObjectTruth:
-        """Truth record of ``obj``; ``first_obj`` (n_rays,) first-hit object of each base ray and
-        ``n_hit`` how many of them hit ``obj`` inside the range window."""
+    def _object_truth(self, obj: SceneObjectLike, origin: FloatArray, R_ns: FloatArray, sampled: RayTable,
+                      owner: NDArray[np.int64], in_win: NDArray[np.bool_],
+                      extent: tuple[int, int, int, int] | None, caster: RayCaster) -> SonarObjectTruth:
+        """Truth record of ``obj`` from the sampled rays (``owner``: the object whose sphere each
+        samples, -1 for base rays, -2 for sub-column rays at base elevations; ``in_win``: the hit
+        lies in the range window). The object is counted on the base rays and on the rays of its
+        own sphere only: two even samplings of its cone, whatever other objects were refined."""
         g = self.geometry
         k = int(obj.id)
+        own = (owner < 0) | (owner == k)
+        first_obj = sampled.obj[own]
+        n_hit = int(np.count_nonzero((first_obj == k) & in_win[own]))
+        dirs = sampled.dirs[own]
         pos = np.asarray(obj.centroid_ned, dtype=float)
-        p_s = R_ns.T @ (pos - origin)
-        rng_m = float(np.linalg.norm(p_s))
-        az = float(np.arctan2(p_s[1], p_s[0]))
-        el = float(np.arctan2(p_s[2], np.hypot(p_s[0], p_s[1])))
+        rng_m, az, el = centroid_polar(pos, origin, R_ns)
         in_fov = bool(abs(az) <= 0.5 * g.fov_rad and abs(el) <= 0.5 * g.vertical_beamwidth_rad
                       and g.window_near_m <= rng_m <= g.window_far_m)
-        frac = float("nan")
-        isolating = hasattr(caster, "cast_isolated")
-        if isolating and n_hit == 0:
-            frac = 0.0  # no first hit in the window: 0 whatever the isolated count
-        elif isolating:
-            centre, radius = caster.object_bounding_sphere(k)
-            v = np.asarray(centre, dtype=float) - origin
-            dist_c = float(np.linalg.norm(v))
-            n_alone = 0
-            if dist_c - radius <= g.window_far_m:
-                if dist_c <= radius:
-                    cand = np.ones(len(dirs), dtype=bool)
-                else:
-                    half = np.arcsin(min(1.0, radius / dist_c)) + self._ray_spacing_rad
-                    cand = dirs @ (v / dist_c) >= np.cos(min(half, np.pi))
-                # a ray whose first hit is k hits k alone at the same range: only the others are cast
-                cand &= first_obj != k
-                n_alone = n_hit
-                if cand.any():
-                    d_alone = caster.cast_isolated(origin, dirs[cand], g.range_max_m, k)
-                    n_alone += int(np.count_nonzero((d_alone >= g.window_near_m) & (d_alone <= g.window_far_m)))
-            frac = n_hit / n_alone if n_alone > 0 else 0.0
-            frac = min(frac, 1.0)
+        frac = visible_fraction(caster, k, origin, dirs, first_obj, n_hit, g.window_near_m, g.window_far_m,
+                                g.range_max_m, self._ray_spacing_rad)
         bbox = bbox_polar = None
         if extent is not None:
             c0, c1, k0, k1 = extent
@@ -467,70 +234,10 @@ class FlsSensor:
             b0, b1 = max(beam0 - pb, 0), min(beam1 + pb, g.n_beams - 1)
             k0, k1 = max(k0 - 1, 0), min(k1 + 1, nb - 1)
             bbox_polar = (b0, k0, b1, k1)
-            bbox = self._fan_box(b0, k0, b1, k1)
+            bbox = self._remap.box_px(b0, k0, b1, k1)
         visible = n_hit > 0 and bbox is not None and (
             np.isnan(frac) or frac >= self.cfg.min_visible_fraction)
-        return FlsObjectTruth(
+        return SonarObjectTruth(
             id=k, name=str(obj.name), class_name=str(obj.class_name), is_target=bool(obj.is_target),
             visible=bool(visible), visible_fraction=frac, n_rays_hit=n_hit, in_fov=in_fov, bbox_xyxy=bbox,
             bbox_polar=bbox_polar, range_m=rng_m, azimuth_rad=az, elevation_rad=el, pos_ned=pos.copy())
-
-    def _fan_box(self, b0: int, k0: int, b1: int, k1: int) -> FloatArray:
-        """Fan-image box (px) of the annular sector covering beams b0..b1, bins k0..k1."""
-        g = self.geometry
-        half = 0.5 * g.beam_spacing_rad
-        a0, a1 = self._beam_az[b0] - half, self._beam_az[b1] + half
-        r0 = g.window_near_m + k0 * g.range_resolution_m
-        r1 = g.window_near_m + (k1 + 1) * g.range_resolution_m
-        a = np.linspace(a0, a1, 9)
-        if a0 < 0.0 < a1:
-            a = np.append(a, 0.0)
-        r = np.array([r0, r1])
-        x, y = self.fan_geometry.polar_to_pixel(r[:, None], a[None, :])
-        w, h = self.fan_geometry.width_px, self.fan_geometry.height_px
-        return np.array([np.clip(x.min(), 0, w - 1), np.clip(y.min(), 0, h - 1),
-                         np.clip(x.max(), 0, w - 1), np.clip(y.max(), 0, h - 1)])
-
-
-@dataclass(frozen=True, slots=True)
-class _RayTable:
-    """Flat table of cast rays: column, elevation, direction (NED) and hit."""
-
-    col: NDArray[np.intp]
-    phi: FloatArray
-    dirs: FloatArray
-    dist: FloatArray
-    normal: FloatArray
-    refl: FloatArray
-    obj: NDArray[np.int64]
-
-    @classmethod
-    def from_hits(cls, hits: RayHits, dirs: FloatArray, col: NDArray[np.intp], phi: FloatArray) -> "_RayTable":
-        return cls(col, phi, dirs, hits.dist_m, hits.normal_ned, hits.reflectivity, hits.object_id)
-
-    def take(self, idx: NDArray[np.intp]) -> "_RayTable":
-        return _RayTable(*(getattr(self, f)[idx] for f in self.__slots__))
-
-    def where(self, cond: NDArray[np.bool_], other: "_RayTable") -> "_RayTable":
-        """Row-wise ``other`` where cond, else self."""
-        out = []
-        for f in self.__slots__:
-            a, b = getattr(self, f), getattr(other, f)
-            out.append(np.where(cond[:, None] if a.ndim == 2 else cond, b, a))
-        return _RayTable(*out)
-
-    def put(self, idx: NDArray[np.intp], rows: "_RayTable") -> "_RayTable":
-        """Copy with rows ``idx`` replaced by ``rows``."""
-        out = []
-        for f in self.__slots__:
-            a = getattr(self, f).copy()
-            a[idx] = getattr(rows, f)
-            out.append(a)
-        return _RayTable(*out)
-
-    def concat(self, other: "_RayTable") -> "_RayTable":
-        return _RayTable(*(np.concatenate([getattr(self, f), getattr(other, f)]) for f in self.__slots__))
-
-    def same_surface(self, ia: NDArray[np.intp], ib: NDArray[np.intp]) -> NDArray[np.bool_]:
-        return _same_surface(self.dist[ia], self.normal[ia], self.obj[ia], self.dirs[ia],
-                             self.dist[ib], self.normal[ib], self.obj[ib], self.dirs[ib])

@@ -1,7 +1,7 @@
 """Forward-looking sonar hardware presets and their resolution against a scenario config.
 
-Figures from docs/references.md [BlueViewM900] (paper 000 Table II for the BlueView M900-130, paper 004
-for the ARIS 3000). Values marked "estimate" are ours: horizontal beam widths, ARIS range
+Figures from paper 000 Table II for the BlueView M900-130 and paper 004 for the ARIS 3000
+(``docs/references.md`` [BlueViewM900], [ARIS3000]). Values marked "estimate" are ours: horizontal beam widths, ARIS range
 resolution and absorption at the operating frequency.
 """
 

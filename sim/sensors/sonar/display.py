@@ -1,0 +1,85 @@
+"""What a sonar shows: the dB display mapping of echo lines and, for a fan-shaped sonar, the
+polar -> fan image resampling (pure numpy + OpenCV)."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from autonomy.sonar_geometry import FanGeometry
+
+FloatArray = NDArray[np.float64]
+
+
+def to_uint8_db(intensity: NDArray[np.float32], gain_per_bin: NDArray[np.float32], gain_db: float,
+                dynamic_range_db: float) -> NDArray[np.uint8]:
+    """Display mapping of (n_lines, n_bins) linear intensities with a per-bin gain (n_bins,).
+
+    ``10 log10(I g) + gain_db`` in dB, with [-dynamic_range_db, 0] mapped linearly onto
+    [0, 255], rounded and saturated.
+    """
+    x = np.multiply(intensity, gain_per_bin[None, :], dtype=np.float32)
+    np.maximum(x, np.float32(1e-30), out=x)
+    db = cv2.log(x, dst=x)  # natural log, float32
+    scale = 255.0 * 10.0 / np.log(10.0) / dynamic_range_db
+    offset = 255.0 * (gain_db + dynamic_range_db) / dynamic_range_db
+    # saturating, rounding conversion: round(db * scale + offset) clipped to [0, 255]
+    return cv2.addWeighted(db, scale, db, 0.0, offset, dtype=cv2.CV_8U)
+
+
+class FanRemap:
+    """Precomputed polar -> fan lookup (``cv2.remap``) for one sonar geometry.
+
+    Args:
+        fan: the fan image geometry.
+        beam_azimuths_rad: (n_beams,) beam centres, evenly filling ``fan.fov_rad``.
+        window_near_m, range_resolution_m, n_bins: the polar range axis.
+    """
+
+    def __init__(self, fan: FanGeometry, beam_azimuths_rad: FloatArray, window_near_m: float,
+                 range_resolution_m: float, n_bins: int) -> None:
+        self.fan = fan
+        self.beam_azimuths_rad = np.asarray(beam_azimuths_rad, dtype=float)
+        self.window_near_m = float(window_near_m)
+        self.range_resolution_m = float(range_resolution_m)
+        ys, xs = np.mgrid[0:fan.height_px, 0:fan.width_px].astype(np.float64)
+        r, a = fan.pixel_to_polar(xs, ys)
+        n_beams = len(beam_azimuths_rad)
+        spacing = (beam_azimuths_rad[-1] - beam_azimuths_rad[0]) / max(n_beams - 1, 1)
+        self.beam_spacing_rad = fan.fov_rad / n_beams
+        beam = (a - beam_azimuths_rad[0]) / spacing
+        rbin = (r - window_near_m) / range_resolution_m - 0.5
+        inside = fan.inside(r, a)
+        beam = np.where(inside, np.clip(beam, 0.0, n_beams - 1), -10.0).astype(np.float32)
+        rbin = np.where(inside, np.clip(rbin, 0.0, n_bins - 1), -10.0).astype(np.float32)
+        self.inside = inside
+        self._fixed = cv2.convertMaps(rbin, beam, cv2.CV_16SC2)
+        self._nearest = cv2.convertMaps(rbin, beam, cv2.CV_16SC2, nninterpolation=True)
+
+    def image(self, polar: NDArray) -> NDArray:
+        """Bilinear fan image (height_px, width_px) of a (n_beams, n_bins) polar image; zero
+        outside the fan."""
+        return cv2.remap(polar, self._fixed[0], self._fixed[1], cv2.INTER_LINEAR,
+                         borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+
+    def labels(self, polar_labels: NDArray[np.int16], fill: int) -> NDArray[np.int16]:
+        """Nearest-neighbour fan image of a (n_beams, n_bins) label image; ``fill`` outside the fan."""
+        return cv2.remap(polar_labels, self._nearest[0], None, cv2.INTER_NEAREST,
+                         borderMode=cv2.BORDER_CONSTANT, borderValue=int(fill))
+
+    def box_px(self, beam0: int, bin0: int, beam1: int, bin1: int) -> FloatArray:
+        """Fan-image box ``[x0, y0, x1, y1]`` (px, clipped to the image) of the annular sector
+        covering beams ``beam0..beam1`` and bins ``bin0..bin1`` (inclusive)."""
+        half = 0.5 * self.beam_spacing_rad
+        a0, a1 = self.beam_azimuths_rad[beam0] - half, self.beam_azimuths_rad[beam1] + half
+        r0 = self.window_near_m + bin0 * self.range_resolution_m
+        r1 = self.window_near_m + (bin1 + 1) * self.range_resolution_m
+        a = np.linspace(a0, a1, 9)
+        if a0 < 0.0 < a1:
+            a = np.append(a, 0.0)
+        r = np.array([r0, r1])
+        x, y = self.fan.polar_to_pixel(r[:, None], a[None, :])
+        w, h = self.fan.width_px, self.fan.height_px
+        return np.array([np.clip(x.min(), 0, w - 1), np.clip(y.min(), 0, h - 1),
+                         np.clip(x.max(), 0, w - 1), np.clip(y.max(), 0, h - 1)])

@@ -1,0 +1,80 @@
+"""From binned echo energy to the displayed echo lines: one chain for every sonar.
+
+Per range bin: two-way spreading and absorption (:mod:`sim.sensors.sonar.propagation`); across
+lines: the azimuth beam pattern (:mod:`sim.sensors.sonar.beam_pattern`); then speckle and
+receiver noise (:mod:`sim.sensors.sonar.speckle`), time-varied gain, gain and the dB display
+mapping (:mod:`sim.sensors.sonar.display`). A forward-looking sonar passes its fan of lines, a
+single-beam scanning sonar one line per ping, a side-scan sonar one line per side.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from sim.sensors.sonar.beam_pattern import apply_azimuth_pattern
+from sim.sensors.sonar.display import to_uint8_db
+from sim.sensors.sonar.propagation import transmission_gain, tvg_gain
+from sim.sensors.sonar.speckle import SpeckleKind, add_speckle_and_noise
+
+FloatArray = NDArray[np.float64]
+
+
+class EchoChain:
+    """Propagation, beam pattern, noise and display for echo lines on one range axis.
+
+    Args:
+        bin_centres_m: (n_bins,) slant range of each bin centre (m).
+        absorption_db_per_m: one-way absorption of the water at the sonar's frequency.
+        tvg_db_per_decade: spreading part ``N`` of the time-varied gain.
+        tvg_absorption_db_per_m: absorption the time-varied gain compensates (0: none).
+        noise_floor_db: receiver noise power (dB re unit echo power).
+        speckle: ``"none"``, ``"rayleigh"`` or ``"k"`` (:func:`add_speckle_and_noise`).
+        k_shape: shape of the K-distribution texture.
+        gain_db, dynamic_range_db: display gain and the dB span mapped onto 0..255.
+        azimuth_kernel: (2K + 1,) pattern across lines (:func:`sim.sensors.sonar.beam_pattern.azimuth_kernel`);
+            default a single tap (lines do not overlap).
+
+    Raises:
+        ValueError: if ``bin_centres_m`` is empty or ``dynamic_range_db`` is not positive.
+    """
+
+    def __init__(self, bin_centres_m: ArrayLike, absorption_db_per_m: float, tvg_db_per_decade: float,
+                 tvg_absorption_db_per_m: float, noise_floor_db: float, speckle: SpeckleKind, k_shape: float,
+                 gain_db: float, dynamic_range_db: float,
+                 azimuth_kernel: NDArray[np.float32] | None = None) -> None:
+        bins_m = np.asarray(bin_centres_m, dtype=float).reshape(-1)
+        if bins_m.size == 0 or not dynamic_range_db > 0.0:
+            raise ValueError("need at least one range bin and dynamic_range_db > 0")
+        # r^-2 undoes the r_a r_b weighting of segment energies (sim.sensors.sonar.echo_lines)
+        self.bin_gain = transmission_gain(bins_m, absorption_db_per_m) / np.maximum(bins_m, 1e-3) ** 2
+        self._bin_gain32 = self.bin_gain.astype(np.float32)
+        self.tvg = tvg_gain(bins_m, tvg_db_per_decade, tvg_absorption_db_per_m).astype(np.float32)
+        self.noise_power = 10.0 ** (0.1 * noise_floor_db)
+        self.speckle: SpeckleKind = speckle
+        self.k_shape = float(k_shape)
+        self.gain_db = float(gain_db)
+        self.dynamic_range_db = float(dynamic_range_db)
+        self.azimuth_kernel = np.ones(1, dtype=np.float32) if azimuth_kernel is None else azimuth_kernel
+
+    def mean_intensity(self, energy_lines: NDArray[np.float32]) -> NDArray[np.float32]:
+        """Noise-free received power (n_lines, n_bins) of binned echo energy (n_lines, n_bins).
+
+        Applies the per-bin spreading and absorption in place (``energy_lines`` is consumed),
+        then the azimuth pattern across lines.
+        """
+        img = np.multiply(energy_lines, self._bin_gain32[None, :], out=energy_lines)
+        return apply_azimuth_pattern(img, self.azimuth_kernel)
+
+    def realise(self, mean: NDArray[np.float32], rng: np.random.Generator, *, noise: bool = True,
+                clutter: NDArray[np.bool_] | None = None) -> NDArray[np.float32]:
+        """Received intensity (n_lines, n_bins): speckle and receiver noise drawn from ``rng``,
+        the K texture only where ``clutter``; ``noise=False`` gives ``mean + noise power``."""
+        if noise:
+            return add_speckle_and_noise(mean, rng, self.speckle, self.noise_power, k_shape=self.k_shape,
+                                         clutter=clutter)
+        return mean + np.float32(self.noise_power)
+
+    def display(self, intensity: NDArray[np.float32]) -> NDArray[np.uint8]:
+        """8-bit echo lines: time-varied gain, gain and the dB display mapping."""
+        return to_uint8_db(intensity, self.tvg, self.gain_db, self.dynamic_range_db)
