@@ -18,7 +18,7 @@ from sim.sensors.dvl import DvlSensor
 from sim.sensors.gps import GpsSensor
 from sim.sensors.imu import GRAVITY_MPS2, ImuSensor
 from sim.sensors.nav_suite import build_nav_sensors
-from test_nav_kinematics import PlaneCaster, flat_seabed, static_truth, wiggle_truth
+from tests.test_nav_kinematics import PlaneCaster, flat_seabed, static_truth, wiggle_truth
 
 RNG = np.random.default_rng
 MOUNT = np.array([0.3, -0.1, 0.2])
