@@ -31,7 +31,9 @@ from sim.envs.coverage import CoverageGrid
 from sim.envs.scenario_arg import resolve_scenario
 from sim.envs.world_model_obs import anchor_bounds, anchor_table, match_new_targets
 from sim.mission import Mission
-from sim.records import FlsEvent
+from sim.records import MissionInfo, MissionSummary
+from sim.sensors.base import Mount
+from sim.sensors.fls import FlsRender
 from sim.sensors.fls_presets import resolve_geometry
 
 NAV_FEATURES = ("n_m", "e_m", "depth_m", "altitude_m", "altitude_valid", "roll_rad", "pitch_rad", "sin_yaw",
@@ -132,21 +134,23 @@ def _options(options: SurveyEnvOptions | dict | None) -> SurveyEnvOptions:
 
 
 class _LatestFls:
-    """Mission observer keeping the latest FLS fan image."""
+    """Mission observer keeping the latest fan image of the sonar named ``name``."""
 
-    def __init__(self) -> None:
+    def __init__(self, name: str = "fls") -> None:
+        self.name = name
         self.fan: np.ndarray | None = None
 
-    def on_start(self, mission: Mission) -> None:
+    def on_start(self, info: MissionInfo) -> None:
         self.fan = None
 
     def on_step(self, record) -> None:
         pass
 
-    def on_fls(self, event: FlsEvent) -> None:
-        self.fan = event.render.frame.fan
+    def on_message(self, name: str, msg: Any) -> None:
+        if name == self.name and isinstance(msg, FlsRender):
+            self.fan = msg.frame.fan
 
-    def on_end(self, mission: Mission) -> None:
+    def on_end(self, summary: MissionSummary) -> None:
         pass
 
 
@@ -189,9 +193,10 @@ class SurveyEnv(gym.Env):
 
         fls_cfg = scn.sensors.fls
         g = resolve_geometry(fls_cfg)
+        mount = Mount.from_config("fls", fls_cfg, self.mission.physics.site_pos_body)
         self.coverage = CoverageGrid(self.area, opts.coverage_shape, self.mission.world.seabed.depth_at,
-                                     self.mission.world.site_pos_body(fls_cfg.mount_site),
-                                     (0.0, math.radians(fls_cfg.tilt_deg), 0.0), range_min_m=g.window_near_m,
+                                     mount.pos_body_m, (mount.rpy_rad[0], math.radians(fls_cfg.tilt_deg),
+                                                        mount.rpy_rad[2]), range_min_m=g.window_near_m,
                                      range_max_m=g.window_far_m, fov_rad=g.fov_rad,
                                      vertical_fov_rad=g.vertical_beamwidth_rad)
         self.targets_ned = np.array([t.pos_ned for t in scn.world.targets if t.is_target], dtype=float).reshape(-1, 3)
@@ -242,7 +247,7 @@ class SurveyEnv(gym.Env):
             rec = m.step(Setpoint(float(speed), self._heading_sp_rad, altitude_m=float(altitude)))
             effort += float(np.mean(np.square(rec.thruster_cmd))) * dt
             n_new_cells += self.coverage.observe(rec.nav.pos_ned, rec.nav.rpy_rad)
-            if m.data.ncon and self._vehicle_contact():
+            if m.physics.data.ncon and m.physics.vehicle_in_contact():
                 collided = True
         self._nav = rec.nav
         self._n_steps += 1
@@ -269,16 +274,6 @@ class SurveyEnv(gym.Env):
         info = self._info(collided, left, n_new_targets)
         info.update(energy=effort, complete=complete)
         return self._observation(), float(reward), terminated, truncated, info
-
-    def _vehicle_contact(self) -> bool:
-        m = self.mission
-        body = m.model.geom_bodyid
-        vb = m.world.vehicle_body_id
-        for i in range(m.data.ncon):
-            c = m.data.contact[i]
-            if body[c.geom1] == vb or body[c.geom2] == vb:
-                return True
-        return False
 
     # ------------------------------------------------------------------ observation
     def _observation(self) -> dict[str, np.ndarray]:
