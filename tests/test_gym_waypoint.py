@@ -1,4 +1,4 @@
-"""auvsim/Waypoint-v0: gymnasium API, determinism, spaces, physics-rate fidelity, vector envs."""
+"""auvsim/Waypoint-v1: gymnasium API, determinism, spaces, physics-rate fidelity, vector envs."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""``auvsim/Waypoint-v0``: reach a sequence of 3-D waypoints under a random current.
+"""``auvsim/Waypoint-v1``: reach a sequence of 3-D waypoints under a random current.
 
 A light loop without sonar, sensors or navigation filter, for fast RL baselines: MuJoCo
 physics with the Fossen wrench (:class:`sim.vehicle.VehicleDynamics`) and thruster

@@ -30,7 +30,8 @@ def test_entries_are_typed_by_kind_and_may_be_added_or_removed():
     assert isinstance(table.first_of_kind("dvl"), DvlConfig) and table.first_of_kind("fls") is table.sonar_port
     two = SensorsConfig({"fls_b": {"kind": "fls"}})
     assert [c.kind for c in two.enabled().values()].count("fls") == 2
-    assert "fls" not in SensorsConfig({"fls": None}) and "fls" not in SensorsConfig({"fls": {"enabled": False}}).enabled()
+    assert "fls" not in SensorsConfig({"fls": None})
+    assert "fls" not in SensorsConfig({"fls": {"enabled": False}}).enabled()
 
 
 def test_errors_name_the_entry_and_field():
