@@ -53,7 +53,8 @@ class SurveyLayout:
 def make_layout(base: Scenario, size_ne_m: tuple[float, float], margin_m: float, *,
                 start_clearance_m: float | None, min_spacing_m: float) -> SurveyLayout:
     """The area centred on the base scenario's survey plan, the start at its south-west
-    corner, and a lawnmower leg spacing of the sonar's swath at the survey altitude less 30 %.
+    corner, and lawnmower legs along both east and west edges and between them, spaced at
+    most the sonar's swath at the survey altitude less 30 %.
 
     Raises:
         ValueError: an area not larger than the sonar's reach on both sides, or a clearance
@@ -76,7 +77,8 @@ def make_layout(base: Scenario, size_ne_m: tuple[float, float], margin_m: float,
     survey = base.autonomy.guidance.survey
     swath = fls_swath_width_m(survey.altitude_m, math.radians(fls.tilt_deg), g.fov_rad, g.vertical_beamwidth_rad,
                               g.window_near_m, g.window_far_m)
-    spacing = float(min(0.7 * swath, float(np.min(size))))
+    n_legs = math.ceil(float(size[1]) / (0.7 * swath)) + 1
+    spacing = float(size[1]) / (n_legs - 1)
     start = np.array([area.lo_ne_m[0] + START_INSET_M, area.lo_ne_m[1] + START_INSET_M,
                       float(base.vehicle.initial_pos_ned[2])])
     return SurveyLayout(area, start, 0.0, reach, clearance, float(min_spacing_m), spacing)
@@ -141,10 +143,12 @@ def episode_scenario(base: Scenario, layout: SurveyLayout, seabed: Seabed, rng: 
     data["world"]["basin"] = {**data["world"]["basin"], "shape": "none"}
     data["vehicle"]["initial_pos_ned"] = tuple(float(x) for x in layout.start_ned)
     data["vehicle"]["initial_rpy_deg"] = (0.0, 0.0, math.degrees(layout.start_yaw_rad))
+    # the plan (legs and their semicircular turns) spans the area, which also bounds the
+    # onboard world model's region
     size = layout.area.hi_ne_m - layout.area.lo_ne_m
     half = 0.5 * layout.leg_spacing_m
     survey = data["autonomy"]["guidance"]["survey"]
-    survey.update(origin_ne_m=(float(layout.area.lo_ne_m[0] + half), float(layout.area.lo_ne_m[1] + half)),
-                  leg_heading_deg=0.0, length_m=float(size[0] - 2.0 * half), width_m=float(size[1] - 2.0 * half),
-                  first_turn="starboard", leg_spacing_m=layout.leg_spacing_m, run_in_m=0.0)
+    survey.update(origin_ne_m=(float(layout.area.lo_ne_m[0] + half), float(layout.area.lo_ne_m[1])),
+                  leg_heading_deg=0.0, length_m=float(size[0] - 2.0 * half), width_m=float(size[1]),
+                  first_turn="starboard", leg_spacing_m=layout.leg_spacing_m, run_in_m=0.0, turn="arc")
     return Scenario.model_validate(data)
