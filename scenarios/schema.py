@@ -2,16 +2,17 @@
 
 from __future__ import annotations
 
-from typing import Literal
+from collections.abc import Iterator
+from typing import Annotated, Any, Literal, Union
 
-from pydantic import Field
+from pydantic import Field, RootModel, TypeAdapter, ValidationError, model_validator
+from pydantic_core import InitErrorDetails, PydanticUndefined
 
 from scenarios.config.atr import AtrConfig
 from scenarios.config.base import StrictModel
-from scenarios.config.fls import FlsConfig
 from scenarios.config.guidance import ControlConfig, GuidanceConfig
-from scenarios.config.nav_sensors import AltimeterConfig, DepthConfig, DvlConfig, GpsConfig, ImuConfig
 from scenarios.config.navigation import NavigationConfig
+from scenarios.config.sensor import SensorConfig, fill_sensor_entries, sensor_config_kinds
 from scenarios.config.vehicle import VehicleConfig
 from scenarios.config.world import WorldConfig
 from scenarios.config.world_model import LocalizationConfig, WorldModelConfig
@@ -22,13 +23,90 @@ class PhysicsConfig(StrictModel):
     integrator: Literal["euler", "implicitfast", "rk4"] = "implicitfast"
 
 
-class SensorsConfig(StrictModel):
-    fls: FlsConfig = FlsConfig()
-    imu: ImuConfig = ImuConfig()
-    dvl: DvlConfig = DvlConfig()
-    depth: DepthConfig = DepthConfig()
-    altimeter: AltimeterConfig = AltimeterConfig()
-    gps: GpsConfig = GpsConfig()
+def _sensor_entry_type() -> Any:
+    """``Annotated[Union[<every registered sensor config>], discriminator 'kind']``."""
+    classes = tuple(sensor_config_kinds().values())
+    return Annotated[Union[classes], Field(discriminator="kind")]  # noqa: UP007 (runtime union of classes)
+
+
+SensorEntry = _sensor_entry_type()
+_SENSOR_TABLE = TypeAdapter(dict[str, SensorEntry])
+
+
+class SensorsConfig(RootModel[dict[str, SensorEntry]]):  # type: ignore[valid-type]
+    """The scenario's sensors: named entries, each typed by its ``kind``.
+
+    ``kind`` defaults to the entry's name; the default suite
+    (:data:`scenarios.config.sensor.DEFAULT_ENTRIES`) is added where a scenario leaves it out,
+    and an entry set to ``null`` removes that sensor. Entries read as attributes or items:
+    ``sensors.fls``, ``sensors["fls"]``. Validation errors point at
+    ``sensors.<name>.<field>``.
+    """
+
+    model_config = {"frozen": True}
+
+    @model_validator(mode="wrap")
+    @classmethod
+    def _validate_table(cls, data: Any, handler: Any) -> "SensorsConfig":
+        if isinstance(data, SensorsConfig):
+            return data
+        if data is PydanticUndefined:  # SensorsConfig() with no argument: the default suite
+            data = {}
+        raw = fill_sensor_entries(data)
+        try:
+            table = _SENSOR_TABLE.validate_python(raw)
+        except ValidationError as exc:
+            raise _without_union_tags(exc) from None
+        return handler(table)
+
+    def __getattr__(self, name: str) -> SensorConfig:
+        if not name.startswith("_"):
+            root = self.__dict__.get("root")
+            if root is not None and name in root:
+                return root[name]
+        return super().__getattr__(name)  # type: ignore[misc]
+
+    def __getitem__(self, name: str) -> SensorConfig:
+        return self.root[name]
+
+    def __contains__(self, name: object) -> bool:
+        return name in self.root
+
+    def __iter__(self) -> Iterator[str]:  # type: ignore[override]
+        return iter(self.root)
+
+    def items(self) -> Iterator[tuple[str, SensorConfig]]:
+        return iter(self.root.items())
+
+    def get(self, name: str) -> SensorConfig | None:
+        return self.root.get(name)
+
+    def enabled(self) -> dict[str, SensorConfig]:
+        """Entries to build, in firing order."""
+        return {n: c for n, c in self.root.items() if c.enabled}
+
+    def first_of_kind(self, kind: str) -> SensorConfig | None:
+        """The first enabled entry of ``kind`` (the one the navigation filter fuses)."""
+        return next((c for c in self.root.values() if c.kind == kind and c.enabled), None)
+
+
+def _without_union_tags(exc: ValidationError) -> ValidationError:
+    """Drop the union tag pydantic puts after the entry name (``fls.fls.rate_hz`` ->
+    ``fls.rate_hz``) so errors name the scenario's own keys."""
+    kinds = sensor_config_kinds()
+    details: list[InitErrorDetails] = []
+    for err in exc.errors():
+        loc = tuple(err["loc"])
+        kind = err["type"]
+        if len(loc) >= 2 and loc[1] in kinds:
+            loc = (loc[0], *loc[2:])
+        if kind == "union_tag_not_found":  # an entry named unlike any kind, without `kind:`
+            kind, loc = "missing", (*loc, "kind")
+        detail: InitErrorDetails = {"type": kind, "loc": loc, "input": err["input"]}
+        if "ctx" in err and kind != "missing":
+            detail["ctx"] = err["ctx"]
+        details.append(detail)
+    return ValidationError.from_exception_data(exc.title, details)
 
 
 class AutonomyConfig(StrictModel):

@@ -3,7 +3,7 @@
 The lawnmower policy flies the scenario's own lawnmower plan through the env's action
 interface: the onboard LOS guidance (``autonomy.guidance.survey``) turns the navigation
 estimate into a speed/heading/altitude setpoint, which is mapped back to the normalised
-action (yaw rate towards the LOS heading). On ``Waypoint-v0`` the scripted policy steers
+action (yaw rate towards the LOS heading). On ``Waypoint-v1`` the scripted policy steers
 straight at the current waypoint (setpoint action mode).
 
     python scripts/gym_baselines.py [--scenario cssn_lawnmower] [--episodes 2] [--sonar]
@@ -77,8 +77,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scenario", default="cssn_lawnmower")
     ap.add_argument("--episodes", type=int, default=2)
-    ap.add_argument("--sonar", action="store_true", help="Survey-v0 with FLS + ATR + PMHA (slow)")
-    ap.add_argument("--survey-time-s", type=float, default=600.0, help="Survey-v0 time limit")
+    ap.add_argument("--sonar", action="store_true", help="Survey-v1 with FLS + ATR + PMHA (slow)")
+    ap.add_argument("--survey-time-s", type=float, default=600.0, help="Survey-v1 time limit")
     ap.add_argument("--set", dest="overrides", action="append", default=[], help="scenario key=value")
     args = ap.parse_args()
     over = tuple(args.overrides)
@@ -87,7 +87,7 @@ def main() -> None:
                        overrides=over)
     lawnmower = LawnmowerPolicy(survey)
     rng = np.random.default_rng(0)
-    print(f"Survey-v0 ({args.scenario}, sonar={'on' if args.sonar else 'off'})")
+    print(f"Survey-v1 ({args.scenario}, sonar={'on' if args.sonar else 'off'})")
     for name, policy, hook in (("lawnmower", lawnmower, lawnmower.reset),
                                ("random", lambda: rng.uniform(-1, 1, 3).astype(np.float32), None)):
         for ep in range(args.episodes):
@@ -97,7 +97,7 @@ def main() -> None:
                   f"collision {info['collision']}  left area {info['left_area']}")
 
     wp = WaypointEnv(args.scenario, WaypointEnvOptions(action_mode="setpoint"), overrides=over)
-    print(f"Waypoint-v0 ({args.scenario}, setpoint actions)")
+    print(f"Waypoint-v1 ({args.scenario}, setpoint actions)")
     for name, policy in (("pursuit", lambda: waypoint_pursuit(wp)),
                          ("random", lambda: rng.uniform(-1, 1, 3).astype(np.float32))):
         for ep in range(args.episodes):

@@ -2,10 +2,10 @@
 
 Variants (each at its default decision interval, one process unless stated):
 
-* ``waypoint``: ``auvsim/Waypoint-v0``, uniform random actions;
-* ``survey``: ``auvsim/Survey-v0`` without sonar, a slow constant turn (stays in the area);
+* ``waypoint``: ``auvsim/Waypoint-v1``, uniform random actions;
+* ``survey``: ``auvsim/Survey-v1`` without sonar, a slow constant turn (stays in the area);
 * ``survey_sonar``: the same with FLS, ATR, PMHA and the sonar image observation;
-* ``vector``: ``Waypoint-v0`` and ``Survey-v0`` (no sonar) in an ``AsyncVectorEnv`` with
+* ``vector``: ``Waypoint-v1`` and ``Survey-v1`` (no sonar) in an ``AsyncVectorEnv`` with
   one worker per core (2 by default): total env steps per second across workers.
 
 Single-env figures time ``step`` only (resets are reported apart); vector figures
@@ -29,7 +29,7 @@ from scenarios.schema import Scenario
 from sim.envs.survey_env import SurveyEnv, SurveyEnvOptions
 from sim.envs.waypoint_env import WaypointEnv
 
-SURVEY_ACTION = np.array([0.0, 0.2, 0.0], dtype=np.float32)  # 0.5 m/s, 3 deg/s turn, 2 m altitude
+SURVEY_ACTION = np.array([0.0, 0.05, 0.0], dtype=np.float32)  # 0.5 m/s, 0.75 deg/s turn, 2 m altitude
 
 
 def _policy(env: gym.Env, rng: np.random.Generator):

@@ -1,8 +1,9 @@
 """Physics benchmark: hull + Fossen hydrodynamics + thrusters at the scenario's physics rate.
 
-Builds the scenario's scene (:func:`sim.world.build_world`: seabed, walls, targets, hull),
-then runs ``sim_time_s`` of simulated time on one thread: every step the thrusters and the
-hydrodynamic wrench are updated (:meth:`VehicleDynamics.step_inputs`) and MuJoCo steps.
+Builds the scenario's world (:class:`sim.physics.Physics`: seabed, walls, targets, hull,
+current), then runs ``sim_time_s`` of simulated time on one thread: every step the thrusters
+and the hydrodynamic wrench are updated, MuJoCo steps and the current evolves
+(:meth:`Physics.advance`).
 Thruster commands change at 10 Hz (as a controller would) following a fixed manoeuvre, so
 rotor lags are always active. Only the stepping loop is timed; it is repeated ``repeats``
 times from the same initial state and the fastest run is reported (as ``timeit`` does: the
@@ -18,9 +19,7 @@ import mujoco
 import numpy as np
 
 from scenarios.schema import Scenario
-from sim.rng import component_rng
-from sim.vehicle import VehicleDynamics
-from sim.vehicle_params import load_vehicle_params
+from sim.physics import Physics
 
 CONTROL_RATE_HZ = 10.0
 
@@ -36,35 +35,31 @@ def _command_schedule(n_thr: int, n_updates: int, dt_ctrl_s: float) -> list[list
 def run(scenario: Scenario, sim_time_s: float = 60.0, repeats: int = 3) -> dict[str, Any]:
     """Time the physics loop; returns steps_per_s, real_time_factor, sim_time_s,
     wall_time_s, rate_hz and a per-step breakdown (µs)."""
-    from sim.world import build_world
-
     if sim_time_s <= 0.0:
         raise ValueError(f"sim_time_s must be > 0, got {sim_time_s}")
     if repeats < 1:
         raise ValueError(f"repeats must be >= 1, got {repeats}")
-    world = build_world(scenario)
-    model, data = world.model, world.data
-    params = load_vehicle_params(scenario.vehicle)
-    dyn = VehicleDynamics(model, data, params, scenario.world.current,
-                          component_rng(scenario.seed, "current"), body_id=world.vehicle_body_id)
+    physics = Physics(scenario)
+    model, data, params, dyn = physics.model, physics.data, physics.params, physics.vehicle
     init_pos = scenario.vehicle.initial_pos_ned
     init_rpy = np.deg2rad(scenario.vehicle.initial_rpy_deg)
 
-    dt_s = float(model.opt.timestep)
+    dt_s = physics.dt_s
     rate_hz = 1.0 / dt_s
     n_steps = int(round(sim_time_s * rate_hz))
     every = max(1, int(round(rate_hz / CONTROL_RATE_HZ)))
     schedule = _command_schedule(params.layout.n, n_steps // every + 1, every * dt_s)
 
-    step_inputs, mj_step = dyn.step_inputs, mujoco.mj_step
+    step_inputs, mj_step, advance = dyn.step_inputs, mujoco.mj_step, physics.advance
+    n_updates, rest = divmod(n_steps, every)
     walls, cpus = [], []
     for _ in range(repeats):
-        mujoco.mj_resetData(model, data)
-        dyn.reset(init_pos, init_rpy)
+        physics.reset(init_pos, init_rpy)
         c0, t0 = time.process_time(), time.perf_counter()
-        for k in range(n_steps):
-            step_inputs(schedule[k // every], dt_s)
-            mj_step(model, data)
+        for j in range(n_updates):
+            advance(schedule[j], every)
+        if rest:
+            advance(schedule[n_updates], rest)
         walls.append(time.perf_counter() - t0)
         cpus.append(time.process_time() - c0)
     wall_s = min(walls)
@@ -84,7 +79,7 @@ def run(scenario: Scenario, sim_time_s: float = 60.0, repeats: int = 3) -> dict[
     mj_us = (time.perf_counter() - t2) / n_probe * 1e6
     data.qpos[:], data.qvel[:], data.time = saved
 
-    warnings = int(sum(int(w.number) for w in data.warning))
+    warnings = physics.warnings()
     truth = dyn.truth(n_steps * dt_s)
     return {
         "steps_per_s": n_steps / wall_s,

@@ -1,55 +1,38 @@
 """The closed-loop mission: physics, sensors and autonomy at their own rates.
 
-One :class:`Mission` owns the MuJoCo world, the vehicle, the sensors and the onboard
-stack. :meth:`Mission.step` advances one autonomy period (physics substeps, sensors due
-in that time, delivery of latent messages, one autonomy tick). Gym environments reuse
-this stepping API and may override guidance with their own setpoints.
+:class:`Mission` runs the loop; :class:`sim.physics.Physics` owns the world and
+:func:`sim.mission_build.build_mission_parts` builds the sensors and the onboard stack.
+:meth:`Mission.step` advances one autonomy period: physics substeps, the sensors due in
+that time, delivery of the messages whose latency has passed, one autonomy tick. Gym
+environments reuse this stepping API and may override guidance with their own setpoints.
 
-Perception runs on every FLS frame when it is delivered: ATR -> geolocalisation -> PMHA.
+Delivery dispatches on the message's type (the navigation filter's handlers, the state
+machine's bottom-lock flag) and on its source (perception runs on the frames of its sonar:
+ATR -> geolocalisation -> world model). Observers receive every delivered message and the
+perception results by sensor name, and immutable start and end summaries.
 """
 
 from __future__ import annotations
 
 import math
 import time
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections import Counter
+from collections.abc import Callable, Sequence
+from types import MappingProxyType
+from typing import Any
 
-import mujoco
 import numpy as np
-from numpy.typing import NDArray
 
-from autonomy.control.allocation import ThrustAllocator
-from autonomy.control.autopilot import Autopilot, AutopilotParams
 from autonomy.control.setpoint import Setpoint
-from autonomy.guidance.mission import MissionFsm
-from autonomy.guidance.survey import SurveyGuidance
-from autonomy.messages import AltimeterMsg, DepthMsg, DvlMsg, GpsMsg, ImuMsg, NavEstimate
-from autonomy.navigation import NavigationFilter, NavNoiseModel
+from autonomy.messages import DvlMsg, NavEstimate
 from scenarios.schema import Scenario
-from sim.current import OceanCurrent
-from sim.perception import Perception
-from sim.records import FlsEvent, MissionObserver, StepRecord
-from sim.rng import component_rng
-from sim.scheduler import SensorScheduler
-from sim.sensors.fls import FlsSensor
-from sim.sensors.nav_suite import build_nav_sensors
-from sim.sensors.raycast import MujocoRayCaster
+from sim.mission_build import NAV_SOURCES, MissionParts, build_mission_parts
+from sim.physics import Physics
+from sim.records import MissionInfo, MissionObserver, MissionSummary, StepRecord
+from sim.sensors.base import SceneView
 from sim.truth import VehicleTruth
-from sim.vehicle import VehicleDynamics
-from sim.vehicle_params import load_vehicle_params
-from sim.world import World, build_world
 
-NAV_SOURCES = ("estimate", "truth")
-
-
-@dataclass(frozen=True)
-class MissionSummary:
-    sim_time_s: float
-    wall_time_s: float
-    finished: bool
-    aborted: bool
-    abort_reason: str
+__all__ = ["NAV_SOURCES", "Mission", "MissionSummary"]
 
 
 class Mission:
@@ -59,9 +42,12 @@ class Mission:
         scenario: the validated scenario.
         nav_source: pose used for target geolocalisation: ``estimate`` (navigation filter)
             or ``truth`` (true vehicle pose, as paper 000's simulated evaluation).
-        observers: readers of the step records (logs, plots, recordings).
-        perception: run ATR/localisation/world model on FLS frames (False: FLS frames are
-            still rendered at their rate when the sensor is enabled, but not processed).
+        observers: readers of the mission's outputs (logs, plots, recordings).
+        perception: run ATR/localisation/world model on the sonar's frames (False: frames
+            are still rendered at their rate when the sonar is enabled, but not processed).
+
+    Raises:
+        ValueError: unknown ``nav_source``; a sensor mount site missing on the hull.
     """
 
     def __init__(
@@ -77,125 +63,134 @@ class Mission:
         self.scenario = scenario
         self.nav_source = nav_source
         self.observers = list(observers)
-        self.params = load_vehicle_params(scenario.vehicle)
-        self.world: World = build_world(scenario)
-        self.model, self.data = self.world.model, self.world.data
-        self.dt_s = float(self.model.opt.timestep)
-        auto_cfg = scenario.autonomy
-        self.substeps = max(int(round(scenario.physics.rate_hz / auto_cfg.rate_hz)), 1)
-        self.autonomy_dt_s = self.substeps * self.dt_s
-        self.caster = MujocoRayCaster(self.model, self.data, self.world.geom_object_id,
-                                      self.world.geom_reflectivity, self.world.vehicle_body_id)
-        self.vehicle_envelope_m = tuple(self.params.envelope_m)
         self.perception_enabled = perception
-        self._build_components(scenario.seed)
+        self.physics = Physics(scenario)
+        self.dt_s = self.physics.dt_s
+        self.substeps = max(int(round(scenario.physics.rate_hz / scenario.autonomy.rate_hz)), 1)
+        self.autonomy_dt_s = self.substeps * self.dt_s
+        self._build(scenario.seed)
 
-    # -- construction ----------------------------------------------------------------
-    def _mount(self, site: str) -> NDArray[np.float64]:
-        return self.world.site_pos_body(site)
+    def _build(self, seed: int) -> None:
+        self.physics.reseed(seed)
+        self.parts: MissionParts = build_mission_parts(self.scenario, self.physics, seed, nav_source=self.nav_source,
+                                                       perception=self.perception_enabled)
 
-    def _build_components(self, seed: int) -> None:
-        scn = self.scenario
-        self.seed = int(seed)
-        self.current = OceanCurrent(scn.world.current, component_rng(seed, "current"))
-        self.vehicle = VehicleDynamics(self.model, self.data, self.params, self.current,
-                                       component_rng(seed, "vehicle"))
-        mounts = {name: self._mount(name) for name in ("imu", "dvl", "depth", "altimeter", "gps")}
-        self.nav_sensors = build_nav_sensors(scn.sensors, mounts, seed)
-        fls_cfg = scn.sensors.fls
-        self.fls = (
-            FlsSensor(fls_cfg, self._mount("fls"), np.deg2rad([0.0, fls_cfg.tilt_deg, 0.0]),
-                      component_rng(seed, "fls"))
-            if fls_cfg.enabled else None
+    # -- read-only views ---------------------------------------------------------------
+    @property
+    def seed(self) -> int:
+        return self.parts.seed
+
+    @property
+    def world(self):
+        return self.physics.world
+
+    @property
+    def t_s(self) -> float:
+        return self.physics.t_s
+
+    @property
+    def sensors(self):
+        return self.parts.sensors
+
+    @property
+    def fls(self):
+        """The sonar perception runs on (None without one)."""
+        return self.parts.sonar
+
+    @property
+    def perception(self):
+        return self.parts.perception
+
+    @property
+    def fsm(self):
+        return self.parts.fsm
+
+    @property
+    def waypoints_ne(self) -> np.ndarray:
+        return self.parts.waypoints_ne
+
+    @property
+    def n_fls_frames(self) -> int:
+        """Frames delivered from the sensors of kind ``fls``."""
+        return sum(n for name, n in self._delivered.items() if self.parts.sensors[name].kind == "fls")
+
+    def info(self) -> MissionInfo:
+        """What observers may know of the built mission."""
+        waypoints = np.array(self.parts.waypoints_ne, dtype=float)
+        waypoints.setflags(write=False)
+        return MissionInfo(
+            scenario=self.scenario, seed=self.seed, nav_source=self.nav_source, seabed=self.world.seabed,
+            objects=tuple(self.world.objects), waypoints_ne=waypoints,
+            vehicle_envelope_m=tuple(float(x) for x in self.physics.params.envelope_m),
+            sensors=MappingProxyType({n: s.kind for n, s in self.parts.sensors.items()}),
         )
-        self.scheduler = SensorScheduler(eps_s=0.25 * self.dt_s)
-        for name, sensor in self.nav_sensors.items():
-            self.scheduler.add(name, sensor.rate_hz, sensor.latency_s)
-        if self.fls is not None:
-            self.scheduler.add("fls", self.fls.rate_hz, self.fls.latency_s)
-
-        auto = scn.autonomy
-        survey = auto.guidance.survey
-        self._nav_noise = NavNoiseModel.from_sensor_configs(scn.sensors.imu, scn.sensors.dvl, scn.sensors.depth,
-                                                            scn.sensors.gps)
-        self._mounts = mounts
-        self.nav_filter = self._make_nav_filter()
-        swath = self.fls.swath_width_m(survey.altitude_m) if self.fls is not None else None
-        self.guidance = SurveyGuidance.from_config(survey, auto.guidance.los, swath_width_m=swath)
-        self.waypoints_ne = np.asarray(self.guidance.plan.waypoints_ne_m)
-        self.fsm = MissionFsm.from_config(auto.guidance.mission, self.guidance)
-        self.autopilot = Autopilot(AutopilotParams.from_config(auto.control))
-        self.allocator = ThrustAllocator.from_layout(self.params.layout)
-        self.perception = (
-            Perception(scn, self.fls, self.world.seabed, self.waypoints_ne, nav_source=self.nav_source)
-            if (self.fls is not None and self.perception_enabled) else None
-        )
-
-    def _make_nav_filter(self) -> NavigationFilter:
-        scn = self.scenario
-        return NavigationFilter(scn.autonomy.navigation, np.asarray(scn.vehicle.initial_pos_ned, dtype=float),
-                                float(np.deg2rad(scn.vehicle.initial_rpy_deg[2])), self._nav_noise, mounts=self._mounts)
 
     # -- stepping API ----------------------------------------------------------------
     def reset(self, seed: int | None = None) -> StepRecord:
         """Restart the mission; a given ``seed`` reseeds every component (same seed, same run)."""
         if seed is not None:
-            self._build_components(int(seed))
-        scn = self.scenario
-        mujoco.mj_resetData(self.model, self.data)
+            self._build(int(seed))
+        scn, parts = self.scenario, self.parts
         init_pos = np.asarray(scn.vehicle.initial_pos_ned, dtype=float)
         init_rpy = np.deg2rad(scn.vehicle.initial_rpy_deg)
-        self.vehicle.reset(init_pos, init_rpy)
-        mujoco.mj_forward(self.model, self.data)
-        self.t_s = 0.0
-        self.thruster_cmd = np.zeros(self.params.n_thrusters)
+        self.physics.reset(init_pos, init_rpy)
+        self.thruster_cmd = np.zeros(self.physics.params.n_thrusters)
         self.wrench_body = np.zeros(6)
-        self.scheduler.reset(0.0)
-        self.nav_filter = self._make_nav_filter()
-        self.guidance.start(init_pos[:2], float(init_rpy[2]))
-        self.fsm.reset()
-        self.autopilot.reset()
-        if self.perception is not None:
-            self.perception.reset()
+        parts.scheduler.reset(0.0)
+        self.nav_filter = parts.make_nav_filter(scn)
+        self._by_type: dict[type, list[Callable[[Any], Any]]] = {}
+        for msg_type, handler in self.nav_filter.message_handlers().items():
+            self._by_type.setdefault(msg_type, []).append(handler)
+        self._by_type.setdefault(DvlMsg, []).append(self._note_bottom_lock)
+        self._by_source: dict[str, Callable[[Any, NavEstimate], Any]] = {}
+        if parts.perception is not None:
+            self._by_source[parts.sonar.name] = parts.perception.process
+        parts.guidance.start(init_pos[:2], float(init_rpy[2]))
+        parts.fsm.reset()
+        parts.autopilot.reset()
+        if parts.perception is not None:
+            parts.perception.reset()
         self.last_dvl_lock = True
         self._setpoint: Setpoint | None = None
         self._wall_start = time.perf_counter()
         self._wall_s = 0.0
-        self.n_fls_frames = 0
+        self._delivered: Counter[str] = Counter()
+        self._started = True
+        info = self.info()
         for obs in self.observers:
-            obs.on_start(self)
-        self._truth = self.vehicle.truth(self.t_s)
+            obs.on_start(info)
+        self._truth = self.physics.truth()
         return self._record(self._truth, self.nav_filter.estimate(), "idle")
 
     @property
     def done(self) -> bool:
-        return self.fsm.done or self.t_s >= self.scenario.duration_s - 1e-9
+        return self.parts.fsm.done or self.t_s >= self.scenario.duration_s - 1e-9
 
     def step(self, setpoint: Setpoint | None = None) -> StepRecord:
         """Advance one autonomy period. ``setpoint`` overrides guidance (gym envs)."""
+        physics, scheduler = self.physics, self.parts.scheduler
         truth = self._truth
         for _ in range(self.substeps):
-            self.vehicle.step_inputs(self.thruster_cmd, self.dt_s)
-            mujoco.mj_step(self.model, self.data)
-            self.t_s += self.dt_s
-            self.current.step(self.dt_s)
-            due = self.scheduler.due(self.t_s)
+            physics.step(self.thruster_cmd)
+            due = scheduler.due(physics.t_s)
             if due:
-                truth = self.vehicle.truth(self.t_s)
+                truth = physics.truth()
+                scene = physics.scene()
                 for name in due:
-                    self._fire(name, truth)
-        if truth.t_s != self.t_s:  # not already taken for a sensor on the last substep
-            truth = self.vehicle.truth(self.t_s)
+                    self._fire(name, truth, scene)
+        if truth.t_s != physics.t_s:  # not already taken for a sensor on the last substep
+            truth = physics.truth()
         self._truth = truth
-        for name, msg in self.scheduler.pop_ready(self.t_s):
+        for name, msg in scheduler.pop_ready(physics.t_s):
             self._deliver(name, msg)
-        self.nav_filter.predict(self.t_s)
+        parts = self.parts
+        self.nav_filter.predict(physics.t_s)
         nav = self.nav_filter.estimate()
-        sp = setpoint if setpoint is not None else self.fsm.update(self.t_s, nav, self.last_dvl_lock)
+        sp = setpoint if setpoint is not None else parts.fsm.update(physics.t_s, nav, self.last_dvl_lock)
         self._setpoint = sp
-        self.wrench_body = np.zeros(6) if sp is None else self.autopilot.update(nav, sp, self.autonomy_dt_s)
-        self.thruster_cmd = self.allocator.allocate(self.wrench_body)
-        rec = self._record(truth, nav, self.fsm.mode)
+        self.wrench_body = np.zeros(6) if sp is None else parts.autopilot.update(nav, sp, self.autonomy_dt_s)
+        self.thruster_cmd = parts.allocator.allocate(self.wrench_body)
+        rec = self._record(truth, nav, parts.fsm.mode)
         self._wall_s = time.perf_counter() - self._wall_start
         return rec
 
@@ -203,7 +198,7 @@ class Mission:
         """Run until the mission ends or the scenario's duration is reached."""
         from tqdm import tqdm
 
-        if not hasattr(self, "t_s"):
+        if not getattr(self, "_started", False):
             self.reset()
         total = self.scenario.duration_s
         with tqdm(total=round(total), unit="sim s", disable=not progress, desc=self.scenario.name, mininterval=1.0,
@@ -215,48 +210,36 @@ class Mission:
                     bar.update(self.t_s - last)
                     bar.set_postfix_str(self.fsm.mode)
                     last = self.t_s
+        summary = self.summary()
         for obs in self.observers:
-            obs.on_end(self)
-        return self.summary()
+            obs.on_end(summary)
+        return summary
 
     def summary(self) -> MissionSummary:
-        return MissionSummary(self.t_s, self._wall_s, self.fsm.done and not self.fsm.aborted,
-                              self.fsm.aborted, self.fsm.abort_reason or "")
+        fsm = self.parts.fsm
+        return MissionSummary(self.t_s, self._wall_s, fsm.done and not fsm.aborted, fsm.aborted,
+                              fsm.abort_reason or "", fsm.mode, MappingProxyType(dict(self._delivered)))
 
     # -- internals -------------------------------------------------------------------
-    def _fire(self, name: str, truth: VehicleTruth) -> None:
-        if name == "fls":
-            render = self.fls.render(truth.t_s, truth.point_ned(self.fls.mount_pos_body_m), truth.R_nb,
-                                     self.caster, self.world.objects)
-            self.scheduler.push(name, truth.t_s, render)
-            return
-        msg = self.nav_sensors[name].measure(truth, caster=self.caster)
-        self.scheduler.push(name, truth.t_s, msg)
+    def _fire(self, name: str, truth: VehicleTruth, scene: SceneView) -> None:
+        self.parts.scheduler.push(name, truth.t_s, self.parts.sensors[name].measure(truth, scene))
 
-    def _deliver(self, name: str, msg) -> None:
-        nf = self.nav_filter
-        if isinstance(msg, ImuMsg):
-            nf.on_imu(msg)
-        elif isinstance(msg, DvlMsg):
-            self.last_dvl_lock = bool(msg.valid)
-            nf.on_dvl(msg)
-        elif isinstance(msg, DepthMsg):
-            nf.on_depth(msg)
-        elif isinstance(msg, AltimeterMsg):
-            nf.on_altimeter(msg)
-        elif isinstance(msg, GpsMsg):
-            nf.on_gps(msg)
-        elif name == "fls":
-            self.n_fls_frames += 1
-            event = FlsEvent(t_s=msg.frame.t_s, render=msg)
-            if self.perception is not None:
-                nav = nf.estimate()
-                self.perception.process(event, nav)
-            for obs in self.observers:
-                obs.on_fls(event)
+    def _note_bottom_lock(self, msg: DvlMsg) -> None:
+        self.last_dvl_lock = bool(msg.valid)
+
+    def _deliver(self, name: str, msg: Any) -> None:
+        self._delivered[name] += 1
+        for handler in self._by_type.get(type(msg), ()):
+            handler(msg)
+        process = self._by_source.get(name)
+        result = process(msg, self.nav_filter.estimate()) if process is not None else None
+        for obs in self.observers:
+            obs.on_message(name, msg)
+            if result is not None:
+                obs.on_message(name, result)
 
     def _record(self, truth: VehicleTruth, nav: NavEstimate, mode: str) -> StepRecord:
-        sp = self._setpoint if getattr(self, "_setpoint", None) is not None else None
+        sp = self._setpoint
         nan = math.nan
         rec = StepRecord(
             t_s=self.t_s, truth=truth, nav=nav,
@@ -269,4 +252,3 @@ class Mission:
         for obs in self.observers:
             obs.on_step(rec)
         return rec
-

@@ -19,8 +19,8 @@ from autonomy.messages import NavEstimate
 from autonomy.world_model import CLASS_NAMES, PMHA
 from scenarios.schema import Scenario
 from sim.evaluation.detection_matching import match_frame
-from sim.records import FlsEvent
 from sim.evaluation.world_model_score import score_world_model
+from sim.records import PerceptionResult
 from sim.seabed import Seabed
 from sim.sensors.fls import FlsRender, FlsSensor
 
@@ -83,13 +83,12 @@ class Perception:
                            rate_body_radps=np.zeros(3), cov_pos_ned=np.zeros((3, 3)), cov_yaw_rad2=0.0,
                            altitude_m=altitude)
 
-    def process(self, event: FlsEvent, nav: NavEstimate) -> None:
-        """Run perception on one delivered frame and fill ``event``'s perception fields."""
-        render: FlsRender = event.render
+    def process(self, render: FlsRender, nav: NavEstimate) -> PerceptionResult:
+        """Run perception on one delivered frame; returns the detections, their scoring
+        against the frame's truth, their geolocalisation and the updated world model."""
         frame = render.frame
         self.n_frames += 1
         detections = self.detector.detect(frame)
-        event.detections = detections
 
         gt = [o for o in render.truth.objects if o.visible and o.is_target and o.bbox_xyxy is not None]
         self.n_visible_targets += len(gt)
@@ -97,7 +96,6 @@ class Perception:
         state, gt_hit = match_frame(np.array([d.box_xyxy_px for d in detections], dtype=float).reshape(-1, 4),
                                     np.array([d.score for d in detections], dtype=float), gt_boxes,
                                     np.zeros(len(gt), dtype=bool), MATCH_IOU)
-        event.true_detection = [bool(s == 1) for s in state]
         self.n_detections += len(detections)
         self.n_true += int(np.sum(state == 1))
         self.n_false += int(np.sum(state != 1))
@@ -106,13 +104,14 @@ class Perception:
         nav_loc = self._truth_nav(render) if self.nav_source == "truth" else nav
         localized = [localize(d, nav_loc, self.fls.mount_pos_body_m, self.fls.mount_rpy_rad, self.loc_cfg,
                               geometry=frame.geometry) for d in detections]
-        event.localized = localized
         g = self.fls.geometry
         visible = fls_visibility(nav_loc.pos_ned, nav_loc.rpy_rad, self.fls.mount_pos_body_m, self.fls.mount_rpy_rad,
                                  range_min_m=g.window_near_m, range_max_m=g.window_far_m, fov_rad=g.fov_rad,
                                  vertical_fov_rad=g.vertical_beamwidth_rad, margin_m=1.0)
         self.pmha.update(frame.t_s, localized, visible)
-        event.world_objects = self.pmha.world_model()
+        return PerceptionResult(t_s=frame.t_s, detections=tuple(detections),
+                                true_detection=tuple(bool(s_ == 1) for s_ in state), localized=tuple(localized),
+                                world_objects=tuple(self.pmha.world_model()))
 
     # -- results --------------------------------------------------------------------------
     def world_objects(self) -> list[Any]:

@@ -1,4 +1,5 @@
-"""What the mission loop emits: step records and sonar events, and the observer protocol.
+"""What the mission loop emits: step records, perception results, the run's info and summary,
+and the observer protocol.
 
 Outputs (CSV, plots, rerun recordings, metrics) are observers reading these records;
 they never take part in the loop's logic.
@@ -6,17 +7,15 @@ they never take part in the loop's logic.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
 from autonomy.messages import Detection, NavEstimate
 from sim.truth import VehicleTruth
-
-if TYPE_CHECKING:
-    from sim.mission import Mission
 
 
 @dataclass(frozen=True, slots=True)
@@ -45,27 +44,82 @@ class StepRecord:
     mode: str
 
 
-@dataclass(slots=True)
-class FlsEvent:
-    """One FLS frame with what perception made of it.
+@dataclass(frozen=True, slots=True)
+class PerceptionResult:
+    """What perception made of one sonar frame (delivered to observers after the frame).
 
-    ``render`` is the simulator's render (frame + ground truth); ``detections`` the
-    ATR output; ``true_detection`` flags each detection matched to a visible target.
+    Attributes:
+        t_s: capture time of the frame, s.
+        detections: ATR detections in the frame.
+        true_detection: per detection, whether it matched a visible target's box.
+        localized: per detection, its geolocalised position (onboard estimate).
+        world_objects: the world model after fusing the frame.
     """
 
     t_s: float
-    render: Any
-    detections: list[Detection] = field(default_factory=list)
-    true_detection: list[bool] = field(default_factory=list)
-    localized: list[Any] = field(default_factory=list)
-    world_objects: list[Any] = field(default_factory=list)
+    detections: tuple[Detection, ...] = ()
+    true_detection: tuple[bool, ...] = ()
+    localized: tuple[Any, ...] = ()
+    world_objects: tuple[Any, ...] = ()
+
+
+@dataclass(frozen=True)
+class MissionInfo:
+    """The built mission as observers may see it (read-only).
+
+    Attributes:
+        scenario: the scenario flown.
+        seed: root seed of this run.
+        nav_source: pose used for geolocalisation (``estimate`` or ``truth``).
+        seabed: the true seabed.
+        objects: the scene objects (pose at start).
+        waypoints_ne: (k, 2) survey plan, m.
+        vehicle_envelope_m: (3,) hull bounding box (length, width, height), m.
+        sensors: entry name -> kind of every sensor built, in firing order.
+    """
+
+    scenario: Any
+    seed: int
+    nav_source: str
+    seabed: Any
+    objects: tuple[Any, ...]
+    waypoints_ne: NDArray[np.float64]
+    vehicle_envelope_m: tuple[float, ...]
+    sensors: Mapping[str, str] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class MissionSummary:
+    """How a mission ended.
+
+    Attributes:
+        sim_time_s, wall_time_s: simulated and wall-clock time since reset, s.
+        finished, aborted, abort_reason: outcome of the mission state machine.
+        final_mode: the state machine's last mode.
+        messages_delivered: sensor name -> messages delivered to the autonomy.
+    """
+
+    sim_time_s: float
+    wall_time_s: float
+    finished: bool
+    aborted: bool
+    abort_reason: str
+    final_mode: str = ""
+    messages_delivered: Mapping[str, int] = field(default_factory=dict)
 
 
 class MissionObserver(Protocol):
-    def on_start(self, mission: "Mission") -> None: ...
+    """Reader of the mission loop's outputs; it never takes part in the loop's logic.
+
+    ``on_message`` receives every message delivered to the autonomy, by sensor name (an
+    ``ImuMsg``, an FLS render, ...), and after a sonar frame the :class:`PerceptionResult`
+    made of it under the same name.
+    """
+
+    def on_start(self, info: MissionInfo) -> None: ...
 
     def on_step(self, record: StepRecord) -> None: ...
 
-    def on_fls(self, event: FlsEvent) -> None: ...
+    def on_message(self, name: str, msg: Any) -> None: ...
 
-    def on_end(self, mission: "Mission") -> None: ...
+    def on_end(self, summary: MissionSummary) -> None: ...

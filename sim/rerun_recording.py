@@ -12,7 +12,10 @@ import cv2
 import numpy as np
 
 from autonomy.frames import quat_from_rot, rot_from_euler
-from sim.records import FlsEvent, StepRecord
+from typing import Any
+
+from sim.records import MissionInfo, MissionSummary, PerceptionResult, StepRecord
+from sim.sensors.fls import FlsRender
 from sim.target_meshes import target_mesh
 
 
@@ -39,14 +42,15 @@ class RerunRecorder:
         self._est: list[np.ndarray] = []
         self._last_path_t = -np.inf
         self._n_fls = 0
+        self._frame_logged = False
 
     # -- observer protocol -----------------------------------------------------------
-    def on_start(self, mission) -> None:
+    def on_start(self, info: MissionInfo) -> None:
         rr, rec = self._rr, self._rec
         rec.save(self.path)
         rec.log("world", rr.ViewCoordinates.FRD, static=True)  # NED: x north, y east, z down
-        scenario = mission.scenario
-        seabed = mission.world.seabed
+        scenario = info.scenario
+        seabed = info.seabed
         cfg = scenario.world.seabed
         if seabed.is_mesh:
             mesh = seabed.terrain_mesh()
@@ -59,16 +63,16 @@ class RerunRecorder:
             depth = seabed.depth_at(corners[:, 0], corners[:, 1])
             rec.log("world/seabed", rr.Mesh3D(vertex_positions=np.c_[corners, depth], triangle_indices=[[0, 1, 2], [0, 2, 3]],
                                               albedo_factor=[140, 125, 100]), static=True)
-        for tcfg, obj in zip(scenario.world.targets, mission.world.objects):
+        for tcfg, obj in zip(scenario.world.targets, info.objects):
             mesh = target_mesh(tcfg)
             R = rot_from_euler(*np.deg2rad(tcfg.rpy_deg))
             verts = mesh.vertices @ R.T + np.asarray(tcfg.pos_ned)
             color = [230, 150, 30] if obj.is_target else [128, 128, 128]
             rec.log(f"world/objects/{obj.name}", rr.Mesh3D(vertex_positions=verts, triangle_indices=mesh.faces,
                                                            albedo_factor=color), static=True)
-        env = mission.vehicle_envelope_m
+        env = info.vehicle_envelope_m
         rec.log("world/vehicle/hull", rr.Boxes3D(half_sizes=[0.5 * np.asarray(env)], colors=[[240, 220, 40]]), static=True)
-        rec.log("world/waypoints", rr.LineStrips3D([np.c_[mission.waypoints_ne, np.full(len(mission.waypoints_ne), 0.0)]],
+        rec.log("world/waypoints", rr.LineStrips3D([np.c_[info.waypoints_ne, np.full(len(info.waypoints_ne), 0.0)]],
                                                    colors=[[150, 150, 150]]), static=True)
 
     def on_step(self, r: StepRecord) -> None:
@@ -87,39 +91,53 @@ class RerunRecorder:
             rec.log("world/path/true", rr.LineStrips3D([np.asarray(self._true)], colors=[[40, 120, 220]]))
             rec.log("world/path/estimated", rr.LineStrips3D([np.asarray(self._est)], colors=[[240, 140, 30]]))
 
-    def on_fls(self, ev: FlsEvent) -> None:
+    def on_message(self, name: str, msg: Any) -> None:
+        if isinstance(msg, FlsRender):
+            self._on_sonar_frame(msg)
+        elif isinstance(msg, PerceptionResult):
+            self._on_perception(msg)
+
+    def _on_sonar_frame(self, render: FlsRender) -> None:
         rr, rec = self._rr, self._rec
         self._n_fls += 1
-        rec.set_time("sim_time", duration=ev.t_s)
-        if ev.world_objects:
-            pos = np.array([o.pos_ned for o in ev.world_objects])
-            half = np.array([2.0 * np.sqrt(np.clip(np.diag(o.cov_ned), 1e-6, None)) for o in ev.world_objects])
-            rec.log("world/world_model", rr.Ellipsoids3D(centers=pos, half_sizes=half, colors=[[220, 40, 40]],
-                                                         labels=[str(o.id) for o in ev.world_objects]))
-        if (self._n_fls - 1) % self.fls_every:
+        self._frame_logged = not (self._n_fls - 1) % self.fls_every
+        if not self._frame_logged:
             return
-        fan = ev.render.frame.fan
+        rec.set_time("sim_time", duration=render.frame.t_s)
+        fan = render.frame.fan
         s = self.fls_scale
         img = cv2.resize(fan, None, fx=s, fy=s, interpolation=cv2.INTER_AREA) if s != 1.0 else fan
         ok, jpg = cv2.imencode(".jpg", img, [cv2.IMWRITE_JPEG_QUALITY, 80])
         if ok:
             rec.log("sonar/fan", rr.EncodedImage(contents=jpg.tobytes(), media_type="image/jpeg"))
-        gt = [o for o in ev.render.truth.objects if o.visible]
+        gt = [o for o in render.truth.objects if o.visible]
         if gt:
             rec.log("sonar/fan/ground_truth", rr.Boxes2D(
                 array=np.array([o.bbox_xyxy for o in gt]) * s, array_format=rr.Box2DFormat.XYXY,
                 labels=[o.name for o in gt], colors=[[40, 220, 40]]))
         else:
             rec.log("sonar/fan/ground_truth", rr.Clear(recursive=False))
-        if ev.detections:
+
+    def _on_perception(self, res: PerceptionResult) -> None:
+        rr, rec = self._rr, self._rec
+        rec.set_time("sim_time", duration=res.t_s)
+        if res.world_objects:
+            pos = np.array([o.pos_ned for o in res.world_objects])
+            half = np.array([2.0 * np.sqrt(np.clip(np.diag(o.cov_ned), 1e-6, None)) for o in res.world_objects])
+            rec.log("world/world_model", rr.Ellipsoids3D(centers=pos, half_sizes=half, colors=[[220, 40, 40]],
+                                                         labels=[str(o.id) for o in res.world_objects]))
+        if not self._frame_logged:
+            return
+        s = self.fls_scale
+        if res.detections:
             rec.log("sonar/fan/detections", rr.Boxes2D(
-                array=np.array([d.box_xyxy_px for d in ev.detections]) * s, array_format=rr.Box2DFormat.XYXY,
-                labels=[f"{d.class_name} {d.score:.2f}" for d in ev.detections],
-                colors=[[40, 220, 40] if ok_ else [230, 40, 40] for ok_ in ev.true_detection]))
+                array=np.array([d.box_xyxy_px for d in res.detections]) * s, array_format=rr.Box2DFormat.XYXY,
+                labels=[f"{d.class_name} {d.score:.2f}" for d in res.detections],
+                colors=[[40, 220, 40] if ok_ else [230, 40, 40] for ok_ in res.true_detection]))
         else:
             rec.log("sonar/fan/detections", rr.Clear(recursive=False))
 
-    def on_end(self, mission) -> None:
+    def on_end(self, summary: MissionSummary) -> None:
         rr, rec = self._rr, self._rec
         if self._true:
             rec.log("world/path/true", rr.LineStrips3D([np.asarray(self._true)], colors=[[40, 120, 220]]))

@@ -1,23 +1,27 @@
 """Multi-rate sensor scheduling with latency.
 
 Sensors fire at their own rate on the physics clock; each message is delivered to the
-autonomy ``latency_s`` later, in order of delivery time. Sensors keep no clocks: the
-scheduler owns timing.
+autonomy its latency later, in order of delivery time (ties: in the order pushed). A latency
+is a fixed number of seconds or a function of the message (an acoustic fix is late by its
+travel time). Sensors keep no clocks: the scheduler owns timing.
 """
 
 from __future__ import annotations
 
 import heapq
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
+
+Latency = float | Callable[[Any], float]
 
 
 @dataclass
 class _Channel:
     name: str
     period_s: float
-    latency_s: float
+    latency_s: Callable[[Any], float]
     next_fire_s: float
 
 
@@ -42,12 +46,29 @@ class SensorScheduler:
         self._queue: list[_Pending] = []
         self._seq = 0
 
-    def add(self, name: str, rate_hz: float, latency_s: float = 0.0, first_fire_s: float = 0.0) -> None:
+    def add(self, name: str, rate_hz: float, latency_s: Latency = 0.0, first_fire_s: float = 0.0) -> None:
+        """Add a channel firing every ``1 / rate_hz`` s from ``first_fire_s``.
+
+        Args:
+            name: channel (sensor) name.
+            rate_hz: firing rate, Hz.
+            latency_s: delay from firing to delivery, s, or a function of the message
+                giving it (e.g. ``sensor.latency_s``).
+            first_fire_s: time of the first firing, s.
+
+        Raises:
+            ValueError: a rate that is not positive and finite, or a negative fixed latency.
+        """
         if not rate_hz > 0.0 or not math.isfinite(rate_hz):
             raise ValueError(f"sensor {name!r}: rate_hz must be > 0, got {rate_hz}")
-        if latency_s < 0.0:
-            raise ValueError(f"sensor {name!r}: latency_s must be >= 0, got {latency_s}")
-        self._channels[name] = _Channel(name, 1.0 / rate_hz, latency_s, first_fire_s)
+        if callable(latency_s):
+            latency = latency_s
+        else:
+            fixed = float(latency_s)
+            if not fixed >= 0.0:
+                raise ValueError(f"sensor {name!r}: latency_s must be >= 0, got {latency_s}")
+            latency = lambda _msg, _fixed=fixed: _fixed  # noqa: E731
+        self._channels[name] = _Channel(name, 1.0 / rate_hz, latency, first_fire_s)
 
     def reset(self, t_s: float = 0.0) -> None:
         self._queue.clear()
@@ -66,8 +87,16 @@ class SensorScheduler:
         return out
 
     def push(self, name: str, t_s: float, message: Any) -> None:
+        """Queue ``message`` sampled at ``t_s`` for delivery after the channel's latency.
+
+        Raises:
+            ValueError: the latency of this message is negative or not finite.
+        """
         ch = self._channels[name]
-        heapq.heappush(self._queue, _Pending(t_s + ch.latency_s, self._seq, name, message))
+        latency = ch.latency_s(message)
+        if not (latency >= 0.0 and math.isfinite(latency)):
+            raise ValueError(f"sensor {name!r}: latency of a message must be finite and >= 0, got {latency}")
+        heapq.heappush(self._queue, _Pending(t_s + latency, self._seq, name, message))
         self._seq += 1
 
     def pop_ready(self, t_s: float) -> list[tuple[str, Any]]:

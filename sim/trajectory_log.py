@@ -9,7 +9,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from autonomy.frames import wrap_angle
-from sim.records import FlsEvent, StepRecord
+from typing import Any
+
+from sim.records import MissionInfo, MissionSummary, StepRecord
 
 COLUMNS = (
     ["t_s", "mode"]
@@ -29,7 +31,7 @@ class TrajectoryLog:
         self._modes: list[str] = []
         self._thrusters: list[NDArray] = []
 
-    def on_start(self, mission) -> None:
+    def on_start(self, info: MissionInfo) -> None:
         self._rows.clear()
         self._modes.clear()
         self._thrusters.clear()
@@ -46,10 +48,10 @@ class TrajectoryLog:
              *r.wrench_body]
         )
 
-    def on_fls(self, event: FlsEvent) -> None:
+    def on_message(self, name: str, msg: Any) -> None:
         pass
 
-    def on_end(self, mission) -> None:
+    def on_end(self, summary: MissionSummary) -> None:
         pass
 
     # -- derived quantities --------------------------------------------------------

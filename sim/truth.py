@@ -10,6 +10,11 @@ from numpy.typing import NDArray
 FloatArray = NDArray[np.float64]
 
 
+def cross3(a: FloatArray, b: FloatArray) -> FloatArray:
+    """Cross product of two 3-vectors (``np.cross`` is slow for single vectors)."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
 @dataclass(frozen=True, slots=True)
 class VehicleTruth:
     """True vehicle state at time ``t_s``.
@@ -50,3 +55,17 @@ class VehicleTruth:
     def point_ned(self, offset_body_m: FloatArray) -> FloatArray:
         """NED position of a point fixed on the hull at ``offset_body_m`` (FRD)."""
         return self.pos_ned + self.R_nb @ np.asarray(offset_body_m, dtype=float)
+
+    def point_vel_body(self, offset_body_m: FloatArray) -> FloatArray:
+        """(3,) velocity over ground of the hull point at ``offset_body_m`` (FRD, m), in FRD,
+        m/s: ``v + omega x r``."""
+        return self.nu[:3] + cross3(self.nu[3:], offset_body_m)
+
+    def point_accel_body(self, offset_body_m: FloatArray) -> FloatArray:
+        """(3,) inertial acceleration of the hull point at ``offset_body_m`` (FRD, m), in FRD,
+        m/s^2: ``v_dot + omega x v + omega_dot x r + omega x (omega x r)`` (``v`` is the body
+        velocity over ground, so ``omega x v`` is the transport term)."""
+        v, omega = self.nu[:3], self.nu[3:]
+        v_dot, omega_dot = self.nu_dot[:3], self.nu_dot[3:]
+        r = offset_body_m
+        return v_dot + cross3(omega, v) + cross3(omega_dot, r) + cross3(omega, cross3(omega, r))

@@ -73,11 +73,10 @@ class VehicleDynamics:
             raise ValueError("the vehicle body needs a free joint")
         self._qadr = int(model.jnt_qposadr[jnt])
         self._vadr = int(model.jnt_dofadr[jnt])
-        self._owns_current = isinstance(current, CurrentConfig)
-        if self._owns_current:
-            current = OceanCurrent(current, rng)
-        self.current = current
-        self._still_water = current is None or current.is_still
+        self._owns_current = False
+        self.current: OceanCurrent | None = None
+        self._still_water = True
+        self.set_current(current, rng)
         self.fossen = FossenModel(params)
         self.thrusters = ThrusterArray(params)
         # Views, so the hot path does no lookups.
@@ -90,6 +89,18 @@ class VehicleDynamics:
         self._tau_thr = [0.0] * 6
 
     # ------------------------------------------------------------------ state handling
+    def set_current(self, current: OceanCurrent | CurrentConfig | None, rng: np.random.Generator | None = None) -> None:
+        """Use ``current`` from the next step on (same meanings as the constructor's argument).
+
+        Everything derived from the current (whether the water is still) is recomputed here,
+        so a current assigned after construction acts on the hull.
+        """
+        self._owns_current = isinstance(current, CurrentConfig)
+        if self._owns_current:
+            current = OceanCurrent(current, rng)
+        self.current = current
+        self._still_water = current is None or current.is_still
+
     def reset(self, pos_ned: ArrayLike, rpy_rad: ArrayLike) -> None:
         """Place the vehicle at rest at ``pos_ned`` (CO, m) with attitude ``rpy_rad``."""
         q, v = self._qadr, self._vadr

@@ -10,27 +10,25 @@ from autonomy.guidance.lawnmower import fls_swath_width_m
 from scenarios.config.fls import FlsConfig
 from sim import bench_fls
 from sim.sensors.fls import FlsSensor
-from sim.sensors.raycast import MujocoRayCaster
 from sim.truth import VehicleTruth
-from sim.world import build_world
+from sim.physics import Physics
 
 
 @pytest.fixture(scope="module")
-def world(cssn_scenario):
-    return build_world(cssn_scenario)
+def physics(cssn_scenario):
+    return Physics(cssn_scenario)
 
 
-def test_cssn_targets_seen_where_they_are(world):
+def test_cssn_targets_seen_where_they_are(physics):
     """From 2 m altitude heading east, every OPI ahead is boxed at its true range and bearing."""
-    caster = MujocoRayCaster(world.model, world.data, world.geom_object_id, world.geom_reflectivity,
-                             world.vehicle_body_id)
+    world = physics.world
     cfg = FlsConfig(range_window_m=(1.0, 30.0), edge_refine_iters=4)
     mount = world.site_pos_body("fls")
     s = FlsSensor(cfg, mount, np.deg2rad([0.0, cfg.tilt_deg, 0.0]), np.random.default_rng(0))
     truth = VehicleTruth(t_s=1.0, pos_ned=np.array([-4.0, 3.0, 2.0]), R_nb=rot_from_euler(0, 0, np.pi / 2),
                          rpy_rad=np.array([0, 0, np.pi / 2]), nu=np.zeros(6), nu_dot=np.zeros(6),
                          current_ned=np.zeros(3))
-    out = s.measure(truth, caster, world.objects)
+    out = s.measure(truth, physics.scene())
     assert out.frame.t_s == 1.0 and out.frame.fan.shape == (477, 894) and out.frame.polar.dtype == np.uint8
     assert np.allclose(out.truth.pos_ned, truth.point_ned(mount))
     geo = out.frame.geometry

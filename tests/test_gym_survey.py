@@ -1,4 +1,4 @@
-"""auvsim/Survey-v0: gymnasium API, determinism, spaces, coverage geometry, world-model table."""
+"""auvsim/Survey-v1: gymnasium API, determinism, spaces, coverage geometry, world-model table."""
 
 from __future__ import annotations
 
@@ -124,7 +124,7 @@ def test_match_new_targets_counts_each_target_once():
 
 
 def test_coverage_reward_and_survey_progress(env):
-    """Flying straight east at 0.75 m/s: coverage grows and the reward is its gain minus energy."""
+    """Flying straight on at 0.75 m/s: coverage grows and the reward is its gain minus energy."""
     obs, _ = env.reset(seed=0)
     cov0 = obs["nav"][-1]
     total, energy = 0.0, 0.0
@@ -136,7 +136,7 @@ def test_coverage_reward_and_survey_progress(env):
     assert trunc and not term
     assert info["coverage_fraction"] > cov0
     assert total == pytest.approx(w.coverage * (info["coverage_fraction"] - cov0) - w.energy_per_s * energy, abs=1e-9)
-    assert info["nav_pos_ned"][1] > 1.0  # moved east from E = 0
+    assert info["nav_pos_ned"][0] > env.layout.start_ned[0] + 1.0  # moved north from the start
 
 
 def test_sonar_observation_with_classical_atr():

@@ -1,4 +1,4 @@
-"""auvsim/Waypoint-v0: gymnasium API, determinism, spaces, physics-rate fidelity, vector envs."""
+"""auvsim/Waypoint-v1: gymnasium API, determinism, spaces, physics-rate fidelity, vector envs."""
 
 from __future__ import annotations
 
@@ -72,7 +72,7 @@ def test_physics_rate_50hz_tracks_200hz():
             env.step(np.array([0.6, 0.3 * math.sin(0.2 * t), 0.2 * math.sin(0.1 * t), 0.3 * math.cos(0.15 * t)]))
         finals.append((env._pos.copy(), env._rpy.copy()))
     travelled = np.linalg.norm(finals[1][0] - WaypointEnv().reset(seed=3)[1]["pos_ned"])
-    assert travelled > 5.0
+    assert travelled > 3.0
     assert np.linalg.norm(finals[0][0] - finals[1][0]) < 0.05
     assert abs((finals[0][1][2] - finals[1][1][2] + math.pi) % (2 * math.pi) - math.pi) < math.radians(1.0)
 

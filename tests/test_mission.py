@@ -2,60 +2,49 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
-import warnings
 
-import mujoco
 import numpy as np
 import pytest
 
-from scenarios import list_scenarios, load_scenario
+from scenarios import load_scenario
 from sim.cli import main
 from sim.mission import Mission
-from sim.records import FlsEvent, StepRecord
-from sim.vehicle import VehicleDynamics
-from sim.vehicle_params import load_vehicle_params
-from sim.world import build_world
+from sim.records import MissionInfo, MissionSummary, PerceptionResult, StepRecord
+from sim.sensors.fls import FlsRender
 
 FAST = ["autonomy.atr.detector=classical"]
-
-
-@pytest.mark.parametrize("name", sorted(list_scenarios()))
-def test_every_shipped_scene_compiles_and_steps_without_warnings(name):
-    scn = load_scenario(name)
-    world = build_world(scn)
-    vehicle = VehicleDynamics(world.model, world.data, load_vehicle_params(scn.vehicle))
-    vehicle.reset(np.asarray(scn.vehicle.initial_pos_ned), np.deg2rad(scn.vehicle.initial_rpy_deg))
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
-        for _ in range(int(round(scn.physics.rate_hz))):
-            vehicle.step_inputs(np.zeros(vehicle_n(scn)), world.model.opt.timestep)
-            mujoco.mj_step(world.model, world.data)
-    assert not np.any(world.data.warning.number), world.data.warning.number
-    assert np.all(np.isfinite(world.data.qpos))
-
-
-def vehicle_n(scn) -> int:
-    return load_vehicle_params(scn.vehicle).n_thrusters
 
 
 class _Counter:
     def __init__(self) -> None:
         self.steps: list[StepRecord] = []
-        self.fls: list[FlsEvent] = []
+        self.fls: list[FlsRender] = []
+        self.perception: list[PerceptionResult] = []
+        self.names: list[str] = []
+        self.info: MissionInfo | None = None
+        self.summary: MissionSummary | None = None
 
-    def on_start(self, mission) -> None:
+    def on_start(self, info: MissionInfo) -> None:
+        self.info = info
         self.steps.clear()
         self.fls.clear()
+        self.perception.clear()
+        self.names.clear()
 
     def on_step(self, r: StepRecord) -> None:
         self.steps.append(r)
 
-    def on_fls(self, ev: FlsEvent) -> None:
-        self.fls.append(ev)
+    def on_message(self, name: str, msg) -> None:
+        self.names.append(name)
+        if isinstance(msg, FlsRender):
+            self.fls.append(msg)
+        elif isinstance(msg, PerceptionResult):
+            self.perception.append(msg)
 
-    def on_end(self, mission) -> None:
-        pass
+    def on_end(self, summary: MissionSummary) -> None:
+        self.summary = summary
 
 
 def _fly(overrides, n_steps, seed=None):
@@ -75,7 +64,7 @@ def test_short_mission_is_deterministic_for_a_seed_and_differs_across_seeds():
     t2 = np.array([np.r_[r.truth.pos_ned, r.nav.pos_ned, r.thruster_cmd] for r in o2.steps])
     assert np.array_equal(t1, t2)
     assert len(o1.fls) == len(o2.fls) > 0
-    assert all(np.array_equal(a.render.frame.fan, b.render.frame.fan) for a, b in zip(o1.fls, o2.fls))
+    assert all(np.array_equal(a.frame.fan, b.frame.fan) for a, b in zip(o1.fls, o2.fls))
     # reseeding the same mission object replays it; another seed changes the noise
     m1.reset(0)
     again = [m1.step() for _ in range(150)]
@@ -89,12 +78,19 @@ def test_fls_frames_arrive_at_rate_after_latency_and_match_truth():
     m, obs = _fly(["autonomy.guidance.mission.start_delay_s=0"], 100)  # 10 s
     fls_cfg = m.scenario.sensors.fls
     assert len(obs.fls) == pytest.approx(10.0 * fls_cfg.rate_hz, abs=1)
-    stamps = np.array([ev.t_s for ev in obs.fls])
+    stamps = np.array([ev.frame.t_s for ev in obs.fls])
     assert np.allclose(np.diff(stamps), 1.0 / fls_cfg.rate_hz, atol=m.dt_s)
     # each frame was captured at the true pose of its timestamp (sonar head on the hull)
     ev = obs.fls[-1]
-    rec = min(obs.steps, key=lambda r: abs(r.t_s - ev.t_s))
-    assert np.linalg.norm(ev.render.truth.pos_ned - rec.truth.point_ned(m.fls.mount_pos_body_m)) < 0.1
+    rec = min(obs.steps, key=lambda r: abs(r.t_s - ev.frame.t_s))
+    assert np.linalg.norm(ev.truth.pos_ned - rec.truth.point_ned(m.fls.mount_pos_body_m)) < 0.1
+    # perception answers each frame, after it, with its own result; observers get views only
+    assert [p.t_s for p in obs.perception] == [ev.frame.t_s for ev in obs.fls]
+    assert obs.names.count("fls") == 2 * len(obs.fls) and obs.names.count("imu") > 0
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        obs.perception[0].detections = ()  # type: ignore[misc]
+    assert obs.info is not None and dict(obs.info.sensors) == {
+        "imu": "imu", "dvl": "dvl", "depth": "depth", "altimeter": "altimeter", "gps": "gps", "fls": "fls"}
 
 
 def test_run_command_writes_all_outputs(tmp_path):
@@ -124,3 +120,25 @@ def test_run_with_bad_parameters_fails_cleanly_and_writes_nothing(tmp_path, caps
     err = capsys.readouterr().err
     assert "sensors.fls.rate_hz" in err
     assert not out.exists()
+
+
+def test_sonar_mount_site_is_honoured_and_missions_carry_two_sonars_or_none():
+    start = ["autonomy.guidance.mission.start_delay_s=0"]
+    m, obs = _fly(start + ["sensors.fls.mount_site=gps"], 10)
+    gps_site, fls_site = m.world.site_pos_body("gps"), m.world.site_pos_body("fls")
+    assert np.linalg.norm(gps_site - fls_site) > 0.1
+    np.testing.assert_array_equal(m.fls.mount_pos_body_m, gps_site)
+    np.testing.assert_array_equal(obs.fls[-1].frame.mount_pos_body_m, gps_site)  # what onboard localisation reads
+
+    m2, obs2 = _fly(start + ["sensors.fls_aft.kind=fls", "sensors.fls_aft.mount_rpy_deg=[0, 0, 180]"], 10)
+    frames_aft = obs2.names.count("fls_aft")  # one message per frame
+    frames_fwd = obs2.names.count("fls") // 2  # a frame, then its perception result
+    assert frames_aft >= 2 and frames_fwd >= 2 and len(obs2.fls) == frames_aft + frames_fwd
+    assert len(obs2.perception) == frames_fwd  # perception runs on the first sonar only
+    assert m2.n_fls_frames == len(obs2.fls)
+    tilt = np.deg2rad(m2.scenario.sensors.fls_aft.tilt_deg)  # boresight aft and tilted down
+    np.testing.assert_allclose(m2.sensors["fls_aft"].R_bs[:, 0], [-np.cos(tilt), 0.0, np.sin(tilt)], atol=1e-12)
+
+    m3, obs3 = _fly(start + ["sensors.fls=null"], 10)
+    assert m3.fls is None and m3.perception is None and not obs3.fls and m3.n_fls_frames == 0
+    assert "fls" not in m3.info().sensors

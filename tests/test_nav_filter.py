@@ -14,6 +14,7 @@ from autonomy.navigation import NavigationFilter, NavNoiseModel
 from autonomy.navigation.ekf import rotated_vector_jacobian, usbl_observation, usbl_observation_jacobian
 from scenarios.config.navigation import NavigationConfig
 from scenarios.schema import SensorsConfig
+from sim.sensors.base import SceneView
 from sim.sensors.nav_suite import build_nav_sensors
 from tests.test_nav_kinematics import flat_seabed, survey_truths
 
@@ -31,7 +32,8 @@ def _distance_m(truths) -> float:
 def _fly(filters, sensors, truths, every: int = 1, noise: bool = True):
     """Feed every filter the same sensor messages; yield (truth, [estimate...]) every ``every`` steps."""
     for k, tr in enumerate(truths):
-        msgs = [sensors["imu"].measure(tr, noise=noise), sensors["dvl"].measure(tr, caster=SEABED, noise=noise),
+        msgs = [sensors["imu"].measure(tr, noise=noise),
+                sensors["dvl"].measure(tr, SceneView(0.0, SEABED), noise=noise),
                 sensors["depth"].measure(tr, noise=noise)]
         gps = sensors["gps"].measure(tr, noise=noise) if k % 5 == 0 else None
         for f in filters:

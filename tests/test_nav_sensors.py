@@ -17,6 +17,7 @@ from sim.sensors.depth import DepthSensor
 from sim.sensors.dvl import DvlSensor
 from sim.sensors.gps import GpsSensor
 from sim.sensors.imu import GRAVITY_MPS2, ImuSensor
+from sim.sensors.base import SceneView
 from sim.sensors.nav_suite import build_nav_sensors
 from tests.test_nav_kinematics import PlaneCaster, flat_seabed, static_truth, wiggle_truth
 
@@ -35,7 +36,7 @@ def test_noise_free_dvl_equals_finite_differenced_position_in_body_frame(mount):
     for t in np.linspace(0.0, 60.0, 13):
         tr = wiggle_truth(t)
         fd_ned = (wiggle_truth(t + h).point_ned(mount) - wiggle_truth(t - h).point_ned(mount)) / (2 * h)
-        msg = dvl.measure(tr, caster=caster, noise=False)
+        msg = dvl.measure(tr, SceneView(0.0, caster), noise=False)
         assert msg.valid
         np.testing.assert_allclose(msg.vel_body_mps, tr.R_nb.T @ fd_ned, atol=1e-7)
         assert msg.altitude_m == pytest.approx(20.0 - tr.point_ned(mount)[2], abs=1e-9)
@@ -47,8 +48,8 @@ def test_dvl_loses_lock_above_max_altitude():
     cfg = DvlConfig(max_altitude_m=30.0)
     dvl = DvlSensor(cfg, np.zeros(3), RNG(0))
     tr = static_truth(pos_ned=(0.0, 0.0, 5.0), rpy_rad=(0.0, 0.0, 1.0))
-    assert dvl.measure(tr, caster=flat_seabed(5.0 + 29.0), noise=False).valid
-    lost = dvl.measure(tr, caster=flat_seabed(5.0 + 31.0), noise=False)
+    assert dvl.measure(tr, SceneView(0.0, flat_seabed(5.0 + 29.0)), noise=False).valid
+    lost = dvl.measure(tr, SceneView(0.0, flat_seabed(5.0 + 31.0)), noise=False)
     assert not lost.valid and np.all(np.isnan(lost.vel_body_mps)) and math.isnan(lost.altitude_m)
 
 
@@ -60,7 +61,7 @@ def test_dvl_loses_lock_over_steep_slope(slope_deg, locked):
     tr = wiggle_truth(3.0)
     tr = type(tr)(t_s=tr.t_s, pos_ned=np.array([0.0, 0.0, 4.0]), R_nb=tr.R_nb, rpy_rad=tr.rpy_rad,
                   nu=tr.nu, nu_dot=tr.nu_dot, current_ned=tr.current_ned)
-    msg = dvl.measure(tr, caster=caster, noise=False)
+    msg = dvl.measure(tr, SceneView(0.0, caster), noise=False)
     assert msg.valid == locked
     if locked:
         np.testing.assert_allclose(msg.vel_body_mps, tr.nu[:3], atol=1e-9)
@@ -72,7 +73,7 @@ def test_dvl_noise_matches_filter_noise_model_and_dropout_rate():
     tr = static_truth(pos_ned=(0.0, 0.0, 2.0))
     tr = type(tr)(t_s=0.0, pos_ned=tr.pos_ned, R_nb=tr.R_nb, rpy_rad=tr.rpy_rad,
                   nu=np.array([0.8, 0.1, 0.05, 0.0, 0.0, 0.0]), nu_dot=np.zeros(6), current_ned=np.zeros(3))
-    msgs = [dvl.measure(tr, caster=flat_seabed(10.0)) for _ in range(4000)]
+    msgs = [dvl.measure(tr, SceneView(0.0, flat_seabed(10.0))) for _ in range(4000)]
     valid = np.array([m.valid for m in msgs])
     n = len(msgs)
     assert abs((~valid).mean() - 0.1) < 4 * math.sqrt(0.1 * 0.9 / n)
@@ -86,7 +87,7 @@ def test_dvl_scale_error_spread_matches_config():
     cfg = DvlConfig(scale_error=0.01, beam_noise_mps=0.0, noise_frac_speed=0.0, dropout_prob=0.0)
     tr = type(static_truth())(t_s=0.0, pos_ned=np.array([0.0, 0.0, 2.0]), R_nb=np.eye(3), rpy_rad=np.zeros(3),
                               nu=np.array([1.0, 0.0, 0.0, 0.0, 0.0, 0.0]), nu_dot=np.zeros(6), current_ned=np.zeros(3))
-    scale = [DvlSensor(cfg, np.zeros(3), RNG(s)).measure(tr, caster=flat_seabed(9.0)).vel_body_mps[0] - 1.0
+    scale = [DvlSensor(cfg, np.zeros(3), RNG(s)).measure(tr, SceneView(0.0, flat_seabed(9.0))).vel_body_mps[0] - 1.0
              for s in range(600)]
     assert np.std(scale) == pytest.approx(0.01, rel=0.12)
 
@@ -168,9 +169,9 @@ def test_depth_sensor_reads_mount_depth():
 def test_altimeter_measures_slant_range_and_range_limits():
     alt = AltimeterSensor(AltimeterConfig(max_range_m=30.0), np.zeros(3), RNG(0))
     tr = static_truth(pos_ned=(0.0, 0.0, 3.0), rpy_rad=(0.2, 0.1, 0.5))
-    msg = alt.measure(tr, caster=flat_seabed(10.0), noise=False)
+    msg = alt.measure(tr, SceneView(0.0, flat_seabed(10.0)), noise=False)
     assert msg.valid and msg.altitude_m == pytest.approx(7.0 / (math.cos(0.2) * math.cos(0.1)))
-    assert not alt.measure(tr, caster=flat_seabed(40.0), noise=False).valid
+    assert not alt.measure(tr, SceneView(0.0, flat_seabed(40.0)), noise=False).valid
 
 
 def test_gps_fixes_only_at_the_surface():
@@ -202,7 +203,7 @@ def _run_suite(seed: int) -> list:
     for t in np.arange(0.0, 5.0, 0.1):
         tr = wiggle_truth(t)
         for name, sensor in sensors.items():
-            msg = sensor.measure(tr, caster=caster)
+            msg = sensor.measure(tr, SceneView(0.0, caster))
             out.append((name, msg))
     return out
 
@@ -224,11 +225,11 @@ def test_suite_is_deterministic_for_a_fixed_seed():
 def test_suite_builds_every_sensor_with_its_own_stream():
     sensors = build_nav_sensors(SensorsConfig(), MOUNTS, 0)
     assert set(sensors) == {"imu", "dvl", "depth", "altimeter", "gps"}
-    assert all(s.name == k and s.rate_hz > 0 and s.latency_s >= 0 for k, s in sensors.items())
+    assert all(s.name == k and s.rate_hz > 0 and s.latency_s(None) >= 0 for k, s in sensors.items())
     # the IMU stream does not depend on whether other sensors are used
     imu_alone = build_nav_sensors(SensorsConfig(), MOUNTS, 0)["imu"]
     tr = wiggle_truth(1.0)
-    sensors["dvl"].measure(tr, caster=flat_seabed(12.0))
+    sensors["dvl"].measure(tr, SceneView(0.0, flat_seabed(12.0)))
     np.testing.assert_array_equal(sensors["imu"].measure(tr).rpy_rad, imu_alone.measure(tr).rpy_rad)
 
 

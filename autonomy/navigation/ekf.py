@@ -16,7 +16,8 @@ In ``dead_reckoning`` mode GPS and USBL are ignored.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -287,6 +288,11 @@ class NavigationFilter:
         sig_r = self.cfg.usbl_range_noise_m + self.cfg.usbl_range_noise_frac * msg.range_m
         sig_a = np.radians(self.cfg.usbl_angle_noise_deg)
         return self._update(residual, H, np.diag([sig_r**2, sig_a**2, sig_a**2]), self.cfg.usbl_gate_chi2)
+
+    def message_handlers(self) -> dict[type, Callable[[Any], Any]]:
+        """Message type -> the method that fuses it (what a message bus dispatches on)."""
+        return {ImuMsg: self.on_imu, DvlMsg: self.on_dvl, DepthMsg: self.on_depth,
+                AltimeterMsg: self.on_altimeter, GpsMsg: self.on_gps, UsblMsg: self.on_usbl}
 
     # ------------------------------------------------------------------ output
     def estimate(self) -> NavEstimate:

@@ -11,12 +11,13 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
-from scenarios.config.base import StrictModel
+from scenarios.config.sensor import SensorConfig, sensor_config
 
 FlsPresetName = Literal["m900_130", "aris3000", "aris3000_lf"]
 
 
-class FlsConfig(StrictModel):
+@sensor_config
+class FlsConfig(SensorConfig):
     """Forward-looking sonar: geometry, ray sampling, image formation and output.
 
     Geometry (``None`` = preset value): ``fov_deg`` horizontal field of view, ``n_beams``
@@ -25,13 +26,18 @@ class FlsConfig(StrictModel):
     inside them, ``range_resolution_m`` the polar bin size, ``beamwidth_az_deg`` the -3 dB
     one-way horizontal beam width, ``absorption_db_per_m`` one-way absorption,
     ``fan_size_px`` the (width, height) of the Cartesian fan image.
+
+    Mount: the head sits at hull site ``mount_site`` (default ``fls``, whatever the entry's
+    name) or at ``mount_pos_body_m``; its boresight is pitched down by ``tilt_deg``, and
+    ``mount_rpy_deg`` gives its roll and yaw (its pitch must stay 0: use ``tilt_deg``).
     """
 
-    enabled: bool = True
+    kind: Literal["fls"] = "fls"
+
     preset: FlsPresetName = "m900_130"
     rate_hz: float = Field(3.0, gt=0.0, le=100.0)
     latency_s: float = Field(0.05, ge=0.0, le=5.0, description="sampling to delivery, s")
-    mount_site: str = Field("fls", min_length=1, description="hull site the head sits at")
+    mount_site: str | None = Field("fls", min_length=1, description="hull site the head sits at")
     tilt_deg: float = Field(10.0, ge=-45.0, le=90.0, description="boresight pitch down")
 
     fov_deg: float | None = Field(None, gt=0.0, le=180.0)
@@ -77,6 +83,8 @@ class FlsConfig(StrictModel):
 
     @model_validator(mode="after")
     def _check_window(self) -> "FlsConfig":
+        if self.mount_rpy_deg[1] != 0.0:
+            raise ValueError("mount_rpy_deg pitch must be 0 for a sonar: set its tilt with tilt_deg")
         w = self.range_window_m
         if w is not None and not (0.0 <= w[0] < w[1]):
             raise ValueError(f"range_window_m must be (near, far) with 0 <= near < far, got {w}")

@@ -13,18 +13,21 @@ from typing import Literal
 
 from pydantic import Field
 
-from scenarios.config.base import StrictModel
+from scenarios.config.sensor import SensorConfig, sensor_config
 
 Latency = Field(0.0, ge=0.0, le=5.0, description="delay from sampling to delivery, s")
 
 
-class ImuConfig(StrictModel):
+@sensor_config
+class ImuConfig(SensorConfig):
     """AHRS/IMU: attitude, body rates and specific force.
 
     ``heading_source='fog'`` integrates a fibre-optic gyro: heading error is an alignment bias
     plus a random walk. ``'ahrs'`` uses the magnetometer heading: a larger constant bias plus
     larger white noise, no drift.
     """
+
+    kind: Literal["imu"] = "imu"
 
     rate_hz: float = Field(100.0, gt=0.0, le=1000.0)
     latency_s: float = Latency
@@ -60,11 +63,14 @@ class ImuConfig(StrictModel):
         return math.radians(self.fog_heading_random_walk_deg_per_sqrt_h) / 60.0
 
 
-class DvlConfig(StrictModel):
+@sensor_config
+class DvlConfig(SensorConfig):
     """Janus 4-beam bottom-tracking DVL. Per-beam radial velocity noise is
     ``beam_noise_mps + noise_frac_speed * |v|``; a per-run scale error (sound speed) multiplies
     all beams. Lock needs ``min_valid_beams`` beam hits within ``max_altitude_m`` and a seabed
     slope (plane fitted to the beam footprints) of at most ``max_slope_deg``."""
+
+    kind: Literal["dvl"] = "dvl"
 
     rate_hz: float = Field(5.0, gt=0.0, le=100.0)
     latency_s: float = Latency
@@ -82,16 +88,22 @@ class DvlConfig(StrictModel):
     dropout_prob: float = Field(0.02, ge=0.0, le=1.0)
 
 
-class DepthConfig(StrictModel):
+@sensor_config
+class DepthConfig(SensorConfig):
     """Pressure depth sensor (the DVL1000's on FeelHippo)."""
+
+    kind: Literal["depth"] = "depth"
 
     rate_hz: float = Field(10.0, gt=0.0, le=100.0)
     latency_s: float = Latency
     noise_m: float = Field(0.02, ge=0.0, le=10.0)
 
 
-class AltimeterConfig(StrictModel):
+@sensor_config
+class AltimeterConfig(SensorConfig):
     """Single-beam echo sounder looking along body +z (down)."""
+
+    kind: Literal["altimeter"] = "altimeter"
 
     rate_hz: float = Field(5.0, gt=0.0, le=100.0)
     latency_s: float = Latency
@@ -102,8 +114,11 @@ class AltimeterConfig(StrictModel):
     dropout_prob: float = Field(0.0, ge=0.0, le=1.0)
 
 
-class GpsConfig(StrictModel):
+@sensor_config
+class GpsConfig(SensorConfig):
     """GPS receiver: fixes only while the antenna is shallower than ``max_antenna_depth_m``."""
+
+    kind: Literal["gps"] = "gps"
 
     rate_hz: float = Field(1.0, gt=0.0, le=20.0)
     latency_s: float = Latency

@@ -1,4 +1,4 @@
-"""Gymnasium environments on top of the simulator: ``auvsim/Survey-v0`` and ``auvsim/Waypoint-v0``.
+"""Gymnasium environments on top of the simulator: ``auvsim/Survey-v1`` and ``auvsim/Waypoint-v1``.
 
 Importing this package registers both ids; the env classes are imported lazily so that
 registration stays cheap.

@@ -1,4 +1,11 @@
-"""``auvsim/Survey-v0``: find and localise the targets of an area with high-level setpoints.
+"""``auvsim/Survey-v1``: find and localise the targets of an area with high-level setpoints.
+
+Each episode (:mod:`sim.envs.survey_layout`) surveys a square area larger than the sonar's
+reach (``area_size_ne_m``, 80 m x 80 m by default, centred on the scenario's survey plan),
+starting at its south-west corner heading north, with the scenario's objects placed at
+random in the area from the episode's seed, none within the sonar's reach of the start.
+(``Survey-v0`` surveyed the scenario's own small area with its fixed targets: the start
+already saw every target, so every sonar episode ended on its first step.)
 
 Wraps the closed-loop :class:`sim.mission.Mission` (physics, navigation sensors, EKF,
 autopilots and, with ``sonar=True``, the FLS, ATR, geolocalisation and PMHA world model).
@@ -29,9 +36,12 @@ from scenarios.schema import Scenario
 from sim.envs.area import OperatingArea, survey_area
 from sim.envs.coverage import CoverageGrid
 from sim.envs.scenario_arg import resolve_scenario
+from sim.envs.survey_layout import SurveyLayout, episode_scenario, episode_seabed, make_layout
 from sim.envs.world_model_obs import anchor_bounds, anchor_table, match_new_targets
 from sim.mission import Mission
-from sim.records import FlsEvent
+from sim.records import MissionInfo, MissionSummary
+from sim.sensors.base import Mount
+from sim.sensors.fls import FlsRender
 from sim.sensors.fls_presets import resolve_geometry
 
 NAV_FEATURES = ("n_m", "e_m", "depth_m", "altitude_m", "altitude_valid", "roll_rad", "pitch_rad", "sin_yaw",
@@ -75,6 +85,11 @@ class SurveyEnvOptions:
             (or once every target is found, with sonar).
         match_radius_m: a world object within this of a true target finds it.
         area_margin_m: the episode ends this far outside the survey area.
+        area_size_ne_m: (north, east) size of the surveyed square, m; must exceed the sonar's
+            reach.
+        start_clearance_m: no object is placed closer than this to the start (None: the
+            sonar's far range + 5 m).
+        min_target_spacing_m: objects are placed at least this far apart, m.
         nav_source: pose used for target geolocalisation (``estimate`` or ``truth``).
         physics_rate_hz: physics rate override (None: the scenario's).
         reward: reward weights.
@@ -91,6 +106,9 @@ class SurveyEnvOptions:
     complete_coverage_fraction: float = 0.95
     match_radius_m: float = 2.0
     area_margin_m: float = 5.0
+    area_size_ne_m: tuple[float, float] = (80.0, 80.0)
+    start_clearance_m: float | None = None
+    min_target_spacing_m: float = 4.0
     nav_source: str = "estimate"
     physics_rate_hz: float | None = None
     reward: SurveyRewardWeights = field(default_factory=SurveyRewardWeights)
@@ -115,6 +133,12 @@ class SurveyEnvOptions:
                              f"got {self.complete_coverage_fraction}")
         if not self.match_radius_m > 0.0 or not self.area_margin_m >= 0.0:
             raise ValueError("SurveyEnvOptions.match_radius_m must be > 0 and area_margin_m >= 0")
+        if len(self.area_size_ne_m) != 2 or min(self.area_size_ne_m) <= 0.0:
+            raise ValueError(f"SurveyEnvOptions.area_size_ne_m must be two sizes > 0, got {self.area_size_ne_m}")
+        if self.start_clearance_m is not None and not self.start_clearance_m >= 0.0:
+            raise ValueError(f"SurveyEnvOptions.start_clearance_m must be >= 0 or None, got {self.start_clearance_m}")
+        if not self.min_target_spacing_m >= 0.0:
+            raise ValueError(f"SurveyEnvOptions.min_target_spacing_m must be >= 0, got {self.min_target_spacing_m}")
 
 
 def _options(options: SurveyEnvOptions | dict | None) -> SurveyEnvOptions:
@@ -124,7 +148,7 @@ def _options(options: SurveyEnvOptions | dict | None) -> SurveyEnvOptions:
         opts = dict(options)
         if isinstance(opts.get("reward"), dict):
             opts["reward"] = SurveyRewardWeights(**opts["reward"])
-        for key in ("coverage_shape", "sonar_shape", "speed_range_mps", "altitude_range_m"):
+        for key in ("coverage_shape", "sonar_shape", "speed_range_mps", "altitude_range_m", "area_size_ne_m"):
             if key in opts:
                 opts[key] = tuple(opts[key])
         return SurveyEnvOptions(**opts)
@@ -132,21 +156,23 @@ def _options(options: SurveyEnvOptions | dict | None) -> SurveyEnvOptions:
 
 
 class _LatestFls:
-    """Mission observer keeping the latest FLS fan image."""
+    """Mission observer keeping the latest fan image of the sonar named ``name``."""
 
-    def __init__(self) -> None:
+    def __init__(self, name: str = "fls") -> None:
+        self.name = name
         self.fan: np.ndarray | None = None
 
-    def on_start(self, mission: Mission) -> None:
+    def on_start(self, info: MissionInfo) -> None:
         self.fan = None
 
     def on_step(self, record) -> None:
         pass
 
-    def on_fls(self, event: FlsEvent) -> None:
-        self.fan = event.render.frame.fan
+    def on_message(self, name: str, msg: Any) -> None:
+        if name == self.name and isinstance(msg, FlsRender):
+            self.fan = msg.frame.fan
 
-    def on_end(self, mission: Mission) -> None:
+    def on_end(self, summary: MissionSummary) -> None:
         pass
 
 
@@ -173,11 +199,15 @@ class SurveyEnv(gym.Env):
             over.append("sensors.fls.enabled=false")
         if opts.physics_rate_hz is not None:
             over.append(f"physics.rate_hz={opts.physics_rate_hz}")
-        self.scenario = scn = resolve_scenario(scenario, over)
-        self.area: OperatingArea = survey_area(scn, opts.area_margin_m)
+        self.base_scenario = base = resolve_scenario(scenario, over)
+        self.layout: SurveyLayout = make_layout(base, opts.area_size_ne_m, opts.area_margin_m,
+                                                start_clearance_m=opts.start_clearance_m,
+                                                min_spacing_m=opts.min_target_spacing_m)
+        self.area: OperatingArea = self.layout.area
+        self._seabed = episode_seabed(base, self.layout)
         self._latest_fls = _LatestFls()
-        self.mission = Mission(scn, nav_source=opts.nav_source, observers=(self._latest_fls,),
-                                   perception=opts.sonar)
+        self._build(episode_scenario(base, self.layout, self._seabed, np.random.default_rng(0)))
+        scn = self.scenario
         self.ticks_per_step = int(round(opts.decision_interval_s / self.mission.autonomy_dt_s))
         if self.ticks_per_step < 1 or abs(self.ticks_per_step * self.mission.autonomy_dt_s
                                           - opts.decision_interval_s) > 1e-6:
@@ -186,15 +216,6 @@ class SurveyEnv(gym.Env):
         self.decision_interval_s = self.ticks_per_step * self.mission.autonomy_dt_s
         self.max_episode_s = float(scn.duration_s if opts.max_episode_s is None else opts.max_episode_s)
         self.max_yaw_rate_radps = math.radians(scn.autonomy.control.max_yaw_rate_dps)
-
-        fls_cfg = scn.sensors.fls
-        g = resolve_geometry(fls_cfg)
-        self.coverage = CoverageGrid(self.area, opts.coverage_shape, self.mission.world.seabed.depth_at,
-                                     self.mission.world.site_pos_body(fls_cfg.mount_site),
-                                     (0.0, math.radians(fls_cfg.tilt_deg), 0.0), range_min_m=g.window_near_m,
-                                     range_max_m=g.window_far_m, fov_rad=g.fov_rad,
-                                     vertical_fov_rad=g.vertical_beamwidth_rad)
-        self.targets_ned = np.array([t.pos_ned for t in scn.world.targets if t.is_target], dtype=float).reshape(-1, 3)
         self.origin_ned = np.array([*self.area.center_ne_m, 0.0])
 
         k = opts.top_k_anchors
@@ -209,11 +230,26 @@ class SurveyEnv(gym.Env):
             obs_spaces["sonar"] = spaces.Box(0, 255, tuple(opts.sonar_shape), dtype=np.uint8)
         self.observation_space = spaces.Dict(obs_spaces)
         self.action_space = spaces.Box(-1.0, 1.0, (3,), dtype=np.float32)
-        self._found = np.zeros(len(self.targets_ned), dtype=bool)
 
     # ------------------------------------------------------------------ episode
+    def _build(self, scn: Scenario) -> None:
+        """Mission, coverage grid and target list of one episode's scenario."""
+        opts = self.options
+        self.scenario = scn
+        self.mission = Mission(scn, nav_source=opts.nav_source, observers=(self._latest_fls,), perception=opts.sonar)
+        fls_cfg = scn.sensors.fls
+        g = resolve_geometry(fls_cfg)
+        mount = Mount.from_config("fls", fls_cfg, self.mission.physics.site_pos_body)
+        self.coverage = CoverageGrid(self.area, opts.coverage_shape, self._seabed.depth_at, mount.pos_body_m,
+                                     (mount.rpy_rad[0], math.radians(fls_cfg.tilt_deg), mount.rpy_rad[2]),
+                                     range_min_m=g.window_near_m, range_max_m=g.window_far_m, fov_rad=g.fov_rad,
+                                     vertical_fov_rad=g.vertical_beamwidth_rad)
+        self.targets_ned = np.array([t.pos_ned for t in scn.world.targets if t.is_target], dtype=float).reshape(-1, 3)
+        self._found = np.zeros(len(self.targets_ned), dtype=bool)
+
     def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[dict, dict[str, Any]]:
         super().reset(seed=seed)
+        self._build(episode_scenario(self.base_scenario, self.layout, self._seabed, self.np_random))
         mission_seed = int(self.np_random.integers(0, 2**63 - 1))
         rec = self.mission.reset(mission_seed)
         self._nav = rec.nav
@@ -242,7 +278,7 @@ class SurveyEnv(gym.Env):
             rec = m.step(Setpoint(float(speed), self._heading_sp_rad, altitude_m=float(altitude)))
             effort += float(np.mean(np.square(rec.thruster_cmd))) * dt
             n_new_cells += self.coverage.observe(rec.nav.pos_ned, rec.nav.rpy_rad)
-            if m.data.ncon and self._vehicle_contact():
+            if m.physics.data.ncon and m.physics.vehicle_in_contact():
                 collided = True
         self._nav = rec.nav
         self._n_steps += 1
@@ -269,16 +305,6 @@ class SurveyEnv(gym.Env):
         info = self._info(collided, left, n_new_targets)
         info.update(energy=effort, complete=complete)
         return self._observation(), float(reward), terminated, truncated, info
-
-    def _vehicle_contact(self) -> bool:
-        m = self.mission
-        body = m.model.geom_bodyid
-        vb = m.world.vehicle_body_id
-        for i in range(m.data.ncon):
-            c = m.data.contact[i]
-            if body[c.geom1] == vb or body[c.geom2] == vb:
-                return True
-        return False
 
     # ------------------------------------------------------------------ observation
     def _observation(self) -> dict[str, np.ndarray]:

@@ -1,4 +1,4 @@
-"""``auvsim/Waypoint-v0``: reach a sequence of 3-D waypoints under a random current.
+"""``auvsim/Waypoint-v1``: reach a sequence of 3-D waypoints under a random current.
 
 A light loop without sonar, sensors or navigation filter, for fast RL baselines: MuJoCo
 physics with the Fossen wrench (:class:`sim.vehicle.VehicleDynamics`) and thruster
@@ -19,7 +19,6 @@ from pathlib import Path
 from typing import Any, Literal
 
 import gymnasium as gym
-import mujoco
 import numpy as np
 from gymnasium import spaces
 
@@ -30,12 +29,9 @@ from autonomy.frames import wrap_angle
 from autonomy.messages import NavEstimate
 from scenarios.config.world import CurrentConfig
 from scenarios.schema import Scenario
-from sim.current import OceanCurrent
 from sim.envs.area import OperatingArea, survey_area
 from sim.envs.scenario_arg import resolve_scenario
-from sim.vehicle import VehicleDynamics
-from sim.vehicle_params import load_vehicle_params
-from sim.world import build_world
+from sim.physics import Physics
 
 ACTION_MODES = ("wrench", "setpoint")
 _POS_LIMIT_M = 200.0
@@ -144,10 +140,10 @@ class WaypointEnv(gym.Env):
             over.append(f"physics.rate_hz={opts.physics_rate_hz}")
         self.scenario = scn = resolve_scenario(scenario, over)
         self.area: OperatingArea = survey_area(scn, opts.area_margin_m)
-        self.params = load_vehicle_params(scn.vehicle)
-        self.world = build_world(scn)
-        self.model, self.data = self.world.model, self.world.data
-        self.dt_s = float(self.model.opt.timestep)
+        self.physics = Physics(scn)
+        self.params = self.physics.params
+        self.world = self.physics.world
+        self.dt_s = self.physics.dt_s
         self.substeps = int(round(opts.decision_interval_s / self.dt_s))
         if self.substeps < 1 or abs(self.substeps * self.dt_s - opts.decision_interval_s) > 1e-6:
             raise ValueError(f"WaypointEnvOptions.decision_interval_s={opts.decision_interval_s} must be a multiple "
@@ -159,7 +155,6 @@ class WaypointEnv(gym.Env):
         if opts.depth_range_m[1] > seabed_min - 0.5:
             raise ValueError(f"WaypointEnvOptions.depth_range_m max {opts.depth_range_m[1]} m must stay 0.5 m above "
                              f"the shallowest seabed in the area ({seabed_min:.2f} m)")
-        self.vehicle = VehicleDynamics(self.model, self.data, self.params, None, body_id=self.world.vehicle_body_id)
         self.allocator = ThrustAllocator.from_layout(self.params.layout)
         ctrl = scn.autonomy.control
         self.autopilot = Autopilot(AutopilotParams.from_config(ctrl))
@@ -204,10 +199,8 @@ class WaypointEnv(gym.Env):
                base.velocity_ned_mps[1] + speed * math.sin(direction), base.velocity_ned_mps[2])
         current_cfg = base.model_copy(update={"velocity_ned_mps": vel})
         current_rng = np.random.default_rng(int(rng.integers(0, 2**63 - 1)))
-        self.vehicle.current = OceanCurrent(CurrentConfig.model_validate(current_cfg.model_dump()), current_rng)
-
-        mujoco.mj_resetData(self.model, self.data)
-        self.vehicle.reset(start, (0.0, 0.0, yaw))
+        self.physics.set_current(CurrentConfig.model_validate(current_cfg.model_dump()), current_rng)
+        self.physics.reset(start, (0.0, 0.0, yaw))
         self.autopilot.reset()
         self._heading_sp_rad = yaw
         self._t_s = 0.0
@@ -220,7 +213,7 @@ class WaypointEnv(gym.Env):
         return self._observation(), self._info(False, False)
 
     def _state(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        truth = self.vehicle.truth(self._t_s)
+        truth = self.physics.truth()
         return truth.pos_ned, truth.R_nb, truth.rpy_rad, truth.nu
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
@@ -235,14 +228,13 @@ class WaypointEnv(gym.Env):
         collided = False
         effort = 0.0
         ticks_per_control = max(int(round(self.autopilot_dt_s / self.dt_s)), 1)
-        for k in range(self.substeps):
-            if opts.action_mode == "setpoint" and k % ticks_per_control == 0:
+        ticks = self.substeps if opts.action_mode == "wrench" else ticks_per_control
+        for k in range(0, self.substeps, ticks):
+            if opts.action_mode == "setpoint":
                 self._thruster_cmd = self._setpoint_command(a, ticks_per_control * self.dt_s)
-            self.vehicle.step_inputs(self._thruster_cmd, self.dt_s)
-            mujoco.mj_step(self.model, self.data)
-            effort += float(np.mean(np.square(self._thruster_cmd))) * self.dt_s
-            if self.data.ncon and self._vehicle_contact():
-                collided = True
+            n = min(ticks, self.substeps - k)
+            collided |= self.physics.advance(self._thruster_cmd, n)
+            effort += float(np.mean(np.square(self._thruster_cmd))) * self.dt_s * n
         self._n_steps += 1
         self._t_s = self._n_steps * self.decision_interval_s
         self._pos, self._R, self._rpy, self._nu = self._state()
@@ -276,20 +268,11 @@ class WaypointEnv(gym.Env):
         speed = s_lo + 0.5 * (a[0] + 1.0) * (s_hi - s_lo)
         self._heading_sp_rad = float(wrap_angle(self._heading_sp_rad + a[1] * self.max_yaw_rate_radps * dt_s))
         depth = d_lo + 0.5 * (a[2] + 1.0) * (d_hi - d_lo)
-        truth = self.vehicle.truth(self._t_s)
+        truth = self.physics.truth()
         nav = NavEstimate(t_s=self._t_s, pos_ned=truth.pos_ned, rpy_rad=truth.rpy_rad, vel_body_mps=truth.nu[:3],
                           rate_body_radps=truth.nu[3:], cov_pos_ned=np.zeros((3, 3)))
         wrench = self.autopilot.update(nav, Setpoint(float(speed), self._heading_sp_rad, depth_m=float(depth)), dt_s)
         return self.allocator.allocate(wrench)
-
-    def _vehicle_contact(self) -> bool:
-        body = self.model.geom_bodyid
-        vb = self.world.vehicle_body_id
-        for i in range(self.data.ncon):
-            c = self.data.contact[i]
-            if body[c.geom1] == vb or body[c.geom2] == vb:
-                return True
-        return False
 
     # ------------------------------------------------------------------ observation
     def _observation(self) -> np.ndarray:

@@ -104,17 +104,17 @@ class _ProgressObserver:
     def __init__(self, progress: MissionProgress) -> None:
         self.progress = progress
 
-    def on_start(self, mission: Any) -> None:
+    def on_start(self, info: Any) -> None:
         self.progress.start()
 
     def on_step(self, record: Any) -> None:
         self.progress.update(record.t_s, record.mode)
 
-    def on_fls(self, event: Any) -> None:
+    def on_message(self, name: str, msg: Any) -> None:
         pass
 
-    def on_end(self, mission: Any) -> None:
-        self.progress.close(mission.t_s)
+    def on_end(self, summary: Any) -> None:
+        self.progress.close(summary.sim_time_s)
 
 
 def run_mission(

@@ -1,1 +1,2 @@
-"""Simulated sensors. Each has a name, a rate, a latency and ``measure(truth, *, noise=True)``."""
+"""Simulated sensors: one contract (:mod:`sim.sensors.base`), registered by kind
+(:mod:`sim.sensors.registry`)."""

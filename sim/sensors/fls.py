@@ -27,6 +27,7 @@ from autonomy.messages import FlsFrame
 from autonomy.sonar_frame import sonar_to_body_rotation
 from autonomy.sonar_geometry import FanGeometry
 from scenarios.config.fls import FlsConfig
+from sim.sensors.base import Mount, SceneView, Sensor
 from sim.sensors.fls_presets import FlsGeometry, resolve_geometry
 from sim.sensors.raycast import RayCaster
 from sim.sensors.sonar.beam_pattern import azimuth_kernel
@@ -41,6 +42,7 @@ from sim.sensors.sonar.ground_truth import (
     label_bins,
     visible_fraction,
 )
+from sim.sensors.registry import register_sensor
 from sim.sensors.sonar.ray_fan import RayFan, RayTable, column_neighbours
 from sim.truth import VehicleTruth
 
@@ -63,7 +65,8 @@ class FlsRender:
     intensity: NDArray[np.float32]
 
 
-class FlsSensor:
+@register_sensor(FlsConfig)
+class FlsSensor(Sensor[FlsRender]):
     """Forward-looking sonar on the hull.
 
     Args:
@@ -71,23 +74,25 @@ class FlsSensor:
         mount_pos_body_m: (3,) FRD offset of the sonar head from the body origin.
         mount_rpy_rad: (3,) sonar frame w.r.t. body: roll, tilt (pitch down > 0), yaw;
             default ``(0, cfg.tilt_deg, 0)``.
-        rng: generator for speckle and noise (``sim.rng.component_rng(seed, "fls")``).
+        rng: generator for speckle and noise (``sim.rng.component_rng(seed, name)``).
+        name: the sensor's entry name (default ``fls``).
     """
 
-    name = "fls"
-
     def __init__(self, cfg: FlsConfig, mount_pos_body_m: ArrayLike = (0.0, 0.0, 0.0),
-                 mount_rpy_rad: ArrayLike | None = None, rng: np.random.Generator | None = None) -> None:
+                 mount_rpy_rad: ArrayLike | None = None, rng: np.random.Generator | None = None, *,
+                 name: str | None = None) -> None:
         self.cfg = cfg
+        self.name = name or cfg.kind
         self.geometry: FlsGeometry = resolve_geometry(cfg)
         g = self.geometry
         self.rate_hz = float(cfg.rate_hz)
-        self.latency_s = float(cfg.latency_s)
         self.mount_pos_body_m = np.asarray(mount_pos_body_m, dtype=float).reshape(3)
         rpy = (0.0, np.deg2rad(cfg.tilt_deg), 0.0) if mount_rpy_rad is None else mount_rpy_rad
         self.mount_rpy_rad = np.asarray(rpy, dtype=float).reshape(3)
         self.R_bs = sonar_to_body_rotation(self.mount_rpy_rad)
-        self.rng = rng if rng is not None else np.random.default_rng(0)
+        roll, tilt, yaw = self.mount_rpy_rad
+        self.mount = Mount(self.mount_pos_body_m, np.array([roll, -tilt, yaw]))  # R_bs as roll/pitch/yaw
+        self.reset(rng if rng is not None else np.random.default_rng(0))
 
         self.n_bins = g.n_bins
         self.rays = RayFan(g.column_azimuths_rad(), g.elevations_rad())
@@ -107,6 +112,29 @@ class FlsSensor:
         self.fan_geometry = FanGeometry.fit(w, h, g.window_near_m, g.window_far_m, g.fov_rad)
         self._remap = FanRemap(self.fan_geometry, beam_az, g.window_near_m, g.range_resolution_m, self.n_bins)
 
+    # -- sensor contract --------------------------------------------------------------------
+    @classmethod
+    def from_config(cls, name: str, cfg: FlsConfig, mount: Mount | ArrayLike,
+                    rng: np.random.Generator) -> "FlsSensor":
+        """Head at the mount's position; roll and yaw from the mount, tilt from ``cfg.tilt_deg``."""
+        m = mount if isinstance(mount, Mount) else Mount(np.asarray(mount, dtype=float))
+        rpy = np.array([m.rpy_rad[0], np.deg2rad(cfg.tilt_deg), m.rpy_rad[2]])
+        return cls(cfg, m.pos_body_m, rpy, rng, name=name)
+
+    def reset(self, rng: np.random.Generator) -> None:
+        """Take a new speckle and noise stream."""
+        self.rng = self._rng = rng
+
+    def ideal(self, truth: VehicleTruth, scene: SceneView) -> FlsRender:
+        """The expected frame (no speckle, no receiver noise draws)."""
+        return self.measure(truth, scene, noise=False)
+
+    def measure(self, truth: VehicleTruth, scene: SceneView, *, noise: bool = True) -> FlsRender:
+        """Render from the true vehicle state (sonar head at the mount point) among the scene's
+        objects at capture time."""
+        return self.render(truth.t_s, truth.point_ned(self.mount_pos_body_m), truth.R_nb,
+                           scene.require_caster("FlsSensor"), scene.objects, noise=noise)
+
     # -- public ---------------------------------------------------------------------------
     @property
     def n_rays(self) -> int:
@@ -118,12 +146,6 @@ class FlsSensor:
         g = self.geometry
         return fls_swath_width_m(altitude_m, float(self.mount_rpy_rad[1]), g.fov_rad, g.vertical_beamwidth_rad,
                                  g.window_near_m, g.window_far_m)
-
-    def measure(self, truth: VehicleTruth, caster: RayCaster, objects: Sequence[SceneObjectLike] = (), *,
-                noise: bool = True) -> FlsRender:
-        """Render from the true vehicle state (sonar head at the mount point)."""
-        return self.render(truth.t_s, truth.point_ned(self.mount_pos_body_m), truth.R_nb, caster, objects,
-                           noise=noise)
 
     def render(self, t_s: float, pos_ned: ArrayLike, R_nb: ArrayLike, caster: RayCaster,
                objects: Sequence[SceneObjectLike] = (), *, noise: bool = True) -> FlsRender:

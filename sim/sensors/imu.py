@@ -10,57 +10,64 @@ from numpy.typing import ArrayLike
 from autonomy.frames import wrap_angle
 from autonomy.messages import ImuMsg
 from scenarios.config.nav_sensors import ImuConfig
+from sim.sensors.base import Mount, SceneView, Sensor
 from sim.sensors.noise import RandomWalkBias, white_noise
-from sim.sensors.base import HullSensor
-from sim.sensors.raycast import RayCaster
+from sim.sensors.registry import register_sensor
 from sim.truth import VehicleTruth
 
 GRAVITY_MPS2 = 9.81
 GRAVITY_NED_MPS2 = np.array([0.0, 0.0, GRAVITY_MPS2])  # NED z is down
 
 
-def _cross(a, b):
-    """3-vector cross product (np.cross is slow for single vectors)."""
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+@register_sensor(ImuConfig)
+class ImuSensor(Sensor[ImuMsg]):
+    """Strapdown IMU + AHRS at the mount point, axes along the body's (FRD).
 
-
-class ImuSensor(HullSensor):
-    """Strapdown IMU + AHRS at ``mount_pos_body_m`` (FRD, m).
-
-    Measurement model (``noise=True``):
+    Ideal values: the true roll/pitch/yaw, body rates, and the specific force at the mount
+    ``R_nb^T (a_mount_ned - g_ned)`` (FRD, m/s^2; at rest and level [0, 0, -9.81]).
+    Corruption:
         rpy   = rpy_true + b_att(t) + w_att,   b_att: per-run constant, heading random walk (FOG)
         rate  = omega + b_g + w_g
-        accel = R_nb^T (a_mount_ned - g_ned) + b_a + w_a   (specific force, FRD)
-    At rest and level ``accel`` reads [0, 0, -9.81].
+        accel = f + b_a + w_a
+    Biases are drawn in :meth:`reset`; yaw is wrapped to (-pi, pi].
+
+    Raises:
+        ValueError: the mount is rotated w.r.t. the body (not modelled).
     """
 
-    name = "imu"
+    def __init__(self, cfg: ImuConfig, mount: Mount | ArrayLike, rng: np.random.Generator | None = None, *,
+                 name: str | None = None) -> None:
+        super().__init__(cfg, mount, rng, name=name)
+        if not self.mount.is_aligned:
+            raise ValueError(f"sensors.{self.name}: an IMU rotated w.r.t. the body is not modelled (mount_rpy_deg)")
+        rp_noise = math.radians(cfg.roll_pitch_noise_deg)
+        self._attitude_noise_rad = np.array([rp_noise, rp_noise, cfg.heading_noise_rad])
 
-    def __init__(self, cfg: ImuConfig, mount_pos_body_m: ArrayLike, rng: np.random.Generator):
-        super().__init__(cfg, mount_pos_body_m, rng)
+    def reset(self, rng: np.random.Generator) -> None:
+        super().reset(rng)
+        cfg = self.cfg
         rp = math.radians(cfg.roll_pitch_bias_deg)
         self._attitude_bias = RandomWalkBias(
             rng, [rp, rp, cfg.heading_bias_rad], [0.0, 0.0, cfg.heading_random_walk_rad_per_sqrt_s]
         )
-        rp_noise = math.radians(cfg.roll_pitch_noise_deg)
-        self._attitude_noise_rad = np.array([rp_noise, rp_noise, cfg.heading_noise_rad])
         self._gyro_bias_radps = white_noise(rng, np.full(3, math.radians(cfg.gyro_bias_dps)))
         self._accel_bias_mps2 = white_noise(rng, np.full(3, cfg.accel_bias_mps2))
 
-    def measure(self, truth: VehicleTruth, *, caster: RayCaster | None = None, noise: bool = True) -> ImuMsg:
-        v, omega = truth.nu[:3], truth.nu[3:]
-        v_dot, omega_dot = truth.nu_dot[:3], truth.nu_dot[3:]
-        r = self.mount_pos_body_m
-        # inertial acceleration of the mount point, body frame (v is body velocity over ground)
-        accel_body = v_dot + _cross(omega, v) + _cross(omega_dot, r) + _cross(omega, _cross(omega, r))
-        specific_force = accel_body - truth.R_nb.T @ GRAVITY_NED_MPS2
-        rpy = np.array(truth.rpy_rad, dtype=float)
-        rate = np.array(omega, dtype=float)
-        if noise:
-            rpy = rpy + self._attitude_bias.at(truth.t_s) + white_noise(self._rng, self._attitude_noise_rad)
-            rate = rate + self._gyro_bias_radps + white_noise(self._rng, np.full(3, math.radians(self.cfg.gyro_noise_dps)))
-            specific_force = (
-                specific_force + self._accel_bias_mps2 + white_noise(self._rng, np.full(3, self.cfg.accel_noise_mps2))
-            )
+    def ideal(self, truth: VehicleTruth, scene: SceneView) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
+        """(t_s, rpy_rad (3,), rate_body_radps (3,), specific force FRD (3,)), yaw unwrapped."""
+        specific_force = truth.point_accel_body(self.mount.pos_body_m) - truth.R_nb.T @ GRAVITY_NED_MPS2
+        return truth.t_s, np.array(truth.rpy_rad, dtype=float), np.array(truth.nu[3:], dtype=float), specific_force
+
+    def exact(self, ideal: tuple[float, np.ndarray, np.ndarray, np.ndarray]) -> ImuMsg:
+        t_s, rpy, rate, specific_force = ideal
         rpy[2] = float(wrap_angle(rpy[2]))
-        return ImuMsg(t_s=truth.t_s, rpy_rad=rpy, rate_body_radps=rate, accel_body_mps2=specific_force)
+        return ImuMsg(t_s=t_s, rpy_rad=rpy, rate_body_radps=rate, accel_body_mps2=specific_force)
+
+    def corrupt(self, ideal: tuple[float, np.ndarray, np.ndarray, np.ndarray], truth: VehicleTruth) -> ImuMsg:
+        t_s, rpy, rate, specific_force = ideal
+        rpy = rpy + self._attitude_bias.at(t_s) + white_noise(self._rng, self._attitude_noise_rad)
+        rate = rate + self._gyro_bias_radps + white_noise(self._rng, np.full(3, math.radians(self.cfg.gyro_noise_dps)))
+        specific_force = (
+            specific_force + self._accel_bias_mps2 + white_noise(self._rng, np.full(3, self.cfg.accel_noise_mps2))
+        )
+        return self.exact((t_s, rpy, rate, specific_force))

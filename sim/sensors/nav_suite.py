@@ -8,13 +8,9 @@ import numpy as np
 
 from scenarios.config.nav_sensors import AltimeterConfig, DepthConfig, DvlConfig, GpsConfig, ImuConfig
 from sim.rng import component_rng
-from sim.sensors.altimeter import AltimeterSensor
-from sim.sensors.depth import DepthSensor
-from sim.sensors.dvl import DvlSensor
-from sim.sensors.gps import GpsSensor
-from sim.sensors.imu import ImuSensor
+from sim.sensors.base import Sensor
+from sim.sensors.registry import build_sensor
 
-NavSensor = ImuSensor | DvlSensor | DepthSensor | AltimeterSensor | GpsSensor
 NAV_SENSOR_NAMES = ("imu", "dvl", "depth", "altimeter", "gps")
 
 
@@ -28,7 +24,7 @@ class NavSensorsConfig(Protocol):
     gps: GpsConfig
 
 
-def build_nav_sensors(sensors_cfg: NavSensorsConfig, mounts: dict[str, np.ndarray], seed: int) -> dict[str, NavSensor]:
+def build_nav_sensors(sensors_cfg: NavSensorsConfig, mounts: dict[str, np.ndarray], seed: int) -> dict[str, Sensor]:
     """All navigation sensors keyed by name, each with its own ``component_rng(seed, name)``.
 
     Args:
@@ -40,13 +36,12 @@ def build_nav_sensors(sensors_cfg: NavSensorsConfig, mounts: dict[str, np.ndarra
     missing = [name for name in NAV_SENSOR_NAMES if name not in mounts]
     if missing:
         raise ValueError(f"build_nav_sensors: mounts lacks {missing}; required keys: {list(NAV_SENSOR_NAMES)}")
-    classes = {"imu": ImuSensor, "dvl": DvlSensor, "depth": DepthSensor, "altimeter": AltimeterSensor, "gps": GpsSensor}
-    sensors: dict[str, NavSensor] = {}
-    for name, cls in classes.items():
+    sensors: dict[str, Sensor] = {}
+    for name in NAV_SENSOR_NAMES:
         mount = np.asarray(mounts[name], dtype=float)
         if mount.shape != (3,) or not np.all(np.isfinite(mount)):
             raise ValueError(f"build_nav_sensors: mounts['{name}'] must be 3 finite FRD metres, got {mounts[name]!r}")
-        sensors[name] = cls(getattr(sensors_cfg, name), mount, component_rng(seed, name))
+        sensors[name] = build_sensor(name, getattr(sensors_cfg, name), mount, component_rng(seed, name))
     return sensors
 
 
@@ -61,6 +56,7 @@ def benchmark_nav_suite(duration_s: float = 120.0, seed: int = 0) -> dict[str, f
     from scenarios.config.navigation import NavigationConfig
     from scenarios.schema import SensorsConfig
     from sim.sensors.analytic_caster import AnalyticCaster
+    from sim.sensors.base import SceneView
     from sim.truth import VehicleTruth
 
     cfg = SensorsConfig()
@@ -69,8 +65,7 @@ def benchmark_nav_suite(duration_s: float = 120.0, seed: int = 0) -> dict[str, f
     caster = AnalyticCaster(seabed_depth_m=6.0)
     nav = NavigationFilter(NavigationConfig(), np.array([0.0, 0.0, 2.0]), 0.0,
                            NavNoiseModel.from_sensor_configs(cfg.imu, cfg.dvl, cfg.depth, cfg.gps), mounts=mounts)
-    handlers = {"imu": nav.on_imu, "dvl": nav.on_dvl, "depth": nav.on_depth, "altimeter": nav.on_altimeter,
-                "gps": nav.on_gps}
+    handlers = nav.message_handlers()
     sensor_s = dict.fromkeys(NAV_SENSOR_NAMES, 0.0)
     filter_s = dict.fromkeys(NAV_SENSOR_NAMES, 0.0)
     calls = dict.fromkeys(NAV_SENSOR_NAMES, 0)
@@ -88,9 +83,9 @@ def benchmark_nav_suite(duration_s: float = 120.0, seed: int = 0) -> dict[str, f
             if k % max(1, round(cfg.imu.rate_hz / sensor.rate_hz)):
                 continue
             t0 = time.perf_counter()
-            msg = sensor.measure(truth, caster=caster)
+            msg = sensor.measure(truth, SceneView(t, caster))
             t1 = time.perf_counter()
-            handlers[name](msg)
+            handlers[type(msg)](msg)
             sensor_s[name] += t1 - t0
             filter_s[name] += time.perf_counter() - t1
             calls[name] += 1

@@ -1,0 +1,113 @@
+"""Building a mission's sensors and onboard stack from a scenario (apart from running it).
+
+:func:`build_mission_parts` makes everything the loop in :mod:`sim.mission` ties together,
+for one root seed: the sensors named in the scenario's sensor table (each from the registry,
+mounted from its config, with its own ``component_rng(seed, name)``), their scheduler, and
+the onboard stack (navigation filter factory, guidance, mission state machine, autopilots,
+thrust allocation and, for the first forward-looking sonar, perception).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from autonomy.control.allocation import ThrustAllocator
+from autonomy.control.autopilot import Autopilot, AutopilotParams
+from autonomy.guidance.mission import MissionFsm
+from autonomy.guidance.survey import SurveyGuidance
+from autonomy.navigation import NavigationFilter, NavNoiseModel
+from scenarios.schema import Scenario
+from sim.perception import Perception
+from sim.physics import Physics
+from sim.scheduler import SensorScheduler
+from sim.sensors.base import Sensor
+from sim.sensors.registry import build_sensors
+
+NAV_SOURCES = ("estimate", "truth")
+#: Sensor kinds whose mounts the navigation filter takes (first sensor of each kind).
+NAV_MOUNT_KINDS = ("dvl", "depth", "gps", "usbl", "altimeter")
+PERCEPTION_SONAR_KIND = "fls"
+
+
+@dataclass
+class MissionParts:
+    """Everything one run of a mission is made of, besides the physics.
+
+    Attributes:
+        seed: root seed the parts were built with.
+        sensors: entry name -> sensor, in firing order.
+        scheduler: fires the sensors at their rates and delivers after their latencies.
+        nav_noise: the navigation filter's sensor noise model.
+        nav_mounts: sensor kind -> (3,) FRD mount of the first sensor of that kind, m.
+        guidance, fsm, autopilot, allocator: the onboard guidance and control.
+        waypoints_ne: (k, 2) survey plan, m.
+        sonar: the sonar perception runs on (None: no forward-looking sonar).
+        perception: ATR -> geolocalisation -> world model on ``sonar``'s frames (or None).
+    """
+
+    seed: int
+    sensors: dict[str, Sensor]
+    scheduler: SensorScheduler
+    nav_noise: NavNoiseModel
+    nav_mounts: dict[str, NDArray[np.float64]]
+    guidance: SurveyGuidance
+    fsm: MissionFsm
+    autopilot: Autopilot
+    allocator: ThrustAllocator
+    waypoints_ne: NDArray[np.float64]
+    sonar: Sensor | None
+    perception: Perception | None
+
+    def make_nav_filter(self, scenario: Scenario) -> NavigationFilter:
+        """A fresh navigation filter at the scenario's start pose."""
+        return NavigationFilter(scenario.autonomy.navigation, np.asarray(scenario.vehicle.initial_pos_ned, dtype=float),
+                                float(np.deg2rad(scenario.vehicle.initial_rpy_deg[2])), self.nav_noise,
+                                mounts=self.nav_mounts)
+
+
+def build_mission_parts(scenario: Scenario, physics: Physics, seed: int, *, nav_source: str = "estimate",
+                        perception: bool = True) -> MissionParts:
+    """Sensors, scheduler and onboard stack of ``scenario`` for root ``seed``.
+
+    Args:
+        scenario: the validated scenario.
+        physics: the world the sensors are mounted in (hull sites, seabed).
+        seed: root seed.
+        nav_source: pose used for geolocalisation, one of :data:`NAV_SOURCES`.
+        perception: build perception for the first forward-looking sonar.
+
+    Raises:
+        ValueError: unknown ``nav_source``; a sensor's mount site is not on the hull.
+    """
+    if nav_source not in NAV_SOURCES:
+        raise ValueError(f"nav_source must be one of {NAV_SOURCES}, got {nav_source!r}")
+    sensors = build_sensors(scenario.sensors.enabled(), physics.site_pos_body, seed)
+    scheduler = SensorScheduler(eps_s=0.25 * physics.dt_s)
+    for name, sensor in sensors.items():
+        scheduler.add(name, sensor.rate_hz, sensor.latency_s)
+
+    first: dict[str, Sensor] = {}
+    for sensor in sensors.values():
+        first.setdefault(sensor.kind, sensor)
+    nav_mounts = {kind: first[kind].mount_pos_body_m for kind in NAV_MOUNT_KINDS if kind in first}
+    cfg_of = scenario.sensors.first_of_kind
+    nav_noise = NavNoiseModel.from_sensor_configs(cfg_of("imu"), cfg_of("dvl"), cfg_of("depth"), cfg_of("gps"))
+
+    auto = scenario.autonomy
+    survey = auto.guidance.survey
+    sonar = first.get(PERCEPTION_SONAR_KIND)
+    swath = sonar.swath_width_m(survey.altitude_m) if sonar is not None else None
+    guidance = SurveyGuidance.from_config(survey, auto.guidance.los, swath_width_m=swath)
+    waypoints_ne = np.asarray(guidance.plan.waypoints_ne_m)
+    fsm = MissionFsm.from_config(auto.guidance.mission, guidance)
+    perceive = (Perception(scenario, sonar, physics.world.seabed, waypoints_ne, nav_source=nav_source)
+                if sonar is not None and perception else None)
+    return MissionParts(
+        seed=int(seed), sensors=sensors, scheduler=scheduler, nav_noise=nav_noise, nav_mounts=nav_mounts,
+        guidance=guidance, fsm=fsm, autopilot=Autopilot(AutopilotParams.from_config(auto.control)),
+        allocator=ThrustAllocator.from_layout(physics.params.layout), waypoints_ne=waypoints_ne, sonar=sonar,
+        perception=perceive,
+    )

@@ -1,0 +1,159 @@
+"""The simulated world in one object: MuJoCo scene, vehicle dynamics, current and ray caster.
+
+:class:`Physics` is what the mission loop, the gym environments, the physics benchmark and
+the scene tests step. Per physics step (:meth:`Physics.step`): the thrusters and the
+hydrodynamic wrench are updated with the present current (:meth:`VehicleDynamics.step_inputs`),
+MuJoCo integrates one step, the clock advances and the current evolves.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import mujoco
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from scenarios.config.world import CurrentConfig
+from scenarios.schema import Scenario
+from sim.current import OceanCurrent
+from sim.rng import component_rng
+from sim.sensors.base import SceneView
+from sim.sensors.raycast import MujocoRayCaster
+from sim.truth import VehicleTruth
+from sim.vehicle import VehicleDynamics
+from sim.vehicle_params import VehicleParams, load_vehicle_params
+from sim.world import SceneObject, World, build_world
+
+FloatArray = NDArray[np.float64]
+
+
+class Physics:
+    """The scenario's world and vehicle, stepped on one clock.
+
+    Args:
+        scenario: the validated scenario (scene, vehicle, current, physics rate).
+        seed: root seed of the current's random part (default: the scenario's).
+
+    Attributes:
+        world: compiled scene and its tables (objects, seabed, hull sites).
+        model, data: the MuJoCo model and data.
+        params: the vehicle's parameters.
+        vehicle: the vehicle dynamics bound to ``model`` / ``data``.
+        current: the water current acting on the vehicle.
+        caster: ray caster over the acoustic geoms (the hull excluded).
+        dt_s: physics step, s.
+        t_s: simulated time since :meth:`reset`, s.
+    """
+
+    def __init__(self, scenario: Scenario, *, seed: int | None = None) -> None:
+        self.scenario = scenario
+        self.params: VehicleParams = load_vehicle_params(scenario.vehicle)
+        self.world: World = build_world(scenario)
+        self.model, self.data = self.world.model, self.world.data
+        self.dt_s = float(self.model.opt.timestep)
+        self.caster = MujocoRayCaster(self.model, self.data, self.world.geom_object_id,
+                                      self.world.geom_reflectivity, self.world.vehicle_body_id)
+        self.vehicle = VehicleDynamics(self.model, self.data, self.params, None, body_id=self.world.vehicle_body_id)
+        self.current: OceanCurrent
+        self.reseed(scenario.seed if seed is None else seed)
+        self._moving = self._moving_objects()
+        self.t_s = 0.0
+
+    # ------------------------------------------------------------------ set-up
+    def reseed(self, seed: int) -> None:
+        """New current from the scenario's config with ``component_rng(seed, "current")``."""
+        self.set_current(self.scenario.world.current, component_rng(int(seed), "current"))
+
+    def set_current(self, cfg: CurrentConfig, rng: np.random.Generator | None) -> OceanCurrent:
+        """Replace the current (e.g. one drawn per episode); the vehicle uses it from the next step.
+
+        Raises:
+            ValueError: a random current without a generator.
+        """
+        self.current = OceanCurrent(cfg, rng)
+        self.vehicle.set_current(self.current)
+        return self.current
+
+    def reset(self, pos_ned: ArrayLike, rpy_rad: ArrayLike) -> None:
+        """Clock to 0, MuJoCo state cleared, vehicle at rest at ``pos_ned`` (m, NED) with
+        attitude ``rpy_rad``, current back to its mean."""
+        mujoco.mj_resetData(self.model, self.data)
+        self.current.reset()
+        self.vehicle.reset(pos_ned, rpy_rad)
+        mujoco.mj_forward(self.model, self.data)
+        self.t_s = 0.0
+
+    # ------------------------------------------------------------------ stepping
+    def step(self, thruster_cmd: ArrayLike) -> None:
+        """One physics step with normalised thruster commands (n_thr,) in [-1, 1]."""
+        self.vehicle.step_inputs(thruster_cmd, self.dt_s)
+        mujoco.mj_step(self.model, self.data)
+        self.t_s += self.dt_s
+        self.current.step(self.dt_s)
+
+    def advance(self, thruster_cmd: ArrayLike, n_steps: int) -> bool:
+        """``n_steps`` physics steps holding ``thruster_cmd``; True if the vehicle touched
+        anything on any of them."""
+        step_inputs, mj_step, current_step = self.vehicle.step_inputs, mujoco.mj_step, self.current.step
+        model, data, dt = self.model, self.data, self.dt_s
+        contact = False
+        for _ in range(n_steps):
+            step_inputs(thruster_cmd, dt)
+            mj_step(model, data)
+            self.t_s += dt
+            current_step(dt)
+            if data.ncon and not contact:
+                contact = self.vehicle_in_contact()
+        return contact
+
+    # ------------------------------------------------------------------ readouts
+    def truth(self) -> VehicleTruth:
+        """True vehicle state now."""
+        return self.vehicle.truth(self.t_s)
+
+    def scene(self) -> SceneView:
+        """What sensors see now: the ray caster and the scene objects at their present poses."""
+        return SceneView(self.t_s, self.caster, self.objects())
+
+    def objects(self) -> tuple[SceneObject, ...]:
+        """Scene objects with their present centroid and base (objects on moving bodies follow them)."""
+        if not self._moving:
+            return self.world.objects
+        objs = list(self.world.objects)
+        xpos, xmat = self.data.geom_xpos, self.data.geom_xmat
+        for i, gid, c_local, b_local in self._moving:
+            R = xmat[gid].reshape(3, 3)
+            objs[i] = replace(objs[i], centroid_ned=xpos[gid] + R @ c_local, base_ned=xpos[gid] + R @ b_local)
+        return tuple(objs)
+
+    def vehicle_in_contact(self) -> bool:
+        """True when a contact involves the vehicle body."""
+        body = self.model.geom_bodyid
+        vb = self.world.vehicle_body_id
+        for i in range(self.data.ncon):
+            c = self.data.contact[i]
+            if body[c.geom1] == vb or body[c.geom2] == vb:
+                return True
+        return False
+
+    def site_pos_body(self, name: str) -> FloatArray:
+        """(3,) FRD offset of hull site ``name`` from the body origin, m. Raises ``KeyError``."""
+        return self.world.site_pos_body(name)
+
+    def warnings(self) -> int:
+        """Number of MuJoCo warnings raised so far."""
+        return int(sum(int(w.number) for w in self.data.warning))
+
+    # ------------------------------------------------------------------ internals
+    def _moving_objects(self) -> list[tuple[int, int, FloatArray, FloatArray]]:
+        """(index, geom id, centroid and base in the geom frame) of objects not fixed to the world."""
+        out = []
+        for i, obj in enumerate(self.world.objects):
+            gid = obj.geom_id
+            if gid < 0 or self.model.geom_bodyid[gid] == 0:
+                continue
+            R0 = self.data.geom_xmat[gid].reshape(3, 3)
+            p0 = self.data.geom_xpos[gid]
+            out.append((i, gid, R0.T @ (obj.centroid_ned - p0), R0.T @ (obj.base_ned - p0)))
+        return out
