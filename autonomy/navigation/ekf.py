@@ -277,8 +277,10 @@ class NavigationFilter:
         self._altitude_var_m2 *= 1.0 - gain
 
     def _body_altitude_m(self, sensor_altitude_m: float, mount_body_m: np.ndarray) -> float:
-        """Altitude of the body origin from a sensor's altitude and its FRD mount offset."""
-        return sensor_altitude_m + float((rot_from_euler(*self._attitude()) @ mount_body_m)[2])
+        """Altitude (m) of the body origin from a sensor's altitude (m, straight below the sensor)
+        and its FRD mount offset (3,), over the seabed plane of the current gradient."""
+        lever_ned = rot_from_euler(*self._attitude()) @ mount_body_m
+        return sensor_altitude_m + float(lever_ned[2]) - float(self._seabed_grad_ne @ lever_ned[:2])
 
     def on_depth(self, msg: DepthMsg) -> None:
         """Pressure depth of the depth sensor."""
