@@ -33,7 +33,7 @@ class DvlMsg:
     t_s: float
     vel_body_mps: FloatArray  # (3,) FRD; NaN when not valid
     valid: bool  # bottom lock
-    altitude_m: float  # mean beam altitude, NaN when not valid
+    altitude_m: float  # m, transducer to the beam-footprint plane straight below; NaN when not valid
     beam_ranges_m: FloatArray = field(default_factory=lambda: np.full(4, np.nan))  # (4,)
 
 

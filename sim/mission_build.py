@@ -94,7 +94,8 @@ def build_mission_parts(scenario: Scenario, physics: Physics, seed: int, *, nav_
         first.setdefault(sensor.kind, sensor)
     nav_mounts = {kind: first[kind].mount_pos_body_m for kind in NAV_MOUNT_KINDS if kind in first}
     cfg_of = scenario.sensors.first_of_kind
-    nav_noise = NavNoiseModel.from_sensor_configs(cfg_of("imu"), cfg_of("dvl"), cfg_of("depth"), cfg_of("gps"))
+    nav_noise = NavNoiseModel.from_sensor_configs(cfg_of("imu"), cfg_of("dvl"), cfg_of("depth"), cfg_of("gps"),
+                                                  altimeter=cfg_of("altimeter"))
 
     auto = scenario.autonomy
     survey = auto.guidance.survey

@@ -12,6 +12,12 @@ omega x r_dvl)``. Each valid DVL ping resets ``n`` to a fresh, independent error
 beam-geometry covariance, so the held error integrates into position exactly as it does in
 the sensor. Depth, GPS (at the surface) and USBL fixes are EKF updates (Joseph form).
 In ``dead_reckoning`` mode GPS and USBL are ignored.
+
+The altitude of the body origin above the seabed is a separate scalar Kalman filter. It is
+propagated with the dead-reckoned NED velocity over the local seabed plane,
+``a_dot = g . v_ne - v_down`` (``g`` the seabed depth gradient d depth / d(north, east) from
+the last DVL beam footprints), and updated by each DVL and altimeter altitude, moved to the
+body origin by the sensor's mount offset, with that sensor's own variance.
 """
 
 from __future__ import annotations
@@ -32,6 +38,11 @@ FloatArray = NDArray[np.float64]
 N_STATES = 10
 POS, ATT, SCALE, DVEL = slice(0, 3), slice(3, 6), 6, slice(7, 10)
 _E = np.eye(3)
+# Seabed relief the altitude filter allows for beyond the local plane: a random walk of the
+# seabed depth along the distance travelled, m per sqrt(m).
+SEABED_RELIEF_M_PER_SQRT_M = 0.03
+# Smallest altitude measurement variance, m^2 (keeps a noise-free sensor from freezing the filter).
+_MIN_ALTITUDE_VAR_M2 = 1e-6
 
 
 def _cross(a, b):
@@ -122,7 +133,9 @@ class NavigationFilter:
         self._vel_dvl_meas = np.zeros(3)
         self._omega_at_dvl = np.zeros(3)
         self._t_dvl_valid_s = -np.inf
-        self._altitude_m = float("nan")
+        self._altitude_m = float("nan")  # body origin above the seabed, m (NaN until measured)
+        self._altitude_var_m2 = float("inf")
+        self._seabed_grad_ne = np.zeros(2)  # d(seabed depth)/d(north, east), from the DVL footprints
 
     # ------------------------------------------------------------------ state access
     @property
@@ -181,7 +194,15 @@ class NavigationFilter:
             q_vel += self.cfg.dvl_lost_noise_mps_per_sqrt_s**2 * dt
         Q[DVEL, DVEL] = q_vel * _E
 
-        x[POS] += R @ v_body * dt
+        v_ned = R @ v_body
+        if np.isfinite(self._altitude_m):
+            # altitude over the local seabed plane: a_dot = g . v_ne - v_down
+            h = np.array([self._seabed_grad_ne[0], self._seabed_grad_ne[1], -1.0])
+            var_rate = float(h @ R @ self._P[DVEL, DVEL] @ R.T @ h) / one_s**2
+            self._altitude_m += float(h @ v_ned) * dt
+            self._altitude_var_m2 += (var_rate * dt * dt
+                                      + SEABED_RELIEF_M_PER_SQRT_M**2 * float(np.hypot(v_ned[0], v_ned[1])) * dt)
+        x[POS] += v_ned * dt
         self._P = F @ self._P @ F.T + Q
         self._t_s = float(t_s)
 
@@ -224,11 +245,43 @@ class NavigationFilter:
         self._P[DVEL, DVEL] = self.noise.dvl_velocity_cov(vel, used)
         self._t_dvl_valid_s = max(self._t_s, float(msg.t_s))
         if np.isfinite(msg.altitude_m):
-            self._altitude_m = self._body_altitude_m(float(msg.altitude_m), self._r_dvl)
+            var = self._dvl_seabed_plane(ranges)
+            self._update_altitude(self._body_altitude_m(float(msg.altitude_m), self._r_dvl), var)
+
+    def _dvl_seabed_plane(self, ranges_m: FloatArray) -> float:
+        """Refresh the seabed gradient from the DVL beam footprints; return the variance (m^2)
+        of the DVL altitude. ``ranges_m``: (4,) slant ranges, NaN for beams not used."""
+        noise = self.noise
+        dirs_body = noise.dvl_beam_dirs_body
+        if ranges_m.shape == (len(dirs_body),) and np.isfinite(ranges_m).sum() >= 3:
+            used = np.isfinite(ranges_m)
+            offsets = ranges_m[used, None] * (dirs_body[used] @ rot_from_euler(*self._attitude()).T)
+            A = np.column_stack([np.ones(len(offsets)), offsets[:, 0], offsets[:, 1]])
+            try:
+                var = noise.dvl_altitude_var_m2(offsets)
+            except ValueError:
+                pass
+            else:
+                self._seabed_grad_ne = np.linalg.lstsq(A, offsets[:, 2], rcond=None)[0][1:3]
+                return max(var, _MIN_ALTITUDE_VAR_M2)
+        # no footprints: all four beams on a level seabed at their nominal geometry
+        var = noise.dvl_range_noise_m**2 * float(np.mean(dirs_body[:, 2] ** 2)) / len(dirs_body)
+        return max(var, _MIN_ALTITUDE_VAR_M2)
+
+    def _update_altitude(self, altitude_m: float, var_m2: float) -> None:
+        """Kalman update of the body-origin altitude with a measurement (m) of variance ``var_m2``."""
+        if not np.isfinite(self._altitude_m):
+            self._altitude_m, self._altitude_var_m2 = altitude_m, var_m2
+            return
+        gain = self._altitude_var_m2 / (self._altitude_var_m2 + var_m2)
+        self._altitude_m += gain * (altitude_m - self._altitude_m)
+        self._altitude_var_m2 *= 1.0 - gain
 
     def _body_altitude_m(self, sensor_altitude_m: float, mount_body_m: np.ndarray) -> float:
-        """Altitude of the body origin from a sensor's altitude and its FRD mount offset."""
-        return sensor_altitude_m + float((rot_from_euler(*self._attitude()) @ mount_body_m)[2])
+        """Altitude (m) of the body origin from a sensor's altitude (m, straight below the sensor)
+        and its FRD mount offset (3,), over the seabed plane of the current gradient."""
+        lever_ned = rot_from_euler(*self._attitude()) @ mount_body_m
+        return sensor_altitude_m + float(lever_ned[2]) - float(self._seabed_grad_ne @ lever_ned[:2])
 
     def on_depth(self, msg: DepthMsg) -> None:
         """Pressure depth of the depth sensor."""
@@ -241,11 +294,18 @@ class NavigationFilter:
         self._update(np.array([msg.depth_m - predicted]), H, np.array([[self.noise.depth_noise_m**2]]), None)
 
     def on_altimeter(self, msg: AltimeterMsg) -> None:
-        """Altimeter slant range, levelled with the AHRS attitude and moved to the body origin,
-        becomes the altitude output."""
-        if msg.valid and np.isfinite(msg.altitude_m):
-            roll, pitch, _ = self._attitude()
-            self._altitude_m = self._body_altitude_m(float(msg.altitude_m * np.cos(roll) * np.cos(pitch)), self._r_alt)
+        """Altimeter slant range along body down, turned into the vertical distance under the
+        altimeter over the seabed plane (AHRS attitude, gradient from the DVL footprints; level
+        seabed before the first DVL footprints), moved to the body origin and fused."""
+        self.predict(msg.t_s)
+        if not (msg.valid and np.isfinite(msg.altitude_m)):
+            return
+        beam_ned = rot_from_euler(*self._attitude())[:, 2]
+        # the echo comes from r * beam_ned; the plane lies g . (r beam_ne) deeper there than below
+        vertical_per_range = float(beam_ned[2] - self._seabed_grad_ne @ beam_ned[:2])
+        range_m = float(msg.altitude_m)
+        var = max(self.noise.altimeter_altitude_var_m2(range_m, vertical_per_range), _MIN_ALTITUDE_VAR_M2)
+        self._update_altitude(self._body_altitude_m(range_m * vertical_per_range, self._r_alt), var)
 
     def on_gps(self, msg: GpsMsg) -> bool:
         """GPS north/east fix of the antenna. Returns whether it was applied (valid, EKF mode,

@@ -9,7 +9,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from autonomy.navigation.dvl_geometry import beam_velocity_covariance, janus_beam_dirs_body
-from scenarios.config.nav_sensors import DepthConfig, DvlConfig, GpsConfig, ImuConfig
+from scenarios.config.nav_sensors import AltimeterConfig, DepthConfig, DvlConfig, GpsConfig, ImuConfig
 
 FloatArray = NDArray[np.float64]
 
@@ -28,6 +28,9 @@ class NavNoiseModel:
         dvl_scale_sigma: prior sigma of the DVL scale-factor error.
         depth_noise_m: depth sensor white noise.
         gps_noise_m: GPS white noise per horizontal axis.
+        dvl_range_noise_m: white noise of each DVL beam's slant range.
+        altimeter_noise_m: constant part of the altimeter range noise.
+        altimeter_noise_frac_range: range-proportional part of the altimeter range noise.
     """
 
     attitude_noise_rad: FloatArray
@@ -39,6 +42,9 @@ class NavNoiseModel:
     dvl_scale_sigma: float
     depth_noise_m: float
     gps_noise_m: float
+    dvl_range_noise_m: float = DvlConfig().range_noise_m
+    altimeter_noise_m: float = AltimeterConfig().noise_m
+    altimeter_noise_frac_range: float = AltimeterConfig().noise_frac_range
 
     @classmethod
     def from_sensor_configs(
@@ -47,9 +53,11 @@ class NavNoiseModel:
         dvl: DvlConfig | None = None,
         depth: DepthConfig | None = None,
         gps: GpsConfig | None = None,
+        altimeter: AltimeterConfig | None = None,
     ) -> NavNoiseModel:
         """Noise model matching the given sensor configs (defaults where ``None``)."""
         imu, dvl, depth, gps = imu or ImuConfig(), dvl or DvlConfig(), depth or DepthConfig(), gps or GpsConfig()
+        altimeter = altimeter or AltimeterConfig()
         rp_noise, rp_bias = math.radians(imu.roll_pitch_noise_deg), math.radians(imu.roll_pitch_bias_deg)
         return cls(
             attitude_noise_rad=np.array([rp_noise, rp_noise, imu.heading_noise_rad]),
@@ -63,6 +71,9 @@ class NavNoiseModel:
             dvl_scale_sigma=dvl.scale_error,
             depth_noise_m=depth.noise_m,
             gps_noise_m=gps.noise_m,
+            dvl_range_noise_m=dvl.range_noise_m,
+            altimeter_noise_m=altimeter.noise_m,
+            altimeter_noise_frac_range=altimeter.noise_frac_range,
         )
 
     def dvl_velocity_cov(self, vel_meas_body_mps: FloatArray, beams_used: NDArray[np.bool_] | None = None) -> FloatArray:
@@ -70,3 +81,36 @@ class NavNoiseModel:
         dirs = self.dvl_beam_dirs_body if beams_used is None else self.dvl_beam_dirs_body[beams_used]
         sigma = self.dvl_beam_noise_mps + self.dvl_noise_frac_speed * float(np.linalg.norm(vel_meas_body_mps))
         return beam_velocity_covariance(dirs, sigma)
+
+    def dvl_altitude_var_m2(self, beam_offsets_ned_m: FloatArray) -> float:
+        """Variance (m^2) of the DVL altitude, the depth below the transducer of the
+        least-squares plane through its beam footprints.
+
+        Args:
+            beam_offsets_ned_m: (n >= 3, 3) footprints of the beams used, relative to the
+                transducer, NED m (range times the beam's NED unit vector).
+
+        Each footprint depth carries the range noise projected on the vertical,
+        ``dvl_range_noise_m * |d_down|``; the plane's value under the transducer is the
+        intercept of ``depth = c + g_n n + g_e e`` with variance ``sigma^2 [(A^T A)^-1]_00``.
+
+        Raises:
+            ValueError: for fewer than 3 footprints or footprints on one vertical plane.
+        """
+        offsets = np.asarray(beam_offsets_ned_m, dtype=float)
+        if offsets.ndim != 2 or offsets.shape[0] < 3 or offsets.shape[1] != 3:
+            raise ValueError(f"dvl_altitude_var_m2 needs (n >= 3, 3) footprints, got {offsets.shape}")
+        ranges = np.linalg.norm(offsets, axis=1)
+        down = offsets[:, 2] / ranges
+        A = np.column_stack([np.ones(len(offsets)), offsets[:, 0], offsets[:, 1]])
+        normal = A.T @ A
+        if np.linalg.cond(normal) > 1e12:
+            raise ValueError("dvl_altitude_var_m2: footprints do not span a plane")
+        sigma2 = self.dvl_range_noise_m**2 * float(np.mean(down**2))
+        return sigma2 * float(np.linalg.inv(normal)[0, 0])
+
+    def altimeter_altitude_var_m2(self, range_m: float, vertical_per_range: float = 1.0) -> float:
+        """Variance (m^2) of an altitude derived as ``range_m * vertical_per_range`` from one
+        altimeter slant range ``range_m`` (m)."""
+        sigma = self.altimeter_noise_m + self.altimeter_noise_frac_range * float(range_m)
+        return (sigma * float(vertical_per_range)) ** 2

@@ -19,11 +19,32 @@ from sim.truth import VehicleTruth
 FloatArray = NDArray[np.float64]
 
 
+def _fitted_plane_ned(points_ned: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Centroid (3,) and unit normal (3,) of the least-squares plane through >= 3 points (n, 3), NED m."""
+    centroid = points_ned.mean(axis=0)
+    normal = np.linalg.svd(points_ned - centroid)[2][-1]
+    return centroid, normal
+
+
 def fitted_slope_rad(points_ned: np.ndarray) -> float:
     """Slope (rad from horizontal) of the least-squares plane through >= 3 points (n, 3)."""
-    centred = points_ned - points_ned.mean(axis=0)
-    normal = np.linalg.svd(centred)[2][-1]
+    normal = _fitted_plane_ned(points_ned)[1]
     return float(np.arccos(np.clip(abs(normal[2]), 0.0, 1.0)))
+
+
+def plane_altitude_m(points_ned: np.ndarray, origin_ned: np.ndarray) -> float:
+    """Vertical distance (m, down positive) from ``origin_ned`` (3,) to the least-squares plane
+    through ``points_ned`` (n >= 3, 3), all NED m: the plane's depth directly below the origin
+    minus the origin's depth.
+
+    Raises:
+        ValueError: if the plane is vertical (no point directly below the origin).
+    """
+    centroid, normal = _fitted_plane_ned(points_ned)
+    if abs(normal[2]) < 1e-9:
+        raise ValueError("plane_altitude_m: the fitted plane is vertical")
+    rel = origin_ned - centroid
+    return float(-(normal[0] * rel[0] + normal[1] * rel[1]) / normal[2] - rel[2])
 
 
 @dataclass(frozen=True, slots=True)
@@ -57,7 +78,9 @@ class DvlSensor(Sensor[DvlMsg]):
     ``n_i ~ N(0, (beam_noise_mps + noise_frac_speed |v|)^2)``; beam ranges get white noise
     and the lock drops out at random. The velocity is the least-squares solution over the
     valid beams, so the reported ``vel_body_mps`` is the transducer's velocity in FRD.
-    ``altitude_m`` is the mean vertical extent (NED) of the valid beams.
+    ``altitude_m`` is the vertical distance (m) from the transducer down to the least-squares
+    plane through the valid beams' footprints (NED), evaluated directly below the transducer,
+    so it is exact over any plane at any attitude.
 
     Bottom lock needs at least ``min_valid_beams`` beams that hit within the slant range of
     ``max_altitude_m``, above ``min_altitude_m``, below the grazing cut-off, and a seabed
@@ -126,7 +149,7 @@ class DvlSensor(Sensor[DvlMsg]):
             radial = (1.0 + self._scale_error) * radial + white_noise(self._rng, sigma, len(radial))
         vel_body = np.linalg.lstsq(B, radial, rcond=None)[0]
         return DvlMsg(t_s=echo.t_s, vel_body_mps=vel_body, valid=True,
-                      altitude_m=float(np.mean(beam_alt[valid])), beam_ranges_m=ranges)
+                      altitude_m=plane_altitude_m(footprints, echo.origin_ned), beam_ranges_m=ranges)
 
     @staticmethod
     def _no_lock(t_s: float, ranges_m: np.ndarray) -> DvlMsg:

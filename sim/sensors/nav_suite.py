@@ -64,7 +64,8 @@ def benchmark_nav_suite(duration_s: float = 120.0, seed: int = 0) -> dict[str, f
     sensors = build_nav_sensors(cfg, mounts, seed)
     caster = AnalyticCaster(seabed_depth_m=6.0)
     nav = NavigationFilter(NavigationConfig(), np.array([0.0, 0.0, 2.0]), 0.0,
-                           NavNoiseModel.from_sensor_configs(cfg.imu, cfg.dvl, cfg.depth, cfg.gps), mounts=mounts)
+                           NavNoiseModel.from_sensor_configs(cfg.imu, cfg.dvl, cfg.depth, cfg.gps,
+                                                             altimeter=cfg.altimeter), mounts=mounts)
     handlers = nav.message_handlers()
     sensor_s = dict.fromkeys(NAV_SENSOR_NAMES, 0.0)
     filter_s = dict.fromkeys(NAV_SENSOR_NAMES, 0.0)
