@@ -6,15 +6,17 @@ from typing import Literal
 
 from pydantic import Field
 
-from scenarios.config.atr import AtrConfig
+from autonomy.atr.config import AtrConfig
+from autonomy.control.config import ControlConfig
+from autonomy.guidance.config import GuidanceConfig
+from autonomy.localization.config import LocalizationConfig
+from autonomy.navigation.config import NavigationConfig
+from autonomy.world_model.config import WorldModelConfig
 from scenarios.config.base import StrictModel
 from scenarios.config.fls import FlsConfig
-from scenarios.config.guidance import ControlConfig, GuidanceConfig
 from scenarios.config.nav_sensors import AltimeterConfig, DepthConfig, DvlConfig, GpsConfig, ImuConfig
-from scenarios.config.navigation import NavigationConfig
 from scenarios.config.vehicle import VehicleConfig
 from scenarios.config.world import WorldConfig
-from scenarios.config.world_model import LocalizationConfig, WorldModelConfig
 
 
 class PhysicsConfig(StrictModel):
@@ -32,6 +34,8 @@ class SensorsConfig(StrictModel):
 
 
 class AutonomyConfig(StrictModel):
+    """The onboard stack's settings; each block is defined next to its code in ``autonomy/``."""
+
     rate_hz: float = Field(10.0, gt=0.0, le=200.0)
     navigation: NavigationConfig = NavigationConfig()
     guidance: GuidanceConfig = GuidanceConfig()

@@ -238,7 +238,7 @@ def evaluate(detector_kind: str = "cnn", data_dir: str | Path | None = None, mod
              score_threshold: float | None = None, max_images: int | None = None) -> dict:
     """Evaluate the ``cnn`` or ``classical`` detector (as :func:`build_detector` builds it)."""
     from autonomy.atr import build_detector
-    from scenarios.config.atr import AtrConfig
+    from autonomy.atr.config import AtrConfig
 
     cfg = AtrConfig(detector=detector_kind, model_path=model_path, intra_op_threads=1,
                     **({} if score_threshold is None else {"score_threshold": score_threshold}))
@@ -272,7 +272,7 @@ def eval_main(args: argparse.Namespace) -> int:
     """Entry point for ``auvsim eval-atr``."""
     if getattr(args, "sweep", False):
         from autonomy.atr import build_detector
-        from scenarios.config.atr import AtrConfig
+        from autonomy.atr.config import AtrConfig
 
         cfg = AtrConfig(detector=args.detector, model_path=args.model, intra_op_threads=1)
         data = Path(args.data) if args.data is not None else ensure_heldout()
@@ -310,7 +310,7 @@ def bench_atr(data_dir: str | Path | None = None, n_frames: int = 50, repeats: i
     held-out set), best of ``repeats`` passes; frames are decoded before timing.
     """
     from autonomy.atr import build_detector
-    from scenarios.config.atr import AtrConfig
+    from autonomy.atr.config import AtrConfig
 
     data = Path(data_dir) if data_dir is not None else ensure_heldout(progress=False)
     coco = json.loads((data / ANNOTATIONS_FILE).read_text())

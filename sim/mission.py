@@ -20,12 +20,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from autonomy.control.allocation import ThrustAllocator
-from autonomy.control.autopilot import Autopilot, AutopilotParams
+from autonomy.control.autopilot import Autopilot
 from autonomy.control.setpoint import Setpoint
 from autonomy.guidance.mission import MissionFsm
 from autonomy.guidance.survey import SurveyGuidance
 from autonomy.messages import AltimeterMsg, DepthMsg, DvlMsg, GpsMsg, ImuMsg, NavEstimate
-from autonomy.navigation import NavigationFilter, NavNoiseModel
+from autonomy.navigation import NavigationFilter
 from scenarios.schema import Scenario
 from sim.current import OceanCurrent
 from sim.perception import Perception
@@ -33,6 +33,7 @@ from sim.records import FlsEvent, MissionObserver, StepRecord
 from sim.rng import component_rng
 from sim.scheduler import SensorScheduler
 from sim.sensors.fls import FlsSensor
+from sim.sensors.nav_noise import nav_noise_model
 from sim.sensors.nav_suite import build_nav_sensors
 from sim.sensors.raycast import MujocoRayCaster
 from sim.truth import VehicleTruth
@@ -116,15 +117,14 @@ class Mission:
 
         auto = scn.autonomy
         survey = auto.guidance.survey
-        self._nav_noise = NavNoiseModel.from_sensor_configs(scn.sensors.imu, scn.sensors.dvl, scn.sensors.depth,
-                                                            scn.sensors.gps)
+        self._nav_noise = nav_noise_model(scn.sensors.imu, scn.sensors.dvl, scn.sensors.depth, scn.sensors.gps)
         self._mounts = mounts
         self.nav_filter = self._make_nav_filter()
         swath = self.fls.swath_width_m(survey.altitude_m) if self.fls is not None else None
         self.guidance = SurveyGuidance.from_config(survey, auto.guidance.los, swath_width_m=swath)
         self.waypoints_ne = np.asarray(self.guidance.plan.waypoints_ne_m)
-        self.fsm = MissionFsm.from_config(auto.guidance.mission, self.guidance)
-        self.autopilot = Autopilot(AutopilotParams.from_config(auto.control))
+        self.fsm = MissionFsm(auto.guidance.mission, self.guidance)
+        self.autopilot = Autopilot(auto.control)
         self.allocator = ThrustAllocator.from_layout(self.params.layout)
         self.perception = (
             Perception(scn, self.fls, self.world.seabed, self.waypoints_ne, nav_source=self.nav_source)

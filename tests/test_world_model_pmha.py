@@ -12,7 +12,7 @@ import pytest
 from autonomy.localization import LocalizedDetection
 from autonomy.world_model import PMHA
 from autonomy.world_model.anchor import Anchor, predicted_cov
-from scenarios.config.world_model import WorldModelConfig
+from autonomy.world_model.config import WorldModelConfig
 from sim.scoring import score_world_model
 
 TRUTHS = np.array([[0, 10, 4], [0, 20, 4], [0, 25, 4], [-8, 10, 4], [-7, 15, 4], [-8, 22, 4]], float)

@@ -23,8 +23,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from autonomy.frames import euler_rate_matrix, rot_from_euler, rot_x, rot_y, rot_z, wrap_angle
 from autonomy.messages import AltimeterMsg, DepthMsg, DvlMsg, GpsMsg, ImuMsg, NavEstimate, UsblMsg
+from autonomy.navigation.config import NavigationConfig
 from autonomy.navigation.noise_model import NavNoiseModel
-from scenarios.config.navigation import NavigationConfig
 
 FloatArray = NDArray[np.float64]
 
@@ -77,7 +77,7 @@ class NavigationFilter:
         cfg: filter settings.
         initial_pos_ned: (3,) prior position of the body origin, NED (m).
         initial_yaw_rad: heading used until the first AHRS message.
-        noise: sensor noise model; by default the one matching default sensor configs.
+        noise: the filter's model of its sensors' noise.
         mounts: FRD sensor offsets (3,) from the body origin, m, keyed ``dvl``, ``depth``,
             ``gps``, ``usbl``, ``altimeter`` (missing keys: at the origin; other keys ignored).
         usbl_beacon_pos_ned: (3,) known transponder position for :meth:`on_usbl`.
@@ -92,14 +92,14 @@ class NavigationFilter:
         cfg: NavigationConfig,
         initial_pos_ned: ArrayLike,
         initial_yaw_rad: float,
-        noise: NavNoiseModel | None = None,
+        noise: NavNoiseModel,
         *,
         mounts: Mapping[str, ArrayLike] | None = None,
         usbl_beacon_pos_ned: ArrayLike | None = None,
         t0_s: float = 0.0,
     ):
         self.cfg = cfg
-        self.noise = noise if noise is not None else NavNoiseModel.from_sensor_configs()
+        self.noise = noise
         mounts = mounts or {}
         self._r_dvl, self._r_depth, self._r_gps, self._r_usbl, self._r_alt = (
             np.asarray(mounts.get(k, np.zeros(3)), dtype=float).reshape(3)

@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from autonomy.localization.geolocate import LocalizedDetection
-from scenarios.config.world_model import WorldModelConfig
+from autonomy.world_model.config import WorldModelConfig
 
 FloatArray = NDArray[np.float64]
 CLASS_NAMES = ("target", "not_target")

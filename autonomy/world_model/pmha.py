@@ -43,7 +43,7 @@ from autonomy.world_model.anchor import (
     update_anchor,
 )
 from autonomy.world_model.murty import LazyRanked, ranked_associations
-from scenarios.config.world_model import WorldModelConfig
+from autonomy.world_model.config import WorldModelConfig
 
 FloatArray = NDArray[np.float64]
 Visibility = Callable[[FloatArray], ArrayLike]
