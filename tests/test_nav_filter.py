@@ -12,7 +12,7 @@ from autonomy.frames import rot_from_euler, wrap_angle
 from autonomy.messages import DvlMsg, GpsMsg, ImuMsg, UsblMsg
 from autonomy.navigation import NavigationFilter
 from autonomy.navigation.config import NavigationConfig
-from autonomy.navigation.ekf import rotated_vector_jacobian, usbl_observation, usbl_observation_jacobian
+from autonomy.navigation.ekf import rotated_vector_jacobian
 from scenarios.schema import SensorsConfig
 from sim.sensors.nav_noise import nav_noise_model
 from sim.sensors.nav_suite import build_nav_sensors
@@ -61,16 +61,6 @@ def test_rotated_vector_jacobian_matches_finite_differences():
         fd = np.column_stack([(rot_from_euler(*(rpy + h)) @ v - rot_from_euler(*(rpy - h)) @ v) / 2e-6
                               for h in 1e-6 * np.eye(3)])
         np.testing.assert_allclose(rotated_vector_jacobian(rpy, v), fd, atol=1e-8)
-
-
-def test_usbl_observation_jacobian_matches_finite_differences():
-    rel = np.array([12.0, -5.0, 3.0])
-    obs = usbl_observation(rel)
-    assert obs[0] == pytest.approx(13.3416, abs=1e-4)
-    assert obs[1] == pytest.approx(np.arctan2(-5.0, 12.0))
-    assert obs[2] == pytest.approx(np.arctan2(3.0, 13.0))
-    fd = np.column_stack([(usbl_observation(rel + h) - usbl_observation(rel - h)) / 2e-6 for h in 1e-6 * np.eye(3)])
-    np.testing.assert_allclose(usbl_observation_jacobian(rel), fd, atol=1e-8)
 
 
 # ----------------------------------------------------------------------------- dead reckoning
@@ -182,7 +172,8 @@ def test_usbl_fixes_pull_a_wrong_prior_to_the_truth():
         f.on_imu(ImuMsg(t_s=t, rpy_rad=np.array([0.0, 0.0, yaw]), rate_body_radps=np.zeros(3),
                         accel_body_mps2=np.array([0.0, 0.0, -9.81])))
         f.on_dvl(DvlMsg(t_s=t, vel_body_mps=np.zeros(3), valid=True, altitude_m=5.0))
-        r, b, e = usbl_observation(R.T @ (beacon - truth_pos))
+        x, y, z = R.T @ (beacon - truth_pos)  # beacon in FRD from the USBL head at the body origin
+        r, b, e = np.sqrt(x * x + y * y + z * z), np.arctan2(y, x), np.arctan2(z, np.hypot(x, y))
         sig_r = cfg.usbl_range_noise_m + cfg.usbl_range_noise_frac * r
         f.on_usbl(UsblMsg(t_s=t, range_m=r + sig_r * rng.standard_normal(),
                           bearing_rad=b + sig_a * rng.standard_normal(), elevation_rad=e + sig_a * rng.standard_normal()))

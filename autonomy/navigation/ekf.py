@@ -21,6 +21,7 @@ from collections.abc import Mapping
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from autonomy.estimation.measurement import PositionFix, RangeBearingElevation
 from autonomy.frames import euler_rate_matrix, rot_from_euler, rot_x, rot_y, rot_z, wrap_angle
 from autonomy.messages import AltimeterMsg, DepthMsg, DvlMsg, GpsMsg, ImuMsg, NavEstimate, UsblMsg
 from autonomy.navigation.config import NavigationConfig
@@ -45,28 +46,6 @@ def rotated_vector_jacobian(rpy_rad: FloatArray, v: FloatArray) -> FloatArray:
     R = Rz @ Ry @ Rx
     return np.column_stack(
         [R @ _cross(_E[0], v), Rz @ Ry @ _cross(_E[1], Rx @ v), _cross(_E[2], R @ v)]
-    )
-
-
-def usbl_observation(rel_body_m: FloatArray) -> FloatArray:
-    """[range, bearing, elevation] of an FRD vector (bearing starboard +, elevation down +)."""
-    x, y, z = rel_body_m
-    return np.array([np.linalg.norm(rel_body_m), np.arctan2(y, x), np.arctan2(z, np.hypot(x, y))])
-
-
-def usbl_observation_jacobian(rel_body_m: FloatArray) -> FloatArray:
-    """d[range, bearing, elevation]/d(rel_body_m), shape (3, 3)."""
-    x, y, z = rel_body_m
-    rho2 = x * x + y * y
-    rho = np.sqrt(rho2)
-    r2 = rho2 + z * z
-    r = np.sqrt(r2)
-    return np.array(
-        [
-            [x / r, y / r, z / r],
-            [-y / rho2, x / rho2, 0.0],
-            [-x * z / (rho * r2), -y * z / (rho * r2), rho / r2],
-        ]
     )
 
 
@@ -106,6 +85,12 @@ class NavigationFilter:
             for k in ("dvl", "depth", "gps", "usbl", "altimeter")
         )
         self._beacon_ned = None if usbl_beacon_pos_ned is None else np.asarray(usbl_beacon_pos_ned, float).reshape(3)
+        # measurement models of the fixes; GPS and depth observe the sensor's NED position
+        self._gps_model = PositionFix(3, (0, 1), self.noise.gps_noise_m**2 * np.eye(2))
+        self._depth_model = PositionFix(3, (2,), np.array([[self.noise.depth_noise_m**2]]))
+        self._usbl_model = RangeBearingElevation(
+            self._r_usbl, cfg.usbl_range_noise_m, cfg.usbl_range_noise_frac, np.radians(cfg.usbl_angle_noise_deg)
+        )
         self._t_s = float(t0_s)
         self._x = np.zeros(N_STATES)
         self._x[POS] = np.asarray(initial_pos_ned, dtype=float).reshape(3)
@@ -233,11 +218,12 @@ class NavigationFilter:
         """Pressure depth of the depth sensor."""
         self.predict(msg.t_s)
         att = self._attitude()
-        predicted = self._x[2] + (rot_from_euler(*att) @ self._r_depth)[2]
+        model = self._depth_model
+        predicted = model.function(self._x[POS] + rot_from_euler(*att) @ self._r_depth)
         H = np.zeros((1, N_STATES))
-        H[0, 2] = 1.0
-        H[0, ATT] = -rotated_vector_jacobian(att, self._r_depth)[2]
-        self._update(np.array([msg.depth_m - predicted]), H, np.array([[self.noise.depth_noise_m**2]]), None)
+        H[:, POS] = model.jacobian()
+        H[:, ATT] = -rotated_vector_jacobian(att, self._r_depth)[model.mapping]
+        self._update(model.residual([msg.depth_m], predicted), H, model.covar(), None)
 
     def on_altimeter(self, msg: AltimeterMsg) -> None:
         """Altimeter slant range, levelled with the AHRS attitude and moved to the body origin,
@@ -253,12 +239,12 @@ class NavigationFilter:
             return False
         self.predict(msg.t_s)
         att = self._attitude()
-        predicted = self._x[0:2] + (rot_from_euler(*att) @ self._r_gps)[:2]
+        model = self._gps_model
+        predicted = model.function(self._x[POS] + rot_from_euler(*att) @ self._r_gps)
         H = np.zeros((2, N_STATES))
-        H[:, 0:2] = np.eye(2)
-        H[:, ATT] = -rotated_vector_jacobian(att, self._r_gps)[:2]
-        R_meas = self.noise.gps_noise_m**2 * np.eye(2)
-        return self._update(np.asarray(msg.pos_ne_m, float) - predicted, H, R_meas, self.cfg.gps_gate_chi2)
+        H[:, POS] = model.jacobian()
+        H[:, ATT] = -rotated_vector_jacobian(att, self._r_gps)[model.mapping]
+        return self._update(model.residual(msg.pos_ne_m, predicted), H, model.covar(), self.cfg.gps_gate_chi2)
 
     def on_usbl(self, msg: UsblMsg) -> bool:
         """Range/bearing/elevation of the known beacon seen from the vehicle's USBL head.
@@ -270,10 +256,11 @@ class NavigationFilter:
         self.predict(msg.t_s)
         att = self._attitude()
         R = rot_from_euler(*att)
-        rel_body = R.T @ (self._beacon_ned - self._x[POS]) - self._r_usbl
-        predicted = usbl_observation(rel_body)
-        J_obs = usbl_observation_jacobian(rel_body)
-        # d(rel_body)/d(att): R^T w = R(att)^T w; use d(R^T w)_i/d(att) = (dR/d att)^T w
+        model = self._usbl_model
+        beacon_body = R.T @ (self._beacon_ned - self._x[POS])  # beacon from the body origin, FRD
+        predicted = model.function(beacon_body)
+        J_obs = model.jacobian(beacon_body)
+        # d(beacon_body)/d(att): R^T w = R(att)^T w; use d(R^T w)_i/d(att) = (dR/d att)^T w
         w = self._beacon_ned - self._x[POS]
         J_rel_att = np.empty((3, 3))
         for k in range(3):
@@ -282,11 +269,8 @@ class NavigationFilter:
         H[:, POS] = J_obs @ (-R.T)
         H[:, ATT] = -(J_obs @ J_rel_att)  # state holds the bias: att = rpy_m - b
         z = np.array([msg.range_m, msg.bearing_rad, msg.elevation_rad])
-        residual = z - predicted
-        residual[1:] = wrap_angle(residual[1:])
-        sig_r = self.cfg.usbl_range_noise_m + self.cfg.usbl_range_noise_frac * msg.range_m
-        sig_a = np.radians(self.cfg.usbl_angle_noise_deg)
-        return self._update(residual, H, np.diag([sig_r**2, sig_a**2, sig_a**2]), self.cfg.usbl_gate_chi2)
+        residual = model.residual(z, predicted)
+        return self._update(residual, H, model.covar(msg.range_m), self.cfg.usbl_gate_chi2)
 
     # ------------------------------------------------------------------ output
     def estimate(self) -> NavEstimate:
