@@ -1,5 +1,5 @@
 """Onboard autonomy: what would run on the vehicle.
 
-Never imports ``mujoco``, ``sim`` or ``rerun``: it consumes sensor messages
-(:mod:`autonomy.messages`) and emits commands.
+Never imports ``mujoco``, ``sim``, ``rerun`` or ``scenarios``: it consumes sensor messages
+(:mod:`autonomy.messages`), emits commands and owns its config classes.
 """

@@ -8,14 +8,16 @@ from typing import Annotated, Any, Literal, Union
 from pydantic import Field, RootModel, TypeAdapter, ValidationError, model_validator
 from pydantic_core import InitErrorDetails, PydanticUndefined
 
-from scenarios.config.atr import AtrConfig
+from autonomy.atr.config import AtrConfig
+from autonomy.control.config import ControlConfig
+from autonomy.guidance.config import GuidanceConfig
+from autonomy.localization.config import LocalizationConfig
+from autonomy.navigation.config import NavigationConfig
+from autonomy.world_model.config import WorldModelConfig
 from scenarios.config.base import StrictModel
-from scenarios.config.guidance import ControlConfig, GuidanceConfig
-from scenarios.config.navigation import NavigationConfig
 from scenarios.config.sensor import SensorConfig, fill_sensor_entries, sensor_config_kinds
 from scenarios.config.vehicle import VehicleConfig
 from scenarios.config.world import WorldConfig
-from scenarios.config.world_model import LocalizationConfig, WorldModelConfig
 
 
 class PhysicsConfig(StrictModel):
@@ -110,6 +112,8 @@ def _without_union_tags(exc: ValidationError) -> ValidationError:
 
 
 class AutonomyConfig(StrictModel):
+    """The onboard stack's settings; each block is defined next to its code in ``autonomy/``."""
+
     rate_hz: float = Field(10.0, gt=0.0, le=200.0)
     navigation: NavigationConfig = NavigationConfig()
     guidance: GuidanceConfig = GuidanceConfig()

@@ -18,7 +18,7 @@ import numpy as np
 
 from autonomy.localization.geolocate import LocalizedDetection
 from autonomy.world_model import PMHA
-from scenarios.config.world_model import WorldModelConfig
+from autonomy.world_model.config import WorldModelConfig
 
 _SIDE_M = 100.0
 _STRIP_M = 10.0

@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from autonomy.control.allocation import ThrustAllocator
-from autonomy.control.autopilot import Autopilot, AutopilotParams
+from autonomy.control.autopilot import Autopilot
 from autonomy.guidance.mission import MissionFsm
 from autonomy.guidance.survey import SurveyGuidance
 from autonomy.navigation import NavigationFilter, NavNoiseModel
@@ -24,6 +24,7 @@ from sim.perception import Perception
 from sim.physics import Physics
 from sim.scheduler import SensorScheduler
 from sim.sensors.base import Sensor
+from sim.sensors.nav_noise import nav_noise_model
 from sim.sensors.registry import build_sensors
 
 NAV_SOURCES = ("estimate", "truth")
@@ -94,8 +95,8 @@ def build_mission_parts(scenario: Scenario, physics: Physics, seed: int, *, nav_
         first.setdefault(sensor.kind, sensor)
     nav_mounts = {kind: first[kind].mount_pos_body_m for kind in NAV_MOUNT_KINDS if kind in first}
     cfg_of = scenario.sensors.first_of_kind
-    nav_noise = NavNoiseModel.from_sensor_configs(cfg_of("imu"), cfg_of("dvl"), cfg_of("depth"), cfg_of("gps"),
-                                                  altimeter=cfg_of("altimeter"))
+    nav_noise = nav_noise_model(cfg_of("imu"), cfg_of("dvl"), cfg_of("depth"), cfg_of("gps"),
+                                altimeter=cfg_of("altimeter"))
 
     auto = scenario.autonomy
     survey = auto.guidance.survey
@@ -103,12 +104,12 @@ def build_mission_parts(scenario: Scenario, physics: Physics, seed: int, *, nav_
     swath = sonar.swath_width_m(survey.altitude_m) if sonar is not None else None
     guidance = SurveyGuidance.from_config(survey, auto.guidance.los, swath_width_m=swath)
     waypoints_ne = np.asarray(guidance.plan.waypoints_ne_m)
-    fsm = MissionFsm.from_config(auto.guidance.mission, guidance)
+    fsm = MissionFsm(auto.guidance.mission, guidance)
     perceive = (Perception(scenario, sonar, physics.world.seabed, waypoints_ne, nav_source=nav_source)
                 if sonar is not None and perception else None)
     return MissionParts(
         seed=int(seed), sensors=sensors, scheduler=scheduler, nav_noise=nav_noise, nav_mounts=nav_mounts,
-        guidance=guidance, fsm=fsm, autopilot=Autopilot(AutopilotParams.from_config(auto.control)),
+        guidance=guidance, fsm=fsm, autopilot=Autopilot(auto.control),
         allocator=ThrustAllocator.from_layout(physics.params.layout), waypoints_ne=waypoints_ne, sonar=sonar,
         perception=perceive,
     )

@@ -15,8 +15,9 @@ from autonomy.messages import ImuMsg
 from autonomy.navigation import NavigationFilter, NavNoiseModel
 from scenarios import load_scenario
 from scenarios.config.nav_sensors import AltimeterConfig, DvlConfig
-from scenarios.config.navigation import NavigationConfig
+from autonomy.navigation.config import NavigationConfig
 from sim.mission import Mission
+from sim.sensors.nav_noise import nav_noise_model
 from sim.sensors.base import SceneView
 from sim.sensors.altimeter import AltimeterSensor
 from sim.sensors.dvl import DvlSensor
@@ -75,13 +76,13 @@ def test_filter_turns_a_tilted_altimeter_slant_range_into_altitude_over_a_slope(
     expected = _vertical_distance_m(truth.pos_ned, plane_point, normal)
     dvl = DvlSensor(DvlConfig(), MOUNTS["dvl"], np.random.default_rng(0))
     alt = AltimeterSensor(AltimeterConfig(), MOUNTS["altimeter"], np.random.default_rng(0))
-    f = NavigationFilter(NavigationConfig(), truth.pos_ned, rpy[2], mounts=MOUNTS)
+    f = NavigationFilter(NavigationConfig(), truth.pos_ned, rpy[2], nav_noise_model(), mounts=MOUNTS)
     f.on_imu(ImuMsg(t_s=0.0, rpy_rad=rpy, rate_body_radps=np.zeros(3), accel_body_mps2=np.array([0, 0, -9.81])))
     f.on_dvl(dvl.measure(truth, SceneView(truth.t_s, caster), noise=False))
     assert f.estimate().altitude_m == pytest.approx(expected, abs=1e-3)
     # a filter that trusts the DVL altitude little: its ping (0.5 m off) gives the gradient only,
     # and the altimeter's slant range sets the altitude
-    vague_dvl = dataclasses.replace(NavNoiseModel.from_sensor_configs(), dvl_range_noise_m=10.0)
+    vague_dvl = dataclasses.replace(nav_noise_model(), dvl_range_noise_m=10.0)
     f2 = NavigationFilter(NavigationConfig(), truth.pos_ned, rpy[2], vague_dvl, mounts=MOUNTS)
     f2.on_imu(ImuMsg(t_s=0.0, rpy_rad=rpy, rate_body_radps=np.zeros(3), accel_body_mps2=np.array([0, 0, -9.81])))
     f2.on_dvl(dataclasses.replace(dvl.measure(truth, SceneView(truth.t_s, caster), noise=False), altitude_m=expected + 0.5))
@@ -101,7 +102,7 @@ def _contour_run(seed: int, dvl_bias_m: float, alt_bias_m: float, duration_s: fl
     alt_cfg = AltimeterConfig(noise_m=0.02)
     dvl = DvlSensor(dvl_cfg, MOUNTS["dvl"], rng)
     alt = AltimeterSensor(alt_cfg, MOUNTS["altimeter"], rng)
-    noise = NavNoiseModel.from_sensor_configs(dvl=dvl_cfg, altimeter=alt_cfg)
+    noise = nav_noise_model(dvl=dvl_cfg, altimeter=alt_cfg)
     normal = _seabed_normal(math.radians(20.0), math.radians(90.0))  # deeper to the east
     plane_point = np.array([0.0, 0.0, 10.0])
     caster = PlaneCaster(plane_point, normal)

@@ -8,11 +8,11 @@ import pytest
 from autonomy.atr import SHIPPED_MODEL_PATH, build_detector
 from autonomy.atr.classical import ClassicalDetector
 from autonomy.atr.cnn_detector import CnnDetector
+from autonomy.atr.config import AtrConfig
 from autonomy.atr.detector import NullDetector
 from autonomy.atr.model_file import ModelFileError
 from autonomy.messages import FlsFrame
 from autonomy.sonar_geometry import FanGeometry
-from scenarios.config.atr import AtrConfig
 
 torch = pytest.importorskip("torch", reason="torch not installed: ONNX export tests need the train extra")
 

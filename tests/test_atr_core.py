@@ -147,7 +147,7 @@ def test_classical_detector_clusters_fragments_and_roi_weights_scores():
     boxes, scores = det.detect_boxes(fan, GEOM.m_per_px)
     assert len(boxes) == 1
     assert boxes[0, 0] < cx - gap_px and boxes[0, 2] > cx + gap_px
-    from scenarios.config.atr import ClassicalAtrConfig
+    from autonomy.atr.config import ClassicalAtrConfig
 
     roi_det = ClassicalDetector(ClassicalAtrConfig(roi_radius_m=1.0), score_threshold=0.0)
     _, s_near = roi_det.detect_boxes(fan, GEOM.m_per_px, roi_centre_px=(cx, cy))

@@ -74,7 +74,7 @@ def test_perfect_detector_scores_one_and_false_boxes_count(eval_set):
 
 def test_shipped_model_meets_floor_on_seeded_heldout_frames(eval_set):
     from autonomy.atr import build_detector
-    from scenarios.config.atr import AtrConfig
+    from autonomy.atr.config import AtrConfig
 
     cfg = AtrConfig()
     res = evaluate_detector(build_detector(cfg), eval_set, cfg.score_threshold)
@@ -85,7 +85,7 @@ def test_shipped_model_meets_floor_on_seeded_heldout_frames(eval_set):
 
 def test_classical_baseline_runs_on_the_same_frames(eval_set):
     from autonomy.atr import build_detector
-    from scenarios.config.atr import AtrConfig
+    from autonomy.atr.config import AtrConfig
 
     res = evaluate_detector(build_detector(AtrConfig(detector="classical")), eval_set, 0.5)
     assert 0.0 <= res["precision"] <= 1.0 and 0.0 <= res["recall"] <= 1.0 and res["frames"] == 40

@@ -7,15 +7,14 @@ import math
 import numpy as np
 import pytest
 
-from autonomy.control.autopilot import Autopilot, AutopilotParams
-from autonomy.control.pid import PidGains
+from autonomy.control.autopilot import Autopilot
+from autonomy.control.config import ControlConfig, PidConfig
 from autonomy.control.setpoint import Setpoint
 from autonomy.messages import NavEstimate
-from scenarios.config.guidance import ControlConfig
 
-P_ONLY = AutopilotParams(surge=PidGains(kp=10.0), sway=PidGains(kp=10.0), heading=PidGains(kp=10.0),
-                         depth=PidGains(kp=10.0), max_yaw_rate_radps=math.radians(10.0),
-                         max_vertical_speed_mps=0.2, max_acceleration_mps2=0.1, altitude_filter_tau_s=0.0)
+P_ONLY = ControlConfig(surge=PidConfig(kp=10.0), sway=PidConfig(kp=10.0), heading=PidConfig(kp=10.0),
+                       depth=PidConfig(kp=10.0), max_yaw_rate_dps=10.0,
+                       max_vertical_speed_mps=0.2, max_acceleration_mps2=0.1, altitude_filter_tau_s=0.0)
 
 
 def nav(depth=1.0, yaw=0.0, u=0.0, v=0.0, altitude=float("nan"), t=0.0):
@@ -75,10 +74,7 @@ def test_setpoint_validation():
         Setpoint(0.5, float("nan"), depth_m=1.0)
 
 
-def test_params_from_config():
-    p = AutopilotParams.from_config(ControlConfig(max_yaw_rate_dps=20.0))
-    assert p.max_yaw_rate_radps == pytest.approx(math.radians(20.0))
-    assert p.depth.kd == ControlConfig().depth.kd
+def test_bad_control_config_rejected():
     with pytest.raises(ValueError):
         ControlConfig(surge={"kp": -1.0})
     with pytest.raises(ValueError):
@@ -89,8 +85,8 @@ def test_derivative_uses_depth_and_yaw_rates_at_any_attitude():
     """D terms act on the NED depth rate and the Euler yaw rate (checked against frames)."""
     from autonomy.frames import euler_rate_matrix, rot_from_euler
 
-    d_only = AutopilotParams(surge=PidGains(), sway=PidGains(), heading=PidGains(kd=2.0),
-                             depth=PidGains(kd=3.0))
+    d_only = ControlConfig(surge=PidConfig(), sway=PidConfig(), heading=PidConfig(kd=2.0),
+                           depth=PidConfig(kd=3.0))
     rpy = np.array([0.2, -0.15, 1.0])
     vel = np.array([0.4, -0.1, 0.05])
     rates = np.array([0.03, -0.02, 0.1])

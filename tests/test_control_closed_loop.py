@@ -13,13 +13,14 @@ import math
 import numpy as np
 import pytest
 
-from autonomy.control.autopilot import Autopilot, AutopilotParams
+from autonomy.control.autopilot import Autopilot
+from autonomy.control.config import ControlConfig, PidConfig
 from autonomy.control.setpoint import Setpoint
 from autonomy.frames import euler_from_rot, quat_from_rot, rot_from_euler, skew, wrap_angle
-from autonomy.guidance.mission import MissionFsm, MissionParams, MissionState
-from autonomy.guidance.survey import LosParams, SurveyGuidance
+from autonomy.guidance.config import LosConfig
+from autonomy.guidance.mission import MissionFsm, MissionState
+from autonomy.guidance.survey import SurveyGuidance
 from autonomy.messages import NavEstimate
-from scenarios.config.guidance import ControlConfig, PidConfig
 from scenarios.load import load_scenario
 from scenarios.schema import Scenario
 from sim.hydrodynamics import FossenModel
@@ -74,7 +75,7 @@ STOP = object()  # returned by a setpoint function to end the run
 def fly(plant: Plant, duration_s: float, setpoint_fn, autopilot: Autopilot | None = None):
     """Run the loop; ``setpoint_fn(nav) -> Setpoint | None | STOP`` (None: idle, zero
     wrench; STOP ends the run). Returns a log."""
-    ap = autopilot or Autopilot(AutopilotParams.from_config(ControlConfig()))
+    ap = autopilot or Autopilot(ControlConfig())
     cmd = np.zeros(plant.thrusters.n)
     log = []
     for k in range(int(round(duration_s / PHYSICS_DT_S))):
@@ -118,12 +119,12 @@ def test_altitude_mode_holds_altitude_over_flat_seabed():
 def _line_in_cross_current(compensate: bool, sway_control: bool):
     """Eastbound 45 m line at 2 m depth with a 0.2 m/s northward current across it."""
     plant = Plant([0.0, 0.0, 2.0], math.radians(90.0), current_ned=(0.2, 0.0, 0.0))
-    los = LosParams(lookahead_m=3.0, sideslip_compensation=compensate)
+    los = LosConfig(lookahead_m=3.0, sideslip_compensation=compensate)
     guidance = SurveyGuidance([[0.0, 45.0]], 0.5, los, depth_m=2.0)
     guidance.start([0.0, 0.0], math.radians(90.0))
     cfg = ControlConfig() if sway_control else ControlConfig(sway=PidConfig())
     log = fly(plant, 130.0, lambda nav: STOP if guidance.finished else guidance.update(nav),
-              Autopilot(AutopilotParams.from_config(cfg)))
+              Autopilot(cfg))
     assert guidance.finished, "did not reach the end of the line"
     t, north, east, depth = log[:, 0], log[:, 1], log[:, 2], log[:, 3]
     cross_track = -north  # starboard of an eastbound line is south
@@ -157,10 +158,10 @@ def test_cssn_lawnmower_mission_visits_every_waypoint():
     scenario = load_scenario("cssn_lawnmower")
     g = scenario.autonomy.guidance
     guidance = SurveyGuidance.from_config(g.survey, g.los)
-    fsm = MissionFsm(MissionParams.from_config(g.mission), guidance)
+    fsm = MissionFsm(g.mission, guidance)
     x0 = scenario.vehicle.initial_pos_ned
     plant = Plant(x0, math.radians(scenario.vehicle.initial_rpy_deg[2]))
-    ap = Autopilot(AutopilotParams.from_config(scenario.autonomy.control))
+    ap = Autopilot(scenario.autonomy.control)
     log = fly(plant, 720.0, lambda nav: STOP if fsm.done else fsm.update(nav.t_s, nav, True), ap)
     assert fsm.succeeded, fsm.transitions
     assert [tr.to_state for tr in fsm.transitions] == [

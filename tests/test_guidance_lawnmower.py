@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
+from autonomy.guidance.config import SurveyConfig
 from autonomy.guidance.lawnmower import fls_swath_width_m, plan_lawnmower
 from autonomy.guidance.survey import plan_from_config
-from scenarios.config.guidance import SurveyConfig
 
 
 def test_legs_parallel_alternating_and_evenly_spaced():

@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from autonomy.guidance.survey import LosParams, SurveyGuidance
+from autonomy.guidance.config import GuidanceConfig, LosConfig, SurveyConfig
+from autonomy.guidance.survey import SurveyGuidance
 from autonomy.messages import NavEstimate
-from scenarios.config.guidance import GuidanceConfig, SurveyConfig
 
 
 def nav(t, n, e, yaw, u=0.5, v=0.0):
@@ -19,7 +19,7 @@ def nav(t, n, e, yaw, u=0.5, v=0.0):
 
 
 def test_heading_speed_and_sideslip_compensation():
-    los = LosParams(lookahead_m=2.0, sideslip_filter_tau_s=1.0, slow_down_heading_error_rad=math.radians(90.0),
+    los = LosConfig(lookahead_m=2.0, sideslip_filter_tau_s=1.0, slow_down_heading_error_deg=90.0,
                     min_speed_fraction=0.25)
     g = SurveyGuidance([[0.0, 100.0]], 0.8, los, altitude_m=2.0)  # eastbound line
     g.start([0.0, 0.0])
@@ -40,7 +40,7 @@ def test_heading_speed_and_sideslip_compensation():
 
 
 def test_holds_heading_with_zero_speed_after_the_last_waypoint():
-    g = SurveyGuidance([[0.0, 5.0]], 0.5, LosParams(acceptance_radius_m=1.0), depth_m=3.0)
+    g = SurveyGuidance([[0.0, 5.0]], 0.5, LosConfig(acceptance_radius_m=1.0), depth_m=3.0)
     g.start([0.0, 0.0])
     g.update(nav(0.0, 0.0, 2.0, 1.5))
     sp = g.update(nav(1.0, 0.0, 4.5, 1.5))

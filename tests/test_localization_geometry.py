@@ -13,10 +13,10 @@ from autonomy.localization import (
     sonar_point_ned,
     sonar_to_body_rotation,
 )
+from autonomy.localization.config import LocalizationConfig
 from autonomy.localization.sonar_projection import tilt_level_flat_seabed_elevation
 from autonomy.messages import Detection, NavEstimate
 from autonomy.sonar_geometry import FanGeometry
-from scenarios.config.world_model import LocalizationConfig
 
 
 def _nav(pos=(0.0, 0.0, 0.0), rpy=(0.0, 0.0, 0.0), altitude=float("nan"), cov_pos=0.0, cov_yaw=0.0):

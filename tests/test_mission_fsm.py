@@ -7,12 +7,12 @@ import math
 import numpy as np
 import pytest
 
-from autonomy.guidance.mission import MissionFsm, MissionParams, MissionState
-from autonomy.guidance.survey import LosParams, SurveyGuidance
+from autonomy.guidance.config import LosConfig, MissionConfig
+from autonomy.guidance.mission import MissionFsm, MissionState
+from autonomy.guidance.survey import SurveyGuidance
 from autonomy.messages import NavEstimate
-from scenarios.config.guidance import GuidanceConfig, MissionConfig
 
-PARAMS = MissionParams(dive_tolerance_m=0.2, dive_settle_s=1.0, dive_timeout_s=30.0,
+PARAMS = MissionConfig(dive_tolerance_m=0.2, dive_settle_s=1.0, dive_timeout_s=30.0,
                        bottom_lock_timeout_s=5.0, nav_timeout_s=2.0, safe_depth_min_m=0.5,
                        safe_depth_max_m=8.0, min_altitude_m=0.5)
 
@@ -24,12 +24,12 @@ def nav(t, n=0.0, e=0.0, depth=0.3, yaw=0.0, altitude=3.7, u=0.0):
 
 
 def with_params(**changes):
-    return MissionParams(**({n: getattr(PARAMS, n) for n in MissionParams.__slots__} | changes))
+    return PARAMS.model_copy(update=changes)
 
 
 def make_fsm(params=PARAMS, altitude_mode=True):
     vert = dict(altitude_m=2.0) if altitude_mode else dict(depth_m=2.0)
-    g = SurveyGuidance([[10.0, 0.0], [10.0, 10.0]], 0.5, LosParams(acceptance_radius_m=1.0), **vert)
+    g = SurveyGuidance([[10.0, 0.0], [10.0, 10.0]], 0.5, LosConfig(acceptance_radius_m=1.0), **vert)
     return MissionFsm(params, g)
 
 
@@ -151,9 +151,7 @@ def test_external_abort_and_depth_mode_dive():
     assert fsm.state is MissionState.ABORT and fsm.abort_reason == "operator"
 
 
-def test_params_from_config_and_band_validation():
-    p = MissionParams.from_config(GuidanceConfig().mission)
-    assert p.bottom_lock_timeout_s == MissionConfig().bottom_lock_timeout_s
+def test_band_validation():
     with pytest.raises(ValueError, match="safe_depth_min_m"):
         MissionConfig(safe_depth_min_m=5.0, safe_depth_max_m=4.0)
 
@@ -165,7 +163,7 @@ def test_mode_names_and_reset():
     assert fsm.mode == "abort" and fsm.aborted
     fsm.reset()
     assert fsm.mode == "idle" and not fsm.aborted and fsm.transitions == []
-    fsm2 = MissionFsm.from_config(MissionConfig(dive_settle_s=0.0), fsm.guidance)
+    fsm2 = MissionFsm(MissionConfig(dive_settle_s=0.0), fsm.guidance)
     fsm2.update(0.0, nav(0.0, depth=2.0, altitude=2.0), True)
     assert fsm2.update(0.1, nav(0.1, depth=2.0, altitude=2.0), True) is not None
     assert fsm2.mode == "survey"

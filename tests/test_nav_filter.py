@@ -10,11 +10,12 @@ from scipy.stats import chi2
 
 from autonomy.frames import rot_from_euler, wrap_angle
 from autonomy.messages import DvlMsg, GpsMsg, ImuMsg, UsblMsg
-from autonomy.navigation import NavigationFilter, NavNoiseModel
-from autonomy.navigation.ekf import rotated_vector_jacobian, usbl_observation, usbl_observation_jacobian
-from scenarios.config.navigation import NavigationConfig
+from autonomy.navigation import NavigationFilter
+from autonomy.navigation.config import NavigationConfig
+from autonomy.navigation.ekf import rotated_vector_jacobian
 from scenarios.schema import SensorsConfig
 from sim.sensors.base import SceneView
+from sim.sensors.nav_noise import nav_noise_model
 from sim.sensors.nav_suite import build_nav_sensors
 from tests.test_nav_kinematics import flat_seabed, survey_truths
 
@@ -23,6 +24,7 @@ MOUNTS = {"imu": np.zeros(3), "dvl": np.array([0.15, 0.0, 0.25]), "depth": np.ar
 SEABED = flat_seabed(6.0)
 DT_S = 0.2  # IMU, DVL and depth every step, GPS every 5th
 TRUTHS = survey_truths(dt_s=DT_S, leg_s=80.0, n_legs=2)
+NOISE = nav_noise_model()  # the filter's model of the default sensors
 
 
 def _distance_m(truths) -> float:
@@ -63,23 +65,13 @@ def test_rotated_vector_jacobian_matches_finite_differences():
         np.testing.assert_allclose(rotated_vector_jacobian(rpy, v), fd, atol=1e-8)
 
 
-def test_usbl_observation_jacobian_matches_finite_differences():
-    rel = np.array([12.0, -5.0, 3.0])
-    obs = usbl_observation(rel)
-    assert obs[0] == pytest.approx(13.3416, abs=1e-4)
-    assert obs[1] == pytest.approx(np.arctan2(-5.0, 12.0))
-    assert obs[2] == pytest.approx(np.arctan2(3.0, 13.0))
-    fd = np.column_stack([(usbl_observation(rel + h) - usbl_observation(rel - h)) / 2e-6 for h in 1e-6 * np.eye(3)])
-    np.testing.assert_allclose(usbl_observation_jacobian(rel), fd, atol=1e-8)
-
-
 # ----------------------------------------------------------------------------- dead reckoning
 
 
 def test_noise_free_sensors_dead_reckon_the_true_path():
     cfg = NavigationConfig(mode="dead_reckoning")
     sensors = build_nav_sensors(SensorsConfig(), MOUNTS, 0)
-    f = NavigationFilter(cfg, TRUTHS[0].pos_ned, TRUTHS[0].rpy_rad[2], mounts=MOUNTS)
+    f = NavigationFilter(cfg, TRUTHS[0].pos_ned, TRUTHS[0].rpy_rad[2], NOISE, mounts=MOUNTS)
     errs = [np.linalg.norm(est[0].pos_ned - tr.pos_ned) for tr, est in _fly([f], sensors, TRUTHS, 10, noise=False)]
     # only the zero-order hold of the 5 Hz DVL velocity separates the estimate from the truth
     assert max(errs) < 0.02
@@ -94,7 +86,7 @@ def test_dead_reckoning_drift_is_a_few_percent_of_distance():
     drift, sigma = [], []
     for seed in range(6):
         sensors = build_nav_sensors(SensorsConfig(), MOUNTS, seed)
-        f = NavigationFilter(cfg, TRUTHS[0].pos_ned, TRUTHS[0].rpy_rad[2], mounts=MOUNTS)
+        f = NavigationFilter(cfg, TRUTHS[0].pos_ned, TRUTHS[0].rpy_rad[2], NOISE, mounts=MOUNTS)
         for _ in _fly([f], sensors, TRUTHS, len(TRUTHS)):
             pass
         est = f.estimate()
@@ -108,9 +100,9 @@ def test_dead_reckoning_drift_is_a_few_percent_of_distance():
 
 def test_gps_is_ignored_in_dead_reckoning_and_gated_in_ekf():
     gps = GpsMsg(t_s=0.0, pos_ne_m=np.array([1.0, 0.0]), valid=True)
-    dr = NavigationFilter(NavigationConfig(mode="dead_reckoning"), np.zeros(3), 0.0)
+    dr = NavigationFilter(NavigationConfig(mode="dead_reckoning"), np.zeros(3), 0.0, NOISE)
     assert not dr.on_gps(gps)
-    ekf = NavigationFilter(NavigationConfig(), np.zeros(3), 0.0)
+    ekf = NavigationFilter(NavigationConfig(), np.zeros(3), 0.0, NOISE)
     cov_before = ekf.estimate().cov_pos_ned
     assert ekf.on_gps(gps)
     after = ekf.estimate()
@@ -124,7 +116,7 @@ def test_gps_is_ignored_in_dead_reckoning_and_gated_in_ekf():
 def test_lost_bottom_lock_inflates_covariance():
     cfg = NavigationConfig(mode="dead_reckoning", initial_pos_sigma_m=0.0, initial_depth_sigma_m=0.0)
     imu = ImuMsg(t_s=0.0, rpy_rad=np.zeros(3), rate_body_radps=np.zeros(3), accel_body_mps2=np.array([0, 0, -9.81]))
-    locked, lost = (NavigationFilter(cfg, np.zeros(3), 0.0) for _ in range(2))
+    locked, lost = (NavigationFilter(cfg, np.zeros(3), 0.0, NOISE) for _ in range(2))
     for k in range(1, 51):
         t = 0.2 * k
         good = DvlMsg(t_s=t, vel_body_mps=np.array([0.5, 0.0, 0.0]), valid=True, altitude_m=2.0,
@@ -145,7 +137,7 @@ def test_ekf_nees_within_chi_square_bounds_over_monte_carlo_runs():
     at (nearly) every checkpoint; a filter with over-optimistic noise fails the same check."""
     n_runs, every = 24, 50  # checkpoint every 10 s
     cfg = NavigationConfig()
-    good_noise = NavNoiseModel.from_sensor_configs()
+    good_noise = NOISE
     bad_noise = dataclasses.replace(good_noise, attitude_bias_sigma_rad=good_noise.attitude_bias_sigma_rad / 4,
                                     dvl_scale_sigma=good_noise.dvl_scale_sigma / 4)
     nees = []
@@ -173,7 +165,7 @@ def test_usbl_fixes_pull_a_wrong_prior_to_the_truth():
     beacon = np.array([20.0, -10.0, 15.0])
     truth_pos, yaw = np.array([3.0, 4.0, 5.0]), 0.7
     cfg = NavigationConfig(initial_pos_sigma_m=5.0, initial_depth_sigma_m=5.0)
-    f = NavigationFilter(cfg, truth_pos + [3.0, -2.0, 1.5], yaw, usbl_beacon_pos_ned=beacon)
+    f = NavigationFilter(cfg, truth_pos + [3.0, -2.0, 1.5], yaw, NOISE, usbl_beacon_pos_ned=beacon)
     R = rot_from_euler(0.0, 0.0, yaw)
     rng = np.random.default_rng(1)
     sig_a = np.radians(cfg.usbl_angle_noise_deg)
@@ -182,7 +174,8 @@ def test_usbl_fixes_pull_a_wrong_prior_to_the_truth():
         f.on_imu(ImuMsg(t_s=t, rpy_rad=np.array([0.0, 0.0, yaw]), rate_body_radps=np.zeros(3),
                         accel_body_mps2=np.array([0.0, 0.0, -9.81])))
         f.on_dvl(DvlMsg(t_s=t, vel_body_mps=np.zeros(3), valid=True, altitude_m=5.0))
-        r, b, e = usbl_observation(R.T @ (beacon - truth_pos))
+        x, y, z = R.T @ (beacon - truth_pos)  # beacon in FRD from the USBL head at the body origin
+        r, b, e = np.sqrt(x * x + y * y + z * z), np.arctan2(y, x), np.arctan2(z, np.hypot(x, y))
         sig_r = cfg.usbl_range_noise_m + cfg.usbl_range_noise_frac * r
         f.on_usbl(UsblMsg(t_s=t, range_m=r + sig_r * rng.standard_normal(),
                           bearing_rad=b + sig_a * rng.standard_normal(), elevation_rad=e + sig_a * rng.standard_normal()))
@@ -191,7 +184,7 @@ def test_usbl_fixes_pull_a_wrong_prior_to_the_truth():
     assert np.linalg.norm(err) < 0.3
     assert err @ np.linalg.solve(est.cov_pos_ned, err) < chi2.ppf(0.999, 3)
     with pytest.raises(ValueError, match="usbl_beacon_pos_ned"):
-        NavigationFilter(cfg, np.zeros(3), 0.0).on_usbl(UsblMsg(t_s=0.0, range_m=1.0, bearing_rad=0.0, elevation_rad=0.0))
+        NavigationFilter(cfg, np.zeros(3), 0.0, NOISE).on_usbl(UsblMsg(t_s=0.0, range_m=1.0, bearing_rad=0.0, elevation_rad=0.0))
 
 
 def test_altitude_refers_to_body_origin_not_the_sensor():
@@ -199,7 +192,7 @@ def test_altitude_refers_to_body_origin_not_the_sensor():
     from autonomy.messages import AltimeterMsg
 
     mounts = {"altimeter": np.array([0.15, 0.0, 0.24]), "dvl": np.array([0.0, 0.0, 0.3])}
-    f = NavigationFilter(NavigationConfig(), np.zeros(3), 0.0, mounts=mounts)
+    f = NavigationFilter(NavigationConfig(), np.zeros(3), 0.0, NOISE, mounts=mounts)
     f.on_imu(ImuMsg(t_s=0.0, rpy_rad=np.zeros(3), rate_body_radps=np.zeros(3),
                     accel_body_mps2=np.array([0.0, 0.0, -9.81])))
     f.on_altimeter(AltimeterMsg(t_s=0.0, altitude_m=1.76, valid=True))

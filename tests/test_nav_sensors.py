@@ -9,7 +9,6 @@ import pytest
 from pydantic import ValidationError
 
 from autonomy.frames import rot_from_euler, rot_y
-from autonomy.navigation import NavNoiseModel
 from scenarios.config.nav_sensors import AltimeterConfig, DepthConfig, DvlConfig, GpsConfig, ImuConfig
 from scenarios.schema import SensorsConfig
 from sim.sensors.altimeter import AltimeterSensor
@@ -18,6 +17,7 @@ from sim.sensors.dvl import DvlSensor
 from sim.sensors.gps import GpsSensor
 from sim.sensors.imu import GRAVITY_MPS2, ImuSensor
 from sim.sensors.base import SceneView
+from sim.sensors.nav_noise import nav_noise_model
 from sim.sensors.nav_suite import build_nav_sensors
 from tests.test_nav_kinematics import PlaneCaster, flat_seabed, static_truth, wiggle_truth
 
@@ -78,7 +78,7 @@ def test_dvl_noise_matches_filter_noise_model_and_dropout_rate():
     n = len(msgs)
     assert abs((~valid).mean() - 0.1) < 4 * math.sqrt(0.1 * 0.9 / n)
     vel = np.array([m.vel_body_mps for m in msgs if m.valid])
-    expected = NavNoiseModel.from_sensor_configs(dvl=cfg).dvl_velocity_cov(tr.nu[:3])
+    expected = nav_noise_model(dvl=cfg).dvl_velocity_cov(tr.nu[:3])
     assert np.all(np.abs(vel.mean(axis=0) - tr.nu[:3]) < 4 * np.sqrt(np.diag(expected) / len(vel)))
     np.testing.assert_allclose(np.cov(vel.T), expected, rtol=0.1, atol=0.1 * expected.max())
 

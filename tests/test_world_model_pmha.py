@@ -11,8 +11,7 @@ import pytest
 
 from autonomy.localization import LocalizedDetection
 from autonomy.world_model import PMHA
-from autonomy.world_model.anchor import Anchor, predicted_cov
-from scenarios.config.world_model import WorldModelConfig
+from autonomy.world_model.config import WorldModelConfig
 from sim.evaluation.world_model_score import score_world_model
 
 TRUTHS = np.array([[0, 10, 4], [0, 20, 4], [0, 25, 4], [-8, 10, 4], [-7, 15, 4], [-8, 22, 4]], float)
@@ -201,9 +200,9 @@ def test_invisible_anchor_is_not_penalised_for_missed_detections(floor):
 
 def test_kf_falls_back_to_fixed_gaussian_after_timeout():
     cfg = WorldModelConfig(kf_timeout_s=5.0, fallback_cov_m2=2.0, process_noise_m2_per_s=0.01)
-    a = Anchor(0, 0, np.zeros(3), 0.1 * np.eye(3), 0.0, 3, np.array([0.5, 0.5]), (0,))
-    np.testing.assert_allclose(predicted_cov(a, 4.0, cfg), 0.14 * np.eye(3))
-    np.testing.assert_allclose(predicted_cov(a, 6.0, cfg), 2.0 * np.eye(3))
+    predictor = PMHA(cfg).predictor
+    np.testing.assert_allclose(predictor.predict_covar(0.1 * np.eye(3), 4.0), 0.14 * np.eye(3))
+    np.testing.assert_allclose(predictor.predict_covar(0.1 * np.eye(3), 6.0), 2.0 * np.eye(3))
 
 
 def test_class_pmf_follows_atr_scores():

@@ -6,8 +6,8 @@ from pathlib import Path
 
 from autonomy.atr.classical import ClassicalDetector
 from autonomy.atr.cnn_detector import CnnDetector
+from autonomy.atr.config import AtrConfig
 from autonomy.atr.detector import Detector, NullDetector
-from scenarios.config.atr import AtrConfig
 
 SHIPPED_MODEL_PATH = Path(__file__).resolve().parent / "models" / "atr_centernet.onnx"
 

@@ -16,10 +16,10 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from autonomy.atr.config import ClassicalAtrConfig
 from autonomy.atr.detector import check_frame, to_detections
 from autonomy.atr.union_find import UnionFind
 from autonomy.messages import Detection, FlsFrame
-from scenarios.config.atr import ClassicalAtrConfig
 
 
 def _box_gaps_px(boxes: NDArray) -> NDArray[np.float64]:

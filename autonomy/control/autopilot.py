@@ -8,59 +8,16 @@ stability. The thrust allocation maps it to thruster commands.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
-from autonomy.control.pid import Pid, PidGains
+from autonomy.control.config import ControlConfig
+from autonomy.control.pid import Pid
 from autonomy.control.setpoint import Setpoint
 from autonomy.messages import NavEstimate
 
 FloatArray = NDArray[np.float64]
-
-
-@dataclass(frozen=True, slots=True)
-class AutopilotParams:
-    """Gains and reference-shaping limits of all loops.
-
-    Attributes:
-        surge, sway, heading, depth: PID gains (m/s -> N, m/s -> N, rad -> N m, m -> N).
-        surge_feedforward_n_per_mps: X feed-forward per m/s of speed reference.
-        heave_bias_n: constant Z added to the depth loop (buoyancy trim), N.
-        max_yaw_rate_radps: slew limit of the heading reference.
-        max_vertical_speed_mps: slew limit of the depth reference.
-        max_acceleration_mps2: slew limit of the surge speed reference.
-        altitude_filter_tau_s: low-pass time constant of the seabed-depth estimate
-            (depth + altitude) used in altitude mode.
-    """
-
-    surge: PidGains
-    sway: PidGains
-    heading: PidGains
-    depth: PidGains
-    surge_feedforward_n_per_mps: float = 0.0
-    heave_bias_n: float = 0.0
-    max_yaw_rate_radps: float = math.radians(15.0)
-    max_vertical_speed_mps: float = 0.3
-    max_acceleration_mps2: float = 0.2
-    altitude_filter_tau_s: float = 1.0
-
-    @classmethod
-    def from_config(cls, cfg: object) -> "AutopilotParams":
-        """Build from ``scenarios.config.guidance.ControlConfig``."""
-        return cls(
-            surge=PidGains.from_config(cfg.surge),
-            sway=PidGains.from_config(cfg.sway),
-            heading=PidGains.from_config(cfg.heading),
-            depth=PidGains.from_config(cfg.depth),
-            surge_feedforward_n_per_mps=float(cfg.surge_feedforward_n_per_mps),
-            heave_bias_n=float(cfg.heave_bias_n),
-            max_yaw_rate_radps=math.radians(cfg.max_yaw_rate_dps),
-            max_vertical_speed_mps=float(cfg.max_vertical_speed_mps),
-            max_acceleration_mps2=float(cfg.max_acceleration_mps2),
-            altitude_filter_tau_s=float(cfg.altitude_filter_tau_s),
-        )
 
 
 def _wrap(angle_rad: float) -> float:
@@ -85,12 +42,13 @@ class Autopilot:
     invalid (NaN) the last seabed estimate is kept (or the current depth held if none).
     """
 
-    def __init__(self, params: AutopilotParams) -> None:
-        self.params = params
-        self.surge_pid = Pid(params.surge)
-        self.sway_pid = Pid(params.sway)
-        self.heading_pid = Pid(params.heading)
-        self.depth_pid = Pid(params.depth)
+    def __init__(self, cfg: ControlConfig) -> None:
+        self.cfg = cfg
+        self._max_yaw_rate_radps = math.radians(cfg.max_yaw_rate_dps)
+        self.surge_pid = Pid(cfg.surge)
+        self.sway_pid = Pid(cfg.sway)
+        self.heading_pid = Pid(cfg.heading)
+        self.depth_pid = Pid(cfg.depth)
         self.reset()
 
     def reset(self) -> None:
@@ -106,10 +64,10 @@ class Autopilot:
         if not math.isfinite(altitude_m):
             return
         sample = depth_m + altitude_m
-        if self.seabed_depth_m is None or self.params.altitude_filter_tau_s <= 0.0:
+        if self.seabed_depth_m is None or self.cfg.altitude_filter_tau_s <= 0.0:
             self.seabed_depth_m = sample
         else:
-            alpha = dt_s / (self.params.altitude_filter_tau_s + dt_s)
+            alpha = dt_s / (self.cfg.altitude_filter_tau_s + dt_s)
             self.seabed_depth_m += alpha * (sample - self.seabed_depth_m)
 
     def update(self, nav: NavEstimate, setpoint: Setpoint, dt_s: float) -> FloatArray:
@@ -126,7 +84,7 @@ class Autopilot:
         """
         if not dt_s > 0.0:
             raise ValueError(f"dt_s must be > 0, got {dt_s}")
-        p = self.params
+        p = self.cfg
         roll, pitch, yaw = (float(a) for a in nav.rpy_rad)
         u, v, w = (float(x) for x in nav.vel_body_mps)
         _, q, r = (float(x) for x in nav.rate_body_radps)
@@ -147,7 +105,7 @@ class Autopilot:
             self.depth_ref_m = depth
         self.speed_ref_mps = _slew(self.speed_ref_mps, setpoint.speed_mps, p.max_acceleration_mps2 * dt_s)
         heading_step = _slew(0.0, _wrap(setpoint.heading_rad - self.heading_ref_rad),
-                             p.max_yaw_rate_radps * dt_s)
+                             self._max_yaw_rate_radps * dt_s)
         self.heading_ref_rad = _wrap(self.heading_ref_rad + heading_step)
 
         self._update_seabed(depth, float(nav.altitude_m), dt_s)

@@ -3,42 +3,8 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
-
-@dataclass(frozen=True, slots=True)
-class PidGains:
-    """Gains and limits of one loop.
-
-    Attributes:
-        kp, ki, kd: proportional, integral (per s) and derivative (s) gains.
-        integral_limit: bound on the integral term's contribution ``|ki * integral|``.
-        output_limit: bound on ``|output|`` (saturation).
-        output_rate_limit: bound on ``|d output / dt|`` per second.
-        derivative_filter_tau_s: time constant of the first-order filter on the derivative
-            term (0: unfiltered).
-    """
-
-    kp: float = 0.0
-    ki: float = 0.0
-    kd: float = 0.0
-    integral_limit: float = math.inf
-    output_limit: float = math.inf
-    output_rate_limit: float = math.inf
-    derivative_filter_tau_s: float = 0.0
-
-    def __post_init__(self) -> None:
-        for name in ("kp", "ki", "kd", "integral_limit", "derivative_filter_tau_s"):
-            if not getattr(self, name) >= 0.0:
-                raise ValueError(f"PidGains.{name} must be >= 0, got {getattr(self, name)}")
-        for name in ("output_limit", "output_rate_limit"):
-            if not getattr(self, name) > 0.0:
-                raise ValueError(f"PidGains.{name} must be > 0, got {getattr(self, name)}")
-
-    @classmethod
-    def from_config(cls, cfg: object) -> "PidGains":
-        """Build from a ``scenarios.config.guidance.PidConfig`` (or any object with the fields)."""
-        return cls(**{name: float(getattr(cfg, name)) for name in cls.__slots__})
+from autonomy.control.config import PidConfig
 
 
 class Pid:
@@ -53,7 +19,7 @@ class Pid:
       per second.
     """
 
-    def __init__(self, gains: PidGains) -> None:
+    def __init__(self, gains: PidConfig) -> None:
         self.gains = gains
         self.reset()
 

@@ -8,12 +8,13 @@ import time
 import numpy as np
 
 from autonomy.control.allocation import ThrusterLayout, allocate
-from autonomy.control.autopilot import Autopilot, AutopilotParams
+from autonomy.control.autopilot import Autopilot
+from autonomy.control.config import ControlConfig
+from autonomy.guidance.config import LosConfig, MissionConfig
 from autonomy.guidance.lawnmower import plan_lawnmower
-from autonomy.guidance.mission import MissionFsm, MissionParams
-from autonomy.guidance.survey import LosParams, SurveyGuidance
+from autonomy.guidance.mission import MissionFsm
+from autonomy.guidance.survey import SurveyGuidance
 from autonomy.messages import NavEstimate
-from scenarios.config.guidance import ControlConfig
 
 
 def bench_guidance_control(n_calls: int = 2000) -> dict[str, float]:
@@ -24,9 +25,9 @@ def bench_guidance_control(n_calls: int = 2000) -> dict[str, float]:
     allocation ``allocate`` (FeelHippo-like 4-thruster layout), and their sum per step.
     """
     plan = plan_lawnmower((0.0, 0.0), 30.0, 16.0, 0.0, 4.0)
-    guidance = SurveyGuidance(plan.waypoints_ne_m, 0.5, LosParams(), altitude_m=2.0)
-    fsm = MissionFsm(MissionParams(dive_settle_s=0.0), guidance)
-    autopilot = Autopilot(AutopilotParams.from_config(ControlConfig()))
+    guidance = SurveyGuidance(plan.waypoints_ne_m, 0.5, LosConfig(), altitude_m=2.0)
+    fsm = MissionFsm(MissionConfig(dive_settle_s=0.0), guidance)
+    autopilot = Autopilot(ControlConfig())
     layout = ThrusterLayout(
         names=("surge_port", "surge_stbd", "sway", "heave"),
         pos_body_m=np.array([[-0.22, -0.26, 0.0], [-0.22, 0.26, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, -0.1]]),

@@ -12,6 +12,7 @@ import math
 from dataclasses import dataclass
 
 from autonomy.control.setpoint import Setpoint
+from autonomy.guidance.config import MissionConfig
 from autonomy.guidance.survey import SurveyGuidance
 from autonomy.messages import NavEstimate
 
@@ -23,27 +24,6 @@ class MissionState(enum.Enum):
     SURFACE = "surface"
     ABORT = "abort"
     DONE = "done"
-
-
-@dataclass(frozen=True, slots=True)
-class MissionParams:
-    """Thresholds of the state machine (see ``scenarios.config.guidance.MissionConfig``)."""
-
-    start_delay_s: float = 0.0
-    dive_tolerance_m: float = 0.3
-    dive_settle_s: float = 3.0
-    dive_timeout_s: float = 120.0
-    surface_depth_m: float = 0.3
-    safe_depth_min_m: float = 0.5
-    safe_depth_max_m: float = 10.0
-    min_altitude_m: float = 0.5
-    bottom_lock_timeout_s: float = 10.0
-    nav_timeout_s: float = 2.0
-    max_mission_time_s: float = 3600.0
-
-    @classmethod
-    def from_config(cls, cfg: object) -> "MissionParams":
-        return cls(**{name: float(getattr(cfg, name)) for name in cls.__slots__})
 
 
 @dataclass(frozen=True, slots=True)
@@ -62,15 +42,10 @@ class MissionFsm:
     It returns the autopilot setpoint for this step, or None while idle (thrusters off).
     """
 
-    def __init__(self, params: MissionParams, guidance: SurveyGuidance) -> None:
-        self.params = params
+    def __init__(self, cfg: MissionConfig, guidance: SurveyGuidance) -> None:
+        self.cfg = cfg
         self.guidance = guidance
         self.reset()
-
-    @classmethod
-    def from_config(cls, mission_cfg: object, guidance: SurveyGuidance) -> "MissionFsm":
-        """Build from ``scenarios.config.guidance.MissionConfig``."""
-        return cls(MissionParams.from_config(mission_cfg), guidance)
 
     def reset(self) -> None:
         """Back to ``IDLE`` with no history (the guidance restarts when the dive ends)."""
@@ -116,7 +91,7 @@ class MissionFsm:
         self._go(t_s, MissionState.ABORT, reason)
 
     def _check_faults(self, t_s: float, nav: NavEstimate | None, bottom_lock: bool) -> None:
-        p = self.params
+        p = self.cfg
         if t_s > p.max_mission_time_s:
             self.abort(t_s, f"mission time {t_s:.1f} s exceeds max_mission_time_s {p.max_mission_time_s}")
             return
@@ -146,7 +121,7 @@ class MissionFsm:
 
     def update(self, t_s: float, nav: NavEstimate | None, bottom_lock: bool) -> Setpoint | None:
         """Advance the state machine; return this step's setpoint (None while idle)."""
-        p = self.params
+        p = self.cfg
         if nav is not None:
             self._last_nav_t_s = t_s
             self._yaw_rad = float(nav.rpy_rad[2])

@@ -3,45 +3,19 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-
 import numpy as np
 from numpy.typing import ArrayLike
 
 from autonomy.control.setpoint import Setpoint
 from autonomy.frames import wrap_angle
+from autonomy.guidance.config import LosConfig, SurveyConfig
 from autonomy.guidance.lawnmower import LawnmowerPlan, plan_lawnmower
 from autonomy.guidance.los import PathErrors, los_course_rad
 from autonomy.guidance.waypoints import WaypointManager
 from autonomy.messages import NavEstimate
 
 
-@dataclass(frozen=True, slots=True)
-class LosParams:
-    """LOS following settings (see ``scenarios.config.guidance.LosConfig``)."""
-
-    lookahead_m: float = 3.0
-    acceptance_radius_m: float = 1.0
-    sideslip_compensation: bool = True
-    max_sideslip_rad: float = math.radians(30.0)
-    sideslip_filter_tau_s: float = 5.0
-    slow_down_heading_error_rad: float = math.radians(45.0)
-    min_speed_fraction: float = 0.2
-
-    @classmethod
-    def from_config(cls, cfg: object) -> "LosParams":
-        return cls(
-            lookahead_m=float(cfg.lookahead_m),
-            acceptance_radius_m=float(cfg.acceptance_radius_m),
-            sideslip_compensation=bool(cfg.sideslip_compensation),
-            max_sideslip_rad=math.radians(cfg.max_sideslip_deg),
-            sideslip_filter_tau_s=float(cfg.sideslip_filter_tau_s),
-            slow_down_heading_error_rad=math.radians(cfg.slow_down_heading_error_deg),
-            min_speed_fraction=float(cfg.min_speed_fraction),
-        )
-
-
-def plan_from_config(survey_cfg: object, swath_width_m: float | None = None) -> LawnmowerPlan:
+def plan_from_config(survey_cfg: SurveyConfig, swath_width_m: float | None = None) -> LawnmowerPlan:
     """Lawnmower plan of a ``SurveyConfig``.
 
     ``swath_width_m`` (e.g. from :func:`autonomy.guidance.lawnmower.fls_swath_width_m`) is
@@ -77,7 +51,7 @@ class SurveyGuidance:
     minus the low-pass-filtered sideslip ``beta = atan2(v, u)`` measured over ground (DVL),
     so a cross current is crabbed into instead of pushing the vehicle off the line. Surge
     speed drops linearly with heading error, to ``min_speed_fraction`` at
-    ``slow_down_heading_error_rad``, so turns stay tight.
+    ``slow_down_heading_error_deg``, so turns stay tight.
 
     Call :meth:`start` once with the current position, then :meth:`update` at the
     autonomy rate. After the last waypoint :attr:`finished` is True and the setpoint holds
@@ -88,7 +62,7 @@ class SurveyGuidance:
         self,
         waypoints_ne_m: ArrayLike,
         speed_mps: float,
-        los: LosParams = LosParams(),
+        los: LosConfig = LosConfig(),
         depth_m: float | None = None,
         altitude_m: float | None = None,
     ) -> None:
@@ -99,6 +73,8 @@ class SurveyGuidance:
         self.manager = WaypointManager(waypoints_ne_m, los.acceptance_radius_m)
         self.speed_mps = float(speed_mps)
         self.los = los
+        self._max_sideslip_rad = math.radians(los.max_sideslip_deg)
+        self._slow_down_heading_error_rad = math.radians(los.slow_down_heading_error_deg)
         self.depth_m = depth_m
         self.altitude_m = altitude_m
         self.sideslip_rad = 0.0
@@ -109,7 +85,7 @@ class SurveyGuidance:
 
     @classmethod
     def from_config(
-        cls, survey_cfg: object, los_cfg: object, swath_width_m: float | None = None
+        cls, survey_cfg: SurveyConfig, los_cfg: LosConfig, swath_width_m: float | None = None
     ) -> "SurveyGuidance":
         """Build from ``SurveyConfig`` and ``LosConfig`` (see :func:`plan_from_config`)."""
         plan = plan_from_config(survey_cfg, swath_width_m)
@@ -117,7 +93,7 @@ class SurveyGuidance:
         guidance = cls(
             plan.waypoints_ne_m,
             survey_cfg.speed_mps,
-            LosParams.from_config(los_cfg),
+            los_cfg,
             depth_m=None if altitude_mode else survey_cfg.depth_m,
             altitude_m=survey_cfg.altitude_m if altitude_mode else None,
         )
@@ -144,7 +120,7 @@ class SurveyGuidance:
         self._last_t_s = nav.t_s
         u, v = float(nav.vel_body_mps[0]), float(nav.vel_body_mps[1])
         if self.los.sideslip_compensation and u > 0.1 and np.isfinite(v):
-            beta = float(np.clip(math.atan2(v, u), -self.los.max_sideslip_rad, self.los.max_sideslip_rad))
+            beta = float(np.clip(math.atan2(v, u), -self._max_sideslip_rad, self._max_sideslip_rad))
             alpha = dt_s / (self.los.sideslip_filter_tau_s + dt_s) if dt_s > 0.0 else 0.0
             self.sideslip_rad += alpha * (beta - self.sideslip_rad)
 
@@ -157,5 +133,5 @@ class SurveyGuidance:
         heading = float(wrap_angle(course - comp))
         self._hold_heading_rad = heading
         heading_err = abs(float(wrap_angle(heading - yaw)))
-        frac = max(self.los.min_speed_fraction, 1.0 - heading_err / self.los.slow_down_heading_error_rad)
+        frac = max(self.los.min_speed_fraction, 1.0 - heading_err / self._slow_down_heading_error_rad)
         return Setpoint(self.speed_mps * frac, heading, **self.vertical_setpoint())

@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from autonomy.frames import rot_from_euler
+from autonomy.localization.config import LocalizationConfig
 from autonomy.localization.sonar_projection import (
     flat_seabed_point_sonar,
     planar_point_sonar,
@@ -23,7 +24,6 @@ from autonomy.localization.sonar_projection import (
 from autonomy.messages import Detection, NavEstimate
 from autonomy.sonar_frame import mount_euler_zyx, spherical_to_sonar
 from autonomy.sonar_geometry import FanGeometry
-from scenarios.config.world_model import LocalizationConfig
 
 FloatArray = NDArray[np.float64]
 

@@ -28,10 +28,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from autonomy.estimation.measurement import PositionFix, RangeBearingElevation
 from autonomy.frames import euler_rate_matrix, rot_from_euler, rot_x, rot_y, rot_z, wrap_angle
 from autonomy.messages import AltimeterMsg, DepthMsg, DvlMsg, GpsMsg, ImuMsg, NavEstimate, UsblMsg
+from autonomy.navigation.config import NavigationConfig
 from autonomy.navigation.noise_model import NavNoiseModel
-from scenarios.config.navigation import NavigationConfig
 
 FloatArray = NDArray[np.float64]
 
@@ -60,28 +61,6 @@ def rotated_vector_jacobian(rpy_rad: FloatArray, v: FloatArray) -> FloatArray:
     )
 
 
-def usbl_observation(rel_body_m: FloatArray) -> FloatArray:
-    """[range, bearing, elevation] of an FRD vector (bearing starboard +, elevation down +)."""
-    x, y, z = rel_body_m
-    return np.array([np.linalg.norm(rel_body_m), np.arctan2(y, x), np.arctan2(z, np.hypot(x, y))])
-
-
-def usbl_observation_jacobian(rel_body_m: FloatArray) -> FloatArray:
-    """d[range, bearing, elevation]/d(rel_body_m), shape (3, 3)."""
-    x, y, z = rel_body_m
-    rho2 = x * x + y * y
-    rho = np.sqrt(rho2)
-    r2 = rho2 + z * z
-    r = np.sqrt(r2)
-    return np.array(
-        [
-            [x / r, y / r, z / r],
-            [-y / rho2, x / rho2, 0.0],
-            [-x * z / (rho * r2), -y * z / (rho * r2), rho / r2],
-        ]
-    )
-
-
 class NavigationFilter:
     """Navigation EKF (or dead reckoning) fed with sensor messages.
 
@@ -89,7 +68,7 @@ class NavigationFilter:
         cfg: filter settings.
         initial_pos_ned: (3,) prior position of the body origin, NED (m).
         initial_yaw_rad: heading used until the first AHRS message.
-        noise: sensor noise model; by default the one matching default sensor configs.
+        noise: the filter's model of its sensors' noise.
         mounts: FRD sensor offsets (3,) from the body origin, m, keyed ``dvl``, ``depth``,
             ``gps``, ``usbl``, ``altimeter`` (missing keys: at the origin; other keys ignored).
         usbl_beacon_pos_ned: (3,) known transponder position for :meth:`on_usbl`.
@@ -104,20 +83,26 @@ class NavigationFilter:
         cfg: NavigationConfig,
         initial_pos_ned: ArrayLike,
         initial_yaw_rad: float,
-        noise: NavNoiseModel | None = None,
+        noise: NavNoiseModel,
         *,
         mounts: Mapping[str, ArrayLike] | None = None,
         usbl_beacon_pos_ned: ArrayLike | None = None,
         t0_s: float = 0.0,
     ):
         self.cfg = cfg
-        self.noise = noise if noise is not None else NavNoiseModel.from_sensor_configs()
+        self.noise = noise
         mounts = mounts or {}
         self._r_dvl, self._r_depth, self._r_gps, self._r_usbl, self._r_alt = (
             np.asarray(mounts.get(k, np.zeros(3)), dtype=float).reshape(3)
             for k in ("dvl", "depth", "gps", "usbl", "altimeter")
         )
         self._beacon_ned = None if usbl_beacon_pos_ned is None else np.asarray(usbl_beacon_pos_ned, float).reshape(3)
+        # measurement models of the fixes; GPS and depth observe the sensor's NED position
+        self._gps_model = PositionFix(3, (0, 1), self.noise.gps_noise_m**2 * np.eye(2))
+        self._depth_model = PositionFix(3, (2,), np.array([[self.noise.depth_noise_m**2]]))
+        self._usbl_model = RangeBearingElevation(
+            self._r_usbl, cfg.usbl_range_noise_m, cfg.usbl_range_noise_frac, np.radians(cfg.usbl_angle_noise_deg)
+        )
         self._t_s = float(t0_s)
         self._x = np.zeros(N_STATES)
         self._x[POS] = np.asarray(initial_pos_ned, dtype=float).reshape(3)
@@ -287,11 +272,12 @@ class NavigationFilter:
         """Pressure depth of the depth sensor."""
         self.predict(msg.t_s)
         att = self._attitude()
-        predicted = self._x[2] + (rot_from_euler(*att) @ self._r_depth)[2]
+        model = self._depth_model
+        predicted = model.function(self._x[POS] + rot_from_euler(*att) @ self._r_depth)
         H = np.zeros((1, N_STATES))
-        H[0, 2] = 1.0
-        H[0, ATT] = -rotated_vector_jacobian(att, self._r_depth)[2]
-        self._update(np.array([msg.depth_m - predicted]), H, np.array([[self.noise.depth_noise_m**2]]), None)
+        H[:, POS] = model.jacobian()
+        H[:, ATT] = -rotated_vector_jacobian(att, self._r_depth)[model.mapping]
+        self._update(model.residual([msg.depth_m], predicted), H, model.covar(), None)
 
     def on_altimeter(self, msg: AltimeterMsg) -> None:
         """Altimeter slant range along body down, turned into the vertical distance under the
@@ -314,12 +300,12 @@ class NavigationFilter:
             return False
         self.predict(msg.t_s)
         att = self._attitude()
-        predicted = self._x[0:2] + (rot_from_euler(*att) @ self._r_gps)[:2]
+        model = self._gps_model
+        predicted = model.function(self._x[POS] + rot_from_euler(*att) @ self._r_gps)
         H = np.zeros((2, N_STATES))
-        H[:, 0:2] = np.eye(2)
-        H[:, ATT] = -rotated_vector_jacobian(att, self._r_gps)[:2]
-        R_meas = self.noise.gps_noise_m**2 * np.eye(2)
-        return self._update(np.asarray(msg.pos_ne_m, float) - predicted, H, R_meas, self.cfg.gps_gate_chi2)
+        H[:, POS] = model.jacobian()
+        H[:, ATT] = -rotated_vector_jacobian(att, self._r_gps)[model.mapping]
+        return self._update(model.residual(msg.pos_ne_m, predicted), H, model.covar(), self.cfg.gps_gate_chi2)
 
     def on_usbl(self, msg: UsblMsg) -> bool:
         """Range/bearing/elevation of the known beacon seen from the vehicle's USBL head.
@@ -331,10 +317,11 @@ class NavigationFilter:
         self.predict(msg.t_s)
         att = self._attitude()
         R = rot_from_euler(*att)
-        rel_body = R.T @ (self._beacon_ned - self._x[POS]) - self._r_usbl
-        predicted = usbl_observation(rel_body)
-        J_obs = usbl_observation_jacobian(rel_body)
-        # d(rel_body)/d(att): R^T w = R(att)^T w; use d(R^T w)_i/d(att) = (dR/d att)^T w
+        model = self._usbl_model
+        beacon_body = R.T @ (self._beacon_ned - self._x[POS])  # beacon from the body origin, FRD
+        predicted = model.function(beacon_body)
+        J_obs = model.jacobian(beacon_body)
+        # d(beacon_body)/d(att): R^T w = R(att)^T w; use d(R^T w)_i/d(att) = (dR/d att)^T w
         w = self._beacon_ned - self._x[POS]
         J_rel_att = np.empty((3, 3))
         for k in range(3):
@@ -343,11 +330,8 @@ class NavigationFilter:
         H[:, POS] = J_obs @ (-R.T)
         H[:, ATT] = -(J_obs @ J_rel_att)  # state holds the bias: att = rpy_m - b
         z = np.array([msg.range_m, msg.bearing_rad, msg.elevation_rad])
-        residual = z - predicted
-        residual[1:] = wrap_angle(residual[1:])
-        sig_r = self.cfg.usbl_range_noise_m + self.cfg.usbl_range_noise_frac * msg.range_m
-        sig_a = np.radians(self.cfg.usbl_angle_noise_deg)
-        return self._update(residual, H, np.diag([sig_r**2, sig_a**2, sig_a**2]), self.cfg.usbl_gate_chi2)
+        residual = model.residual(z, predicted)
+        return self._update(residual, H, model.covar(msg.range_m), self.cfg.usbl_gate_chi2)
 
     def message_handlers(self) -> dict[type, Callable[[Any], Any]]:
         """Message type -> the method that fuses it (what a message bus dispatches on)."""

@@ -1,15 +1,17 @@
-"""The navigation filter's model of its sensors' noise, built from the sensor configs."""
+"""The navigation filter's model of its sensors' noise (plain numbers).
+
+The vehicle integration fills it from its sensors' data sheets or, in the simulator, from the
+simulated sensors' configs (:func:`sim.sensors.nav_noise.nav_noise_model`).
+"""
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
-from autonomy.navigation.dvl_geometry import beam_velocity_covariance, janus_beam_dirs_body
-from scenarios.config.nav_sensors import AltimeterConfig, DepthConfig, DvlConfig, GpsConfig, ImuConfig
+from autonomy.navigation.dvl_geometry import beam_velocity_covariance
 
 FloatArray = NDArray[np.float64]
 
@@ -42,39 +44,9 @@ class NavNoiseModel:
     dvl_scale_sigma: float
     depth_noise_m: float
     gps_noise_m: float
-    dvl_range_noise_m: float = DvlConfig().range_noise_m
-    altimeter_noise_m: float = AltimeterConfig().noise_m
-    altimeter_noise_frac_range: float = AltimeterConfig().noise_frac_range
-
-    @classmethod
-    def from_sensor_configs(
-        cls,
-        imu: ImuConfig | None = None,
-        dvl: DvlConfig | None = None,
-        depth: DepthConfig | None = None,
-        gps: GpsConfig | None = None,
-        altimeter: AltimeterConfig | None = None,
-    ) -> NavNoiseModel:
-        """Noise model matching the given sensor configs (defaults where ``None``)."""
-        imu, dvl, depth, gps = imu or ImuConfig(), dvl or DvlConfig(), depth or DepthConfig(), gps or GpsConfig()
-        altimeter = altimeter or AltimeterConfig()
-        rp_noise, rp_bias = math.radians(imu.roll_pitch_noise_deg), math.radians(imu.roll_pitch_bias_deg)
-        return cls(
-            attitude_noise_rad=np.array([rp_noise, rp_noise, imu.heading_noise_rad]),
-            attitude_bias_sigma_rad=np.array([rp_bias, rp_bias, imu.heading_bias_rad]),
-            heading_rw_rad_per_sqrt_s=imu.heading_random_walk_rad_per_sqrt_s,
-            dvl_beam_dirs_body=janus_beam_dirs_body(
-                math.radians(dvl.beam_angle_deg), math.radians(dvl.beam_azimuth_offset_deg)
-            ),
-            dvl_beam_noise_mps=dvl.beam_noise_mps,
-            dvl_noise_frac_speed=dvl.noise_frac_speed,
-            dvl_scale_sigma=dvl.scale_error,
-            depth_noise_m=depth.noise_m,
-            gps_noise_m=gps.noise_m,
-            dvl_range_noise_m=dvl.range_noise_m,
-            altimeter_noise_m=altimeter.noise_m,
-            altimeter_noise_frac_range=altimeter.noise_frac_range,
-        )
+    dvl_range_noise_m: float = 0.01
+    altimeter_noise_m: float = 0.01
+    altimeter_noise_frac_range: float = 0.002
 
     def dvl_velocity_cov(self, vel_meas_body_mps: FloatArray, beams_used: NDArray[np.bool_] | None = None) -> FloatArray:
         """Covariance (3, 3) of a DVL velocity solved from the ``beams_used`` (default all)."""

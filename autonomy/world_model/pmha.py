@@ -15,12 +15,18 @@ uniform class prior. The product factorises over (measurement, origin) pairs, so
 children of a parent in decreasing probability are the ranked assignments of a cost
 matrix: rows are split into groups linked by a shared gated anchor, multi-row groups are
 ranked with Murty's algorithm (``linear_sum_assignment`` inside) and the groups' lists are
-combined best-first (:func:`autonomy.world_model.murty.ranked_associations`, exact).
+combined best-first (:func:`autonomy.estimation.assignment.ranked_associations`, exact).
 Children of all parents are drawn best-first from one heap until ``max_hypotheses``
 distinct worlds are found or the next one falls below ``prune_ratio`` times the best;
 children with identical anchor sets are merged (probabilities added), which also happens
 when unconfirmed anchors age out (``drop_tentative_after_s``). The most probable
 hypothesis is the world model.
+
+The model is assembled from the estimation roles of :mod:`autonomy.estimation`: a
+constant-position transition with a Kalman predictor (and its fixed-Gaussian fallback), an
+identity position-fix measurement model with a Kalman updater and a single-measurement
+initiator, a Mahalanobis gater, a k-best (Murty) data associator and an update-time deleter
+for tentative anchors; PMHA adds the hypothesis tree, detection probabilities and class pmf.
 """
 
 from __future__ import annotations
@@ -33,23 +39,22 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from autonomy.estimation.assignment import LazyRanked
+from autonomy.estimation.association import KBestAssociator
+from autonomy.estimation.deleter import UpdateTimeDeleter
+from autonomy.estimation.gater import MahalanobisGater, innovation_log_likelihoods
+from autonomy.estimation.initiator import SingleMeasurementInitiator
+from autonomy.estimation.measurement import PositionFix
+from autonomy.estimation.predictor import KalmanPredictor
+from autonomy.estimation.transition import ConstantPosition
+from autonomy.estimation.updater import KalmanUpdater
 from autonomy.localization.geolocate import LocalizedDetection
-from autonomy.world_model.anchor import (
-    CLASS_NAMES,
-    Anchor,
-    class_likelihood,
-    measurement_cov,
-    new_anchor,
-    update_anchor,
-)
-from autonomy.world_model.murty import LazyRanked, ranked_associations
-from scenarios.config.world_model import WorldModelConfig
+from autonomy.world_model.anchor import CLASS_NAMES, Anchor, class_likelihood, class_update, measurement_cov
+from autonomy.world_model.config import WorldModelConfig
 
 FloatArray = NDArray[np.float64]
 Visibility = Callable[[FloatArray], ArrayLike]
-_LOG_2PI = math.log(2.0 * math.pi)
 _PD_MAX = 1.0 - 1e-12
-_EYE3 = np.eye(3)
 _NEW, _CLUTTER = -1, -2  # private origin labels of a measurement
 
 
@@ -118,6 +123,17 @@ class PMHA:
         self._log_new = math.log(cfg.p_new) + log_u_new + log_c0
         self._log_clutter = math.log(cfg.p_clutter) + log_u_clutter + log_c0
         self._log_existing = math.log(cfg.p_existing)
+        # estimation roles
+        self.transition = ConstantPosition(cfg.process_noise_m2_per_s, ndim=3)
+        self.predictor = KalmanPredictor(self.transition, cfg.kf_timeout_s, cfg.fallback_cov_m2 * np.eye(3))
+        self.measurement_model = PositionFix(3, (0, 1, 2))  # NED position; covariance per detection
+        self.updater = KalmanUpdater(self.measurement_model)
+        self.gater = MahalanobisGater(cfg.gate_mahalanobis2)
+        self.initiator = SingleMeasurementInitiator(self.measurement_model)
+        self.deleter = (
+            None if cfg.drop_tentative_after_s is None
+            else UpdateTimeDeleter(cfg.drop_tentative_after_s, min_updates=cfg.min_detections)
+        )
         self._log_w = np.zeros(1)
         self._hyps: list[frozenset[int]] = [frozenset()]  # anchor versions of each world
         self._anchors: dict[int, Anchor] = {}  # version -> anchor, for all live versions
@@ -166,47 +182,39 @@ class PMHA:
         anchor_of = dict(zip(versions, anchors))
 
         # Gated associations per measurement: (anchor version, cost = -log weight rel. miss).
+        if m:
+            Z = np.stack([np.asarray(z.pos_ned, dtype=float) for z in measurements])
+            R = np.stack([measurement_cov(z, cfg) for z in measurements])
         if m and n_u:
-            assoc = self._association_logw(anchors, X, p_d, log_miss, measurements, t_s)
+            dt = np.maximum(t_s - np.array([a.t_last_s for a in anchors]), 0.0)
+            P_pred = self.predictor.predict_covar(np.stack([a.cov_ned for a in anchors]), dt)
+            assoc = self._association_logw(anchors, X, P_pred, p_d, log_miss, measurements, Z, R)
             gated = [
                 [(versions[u], -float(assoc[u, j])) for u in np.flatnonzero(np.isfinite(assoc[:, j]))]
                 for j in range(m)
             ]
+            row_of = dict(zip(versions, range(n_u)))
         else:
             gated = [[] for _ in range(m)]
         private_in = [(_NEW, -self._log_new), (_CLUTTER, -self._log_clutter)]
         private_out = [(_CLUTTER, -self._log_clutter)]
         privates = [private_in if self._in_region(z.pos_ned) else private_out for z in measurements]
-        any_gated = any(gated)
+        associator = KBestAssociator(gated, privates)
 
         # Tentative anchors that age out in this scan (merged into the "clutter" worlds).
         stale: frozenset[int] = frozenset()
-        if cfg.drop_tentative_after_s is not None:
+        if self.deleter is not None:
             stale = frozenset(
-                a.version for a in anchors
-                if a.n_detections < cfg.min_detections
-                and t_s - a.t_last_s > cfg.drop_tentative_after_s
+                a.version for a in anchors if self.deleter.deletes(t_s, a.t_last_s, a.n_detections)
             )
 
         # Parents offering the same options share one ranked list of associations.
-        streams: dict[tuple, LazyRanked] = {}
-        row_cache: dict = {}
         heap: list[tuple[float, int, int]] = []
         parent_stream: list[LazyRanked] = []
         parent_base: list[float] = []
         for h, hyp in enumerate(self._hyps):
             base = float(self._log_w[h]) + sum(map(log_miss_of.__getitem__, hyp))
-            if any_gated:
-                present = tuple(tuple(o[0] for o in g if o[0] in hyp) for g in gated)
-            else:
-                present = ()
-            stream = streams.get(present)
-            if stream is None:
-                if present:
-                    opts = [[o for o in g if o[0] in hyp] + pv for g, pv in zip(gated, privates)]
-                else:
-                    opts = privates
-                stream = streams[present] = LazyRanked(ranked_associations(opts, row_cache))
+            stream = associator.ranked(hyp)
             parent_stream.append(stream)
             parent_base.append(base)
             first = stream.get(0)
@@ -233,15 +241,15 @@ class PMHA:
                     key = (lab, j)
                     a = update_cache.get(key)
                     if a is None:
-                        a = update_cache[key] = update_anchor(
-                            anchor_of[lab], measurements[j], uids[j], t_s, self._version(), cfg
+                        a = update_cache[key] = self._updated(
+                            anchor_of[lab], P_pred[row_of[lab]], measurements[j], Z[j], R[j], uids[j], t_s
                         )
                     removed.append(lab)
                     added.append(a.version)
                 elif lab == _NEW:
                     a = birth_cache.get(j)
                     if a is None:
-                        a = birth_cache[j] = new_anchor(measurements[j], uids[j], self._version(), cfg)
+                        a = birth_cache[j] = self._born(measurements[j], Z[j], R[j], uids[j])
                     added.append(a.version)
             child = self._hyps[h]
             if removed or stale:
@@ -284,32 +292,57 @@ class PMHA:
         self,
         anchors: list[Anchor],
         X: FloatArray,
+        P_pred: FloatArray,
         p_d: FloatArray,
         log_miss: FloatArray,
         measurements: Sequence[LocalizedDetection],
-        t_s: float,
+        Z: FloatArray,
+        R: FloatArray,
     ) -> FloatArray:
+        """Log weight (n_u, m) of each anchor-measurement pair relative to the anchor's miss;
+        -inf outside the gate."""
         cfg = self.cfg
-        Z = np.stack([np.asarray(z.pos_ned, dtype=float) for z in measurements])
-        R = np.stack([measurement_cov(z, cfg) for z in measurements])
-        dt = np.maximum(t_s - np.array([a.t_last_s for a in anchors]), 0.0)
-        P = np.stack([a.cov_ned for a in anchors]) + (cfg.process_noise_m2_per_s * dt)[:, None, None] * _EYE3
-        P[dt > cfg.kf_timeout_s] = cfg.fallback_cov_m2 * _EYE3  # as anchor.predicted_cov
-        S = P[:, None] + R[None]  # (n_u, m, 3, 3)
-        d = Z[None] - X[:, None]  # (n_u, m, 3)
-        L = np.linalg.cholesky(S)
-        w = np.linalg.solve(L, d[..., None])[..., 0]
-        maha2 = np.einsum("umk,umk->um", w, w)
-        logdet = 2.0 * np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(-1)
-        loglik = -0.5 * (maha2 + logdet + 3.0 * _LOG_2PI)
+        model = self.measurement_model
+        maha2, loglik = innovation_log_likelihoods(model.function(X), model.project_covar(P_pred), Z, R)
         with np.errstate(divide="ignore"):
             logw = self._log_existing + np.log(p_d)[:, None] + loglik - log_miss[:, None]
         if cfg.use_class_likelihood:
             Q = np.stack([class_likelihood(z.class_score, cfg) for z in measurements])  # (m, 2)
             pmf = np.stack([a.class_pmf for a in anchors])  # (n_u, 2)
             logw = logw + np.log(pmf @ Q.T)
-        logw[maha2 > cfg.gate_mahalanobis2] = -np.inf
+        logw[self.gater.rejects(maha2)] = -np.inf
         return logw
+
+    def _updated(
+        self, anchor: Anchor, P_pred: FloatArray, z: LocalizedDetection, z_pos: FloatArray,
+        R: FloatArray, uid: int, t_s: float,
+    ) -> Anchor:
+        """New version of ``anchor`` after measurement ``z`` (Kalman and class updates)."""
+        x, P = self.updater.update(anchor.pos_ned, P_pred, z_pos, R)
+        return Anchor(
+            id=anchor.id,
+            version=self._version(),
+            pos_ned=x,
+            cov_ned=P,
+            t_last_s=float(t_s),
+            n_detections=anchor.n_detections + 1,
+            class_pmf=class_update(anchor.class_pmf, class_likelihood(z.class_score, self.cfg)),
+            measurement_ids=anchor.measurement_ids + (uid,),
+        )
+
+    def _born(self, z: LocalizedDetection, z_pos: FloatArray, R: FloatArray, uid: int) -> Anchor:
+        """Anchor initialised from its first measurement (the uid becomes its symbol)."""
+        x, P = self.initiator.initiate(z_pos, R)
+        return Anchor(
+            id=uid,
+            version=self._version(),
+            pos_ned=x,
+            cov_ned=P,
+            t_last_s=float(z.t_s),
+            n_detections=1,
+            class_pmf=class_likelihood(z.class_score, self.cfg),
+            measurement_ids=(uid,),
+        )
 
     def _version(self) -> int:
         self._next_version += 1

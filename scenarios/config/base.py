@@ -1,23 +1,7 @@
-"""Base model for every config block: frozen, unknown keys rejected."""
+"""Config base shared with the onboard configs (defined in :mod:`autonomy.config_base`)."""
 
 from __future__ import annotations
 
-from typing import Annotated
+from autonomy.config_base import NonNegFloat, PositiveFloat, Probability, StrictModel, Vec2, Vec3
 
-from pydantic import BaseModel, ConfigDict, Field
-
-Vec2 = tuple[float, float]
-Vec3 = tuple[float, float, float]
-Probability = Annotated[float, Field(ge=0.0, le=1.0)]
-PositiveFloat = Annotated[float, Field(gt=0.0)]
-NonNegFloat = Annotated[float, Field(ge=0.0)]
-
-
-class StrictModel(BaseModel):
-    """Frozen config block; unknown keys, NaN and infinity are errors.
-
-    A field that means "no limit" by infinity opts in with ``Field(allow_inf_nan=True)``
-    and a bound (``gt``/``ge``) that NaN fails.
-    """
-
-    model_config = ConfigDict(extra="forbid", frozen=True, validate_default=True, allow_inf_nan=False)
+__all__ = ["NonNegFloat", "PositiveFloat", "Probability", "StrictModel", "Vec2", "Vec3"]

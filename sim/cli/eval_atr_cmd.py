@@ -18,7 +18,7 @@ def _fmt(v) -> str:
 def _detector_config(args: argparse.Namespace):
     from autonomy.atr.build import model_path
     from autonomy.atr.model_file import ModelFileError
-    from scenarios.config.atr import AtrConfig
+    from autonomy.atr.config import AtrConfig
 
     cfg = AtrConfig(detector=args.detector, model_path=args.model, intra_op_threads=1,
                     **({} if args.threshold is None else {"score_threshold": args.threshold}))

@@ -23,7 +23,7 @@ import numpy as np
 from gymnasium import spaces
 
 from autonomy.control.allocation import ThrustAllocator
-from autonomy.control.autopilot import Autopilot, AutopilotParams
+from autonomy.control.autopilot import Autopilot
 from autonomy.control.setpoint import Setpoint
 from autonomy.frames import wrap_angle
 from autonomy.messages import NavEstimate
@@ -157,7 +157,7 @@ class WaypointEnv(gym.Env):
                              f"the shallowest seabed in the area ({seabed_min:.2f} m)")
         self.allocator = ThrustAllocator.from_layout(self.params.layout)
         ctrl = scn.autonomy.control
-        self.autopilot = Autopilot(AutopilotParams.from_config(ctrl))
+        self.autopilot = Autopilot(ctrl)
         self.autopilot_dt_s = 1.0 / scn.autonomy.rate_hz
         self.max_yaw_rate_radps = math.radians(ctrl.max_yaw_rate_dps)
         self.wrench_scale = np.array([ctrl.surge.output_limit, ctrl.sway.output_limit, ctrl.depth.output_limit,

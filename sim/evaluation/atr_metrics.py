@@ -219,7 +219,7 @@ def bench_atr(data_dir: str | Path | None = None, n_frames: int = 50, repeats: i
     held-out set), best of ``repeats`` passes; frames are decoded before timing.
     """
     from autonomy.atr import build_detector
-    from scenarios.config.atr import AtrConfig
+    from autonomy.atr.config import AtrConfig
 
     data = Path(data_dir) if data_dir is not None else ensure_heldout(progress=False)
     coco = json.loads((data / ANNOTATIONS_FILE).read_text())

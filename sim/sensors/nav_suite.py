@@ -52,11 +52,12 @@ def benchmark_nav_suite(duration_s: float = 120.0, seed: int = 0) -> dict[str, f
     import time
 
     from autonomy.frames import rot_from_euler
-    from autonomy.navigation import NavigationFilter, NavNoiseModel
-    from scenarios.config.navigation import NavigationConfig
+    from autonomy.navigation import NavigationFilter
+    from autonomy.navigation.config import NavigationConfig
     from scenarios.schema import SensorsConfig
     from sim.sensors.analytic_caster import AnalyticCaster
     from sim.sensors.base import SceneView
+    from sim.sensors.nav_noise import nav_noise_model
     from sim.truth import VehicleTruth
 
     cfg = SensorsConfig()
@@ -64,8 +65,7 @@ def benchmark_nav_suite(duration_s: float = 120.0, seed: int = 0) -> dict[str, f
     sensors = build_nav_sensors(cfg, mounts, seed)
     caster = AnalyticCaster(seabed_depth_m=6.0)
     nav = NavigationFilter(NavigationConfig(), np.array([0.0, 0.0, 2.0]), 0.0,
-                           NavNoiseModel.from_sensor_configs(cfg.imu, cfg.dvl, cfg.depth, cfg.gps,
-                                                             altimeter=cfg.altimeter), mounts=mounts)
+                           nav_noise_model(cfg.imu, cfg.dvl, cfg.depth, cfg.gps, altimeter=cfg.altimeter), mounts=mounts)
     handlers = nav.message_handlers()
     sensor_s = dict.fromkeys(NAV_SENSOR_NAMES, 0.0)
     filter_s = dict.fromkeys(NAV_SENSOR_NAMES, 0.0)

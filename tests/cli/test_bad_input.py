@@ -185,7 +185,12 @@ def test_command_arguments(sandbox, capsys, argv, named):
 
 
 def test_train_atr_without_torch_says_how_to_install(sandbox):
-    code = ("import sys; sys.modules['torch'] = None\n"
+    code = ("import sys, importlib.abc\n"
+            "class NoTorch(importlib.abc.MetaPathFinder):\n"
+            "    def find_spec(self, name, path, target=None):\n"
+            "        if name.split('.')[0] == 'torch':\n"
+            "            raise ImportError('No module named torch')\n"
+            "sys.meta_path.insert(0, NoTorch())\n"
             "from sim.cli import main\n"
             "sys.exit(main(['train-atr', '--data', 'x', '--out', 'm.onnx']))\n")
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=sandbox / "work")

@@ -6,7 +6,7 @@ from typing import Literal
 
 from pydantic import Field
 
-from scenarios.config.base import StrictModel
+from autonomy.config_base import StrictModel
 
 
 class ClassicalAtrConfig(StrictModel):

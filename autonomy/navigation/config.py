@@ -1,8 +1,8 @@
 """Navigation filter config.
 
-The filter's sensor noise model is built from the sensor configs
-(:func:`autonomy.navigation.NavNoiseModel.from_sensor_configs`), so it matches what the
-sensors do; this block holds only what belongs to the filter itself.
+The filter's model of its sensors' noise is :class:`autonomy.navigation.NavNoiseModel`
+(the simulator fills it from its sensor configs); this block holds only what belongs to the
+filter itself.
 """
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ from typing import Literal
 
 from pydantic import Field
 
-from scenarios.config.base import StrictModel
+from autonomy.config_base import StrictModel
 
 
 class NavigationConfig(StrictModel):

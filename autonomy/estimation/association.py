@@ -1,0 +1,50 @@
+"""K-best data associator (the data-associator role) for multiple-hypothesis tracking.
+
+Each measurement of a scan may come from one of the objects a hypothesis holds (shared
+labels >= 0, at most one measurement each) or from a private origin of its own (negative
+labels: new object, clutter). Costs are negative log weights. For every hypothesis the
+associator yields its joint associations best first, exactly (Murty 1968, as used for MHT by
+Cox and Miller 1995), via :func:`autonomy.estimation.assignment.ranked_associations`.
+Hypotheses offering the same gated options share one lazily extended ranked list.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Container, Sequence
+
+from autonomy.estimation.assignment import LazyRanked, ranked_associations
+
+Option = tuple[int, float]  # (label, cost)
+
+
+class KBestAssociator:
+    """Ranked associations of one scan.
+
+    Args:
+        gated: per measurement, the ``(object label >= 0, cost)`` pairs inside the gate, over
+            all objects of all hypotheses.
+        private: per measurement, its ``(label < 0, cost)`` private origins.
+    """
+
+    def __init__(self, gated: Sequence[Sequence[Option]], private: Sequence[Sequence[Option]]) -> None:
+        if len(gated) != len(private):
+            raise ValueError(f"KBestAssociator: {len(gated)} gated rows but {len(private)} private rows")
+        self._gated = gated
+        self._private = private
+        self._any_gated = any(gated)
+        self._streams: dict[tuple, LazyRanked] = {}
+        self._row_cache: dict = {}
+
+    def ranked(self, labels: Container[int]) -> LazyRanked:
+        """Joint associations, best first, of a hypothesis holding the objects ``labels``:
+        ``get(k)`` gives the k-th ``(total cost, label of each measurement)`` or None."""
+        gated = self._gated
+        present = tuple(tuple(o[0] for o in g if o[0] in labels) for g in gated) if self._any_gated else ()
+        stream = self._streams.get(present)
+        if stream is None:
+            if present:
+                opts = [[o for o in g if o[0] in labels] + list(pv) for g, pv in zip(gated, self._private)]
+            else:
+                opts = self._private
+            stream = self._streams[present] = LazyRanked(ranked_associations(opts, self._row_cache))
+        return stream

@@ -1,0 +1,81 @@
+"""Kalman updaters (the updater role): a Gaussian prior corrected by one measurement.
+
+Both use the Joseph form ``P+ = (I - K H) P (I - K H)^T + K R K^T`` (Bucy and Joseph 1968),
+which stays symmetric positive semi-definite for any gain, and return ``(mean, covar)``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from autonomy.estimation.measurement import PositionFix, RangeAzimuth, RangeBearingElevation
+
+FloatArray = NDArray[np.float64]
+
+
+class KalmanUpdater:
+    """Kalman update for a linear :class:`PositionFix` (Kalman 1960).
+
+    ``S = H P H^T + R``, ``K = P H^T S^-1``, ``x+ = x + K (z - H x)``. The gain is obtained
+    with a linear solve (``S`` and ``P`` symmetric), never an explicit inverse.
+    """
+
+    def __init__(self, model: PositionFix) -> None:
+        self.model = model
+
+    def predict_measurement(self, mean: ArrayLike, covar: ArrayLike,
+                            noise_covar: ArrayLike | None = None) -> tuple[FloatArray, FloatArray]:
+        """Predicted measurement (m,) and innovation covariance S (m, m)."""
+        R = self.model.covar() if noise_covar is None else np.asarray(noise_covar, dtype=float)
+        return self.model.function(mean), self.model.project_covar(covar) + R
+
+    def update(self, mean: ArrayLike, covar: ArrayLike, z: ArrayLike,
+               noise_covar: ArrayLike | None = None) -> tuple[FloatArray, FloatArray]:
+        """Posterior mean (n,) and covariance (n, n) given ``z`` (m,) with noise R (m, m)
+        (default: the model's).
+
+        Raises:
+            numpy.linalg.LinAlgError: singular innovation covariance.
+        """
+        model = self.model
+        x = np.asarray(mean, dtype=float)
+        P = np.asarray(covar, dtype=float)
+        R = model.covar() if noise_covar is None else np.asarray(noise_covar, dtype=float)
+        S = model.project_covar(P) + R
+        K = np.linalg.solve(S, model.cross_covar(P)).T  # P H^T S^-1 (P, S symmetric)
+        x_new = x + K @ model.residual(z, model.function(x))
+        I_KH = np.eye(model.ndim_state)
+        I_KH[:, model.mapping] -= K
+        P_new = I_KH @ P @ I_KH.T + K @ R @ K.T
+        return x_new, 0.5 * (P_new + P_new.T)
+
+
+class ExtendedKalmanUpdater:
+    """Extended Kalman update for a nonlinear measurement model of the state (its ``function``
+    and ``jacobian`` taking the state; angle residuals wrapped by the model's ``residual``).
+
+    ``H = dh/dx (x)``, ``S = H P H^T + R``, ``K = P H^T S^-1``, ``x+ = x + K r(z, h(x))``.
+    """
+
+    def __init__(self, model: RangeBearingElevation | RangeAzimuth | PositionFix) -> None:
+        self.model = model
+
+    def update(self, mean: ArrayLike, covar: ArrayLike, z: ArrayLike,
+               noise_covar: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """Posterior mean (n,) and covariance (n, n) given ``z`` (m,) and its noise R (m, m).
+
+        Raises:
+            numpy.linalg.LinAlgError: singular innovation covariance.
+        """
+        x = np.asarray(mean, dtype=float)
+        P = np.asarray(covar, dtype=float)
+        R = np.asarray(noise_covar, dtype=float)
+        H = self.model.jacobian(x)
+        PHt = P @ H.T
+        S = H @ PHt + R
+        K = np.linalg.solve(S, PHt.T).T
+        x_new = x + K @ self.model.residual(z, self.model.function(x))
+        I_KH = np.eye(x.size) - K @ H
+        P_new = I_KH @ P @ I_KH.T + K @ R @ K.T
+        return x_new, 0.5 * (P_new + P_new.T)
