@@ -407,10 +407,13 @@ class PMHA:
         children: dict[frozenset[int], int], child_logw: list[float], canon: dict[int, int]
     ) -> tuple[dict[frozenset[int], int], list[float]]:
         """Children re-keyed by representative versions; equal worlds' weights added."""
+        moved = frozenset(v for v, r in canon.items() if v != r)
+        if not moved:
+            return children, child_logw
         merged: dict[frozenset[int], int] = {}
         logw: list[float] = []
         for child, i in children.items():
-            key = frozenset(map(canon.__getitem__, child))
+            key = child if child.isdisjoint(moved) else frozenset(map(canon.__getitem__, child))
             k = merged.get(key)
             if k is None:
                 merged[key] = len(logw)
