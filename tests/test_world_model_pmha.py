@@ -92,7 +92,7 @@ def _brute_force(scans, cfg, volume, visible):
 def test_hypothesis_probabilities_equal_exhaustive_enumeration():
     cfg = WorldModelConfig(max_hypotheses=100_000, prune_ratio=1e-300, drop_tentative_after_s=None,
                            gate_mahalanobis2=1e6, process_noise_m2_per_s=0.05, kf_timeout_s=1.5,
-                           visibility_floor=0.1)
+                           visibility_floor=0.1, scan_cluster_mahalanobis2=None)  # point measurements
     lo, hi = np.array(REGION[0]), np.array(REGION[1])
     volume = float(np.prod(hi - lo))
 
@@ -117,8 +117,9 @@ def test_hypothesis_probabilities_equal_exhaustive_enumeration():
 
 
 def test_k_best_expansion_returns_the_top_k_of_the_exhaustive_set():
-    full_cfg = WorldModelConfig(max_hypotheses=100_000, prune_ratio=1e-300, drop_tentative_after_s=None)
-    k_cfg = full_cfg.model_copy(update={"max_hypotheses": 10})
+    full_cfg = WorldModelConfig(max_hypotheses=100_000, prune_ratio=1e-300, drop_tentative_after_s=None,
+                                scan_cluster_mahalanobis2=None)
+    k_cfg = full_cfg.model_copy(update={"max_hypotheses": 10, "merge_mahalanobis2": None})
     scans = [(0.0, [_z(0.0, [0, 10, 4])]),
              (0.5, [_z(0.5, [0.1, 10.2, 4]), _z(0.5, [0.4, 10, 4]), _z(0.5, [-8, 10, 4])])]
     full, k = PMHA(full_cfg, REGION), PMHA(k_cfg, REGION)

@@ -51,6 +51,25 @@ class WorldModelConfig(StrictModel):
     drop_tentative_after_s: PositiveFloat | None = Field(
         60.0, description="forget anchors below min_detections unmeasured this long"
     )
+    scan_cluster_mahalanobis2: PositiveFloat | None = Field(
+        16.3, description="detections of one scan whose difference passes this squared Mahalanobis "
+        "gate are one object's (duplicate boxes) and enter as one measurement; None: each detection "
+        "is a separate point measurement; 16.3 = 99.9 % of one point's pairs (3 dof)",
+    )
+    merge_mahalanobis2: PositiveFloat | None = Field(
+        1.0, description="once the hypothesis budget is full, versions of one anchor with the same "
+        "detection count this close (squared Mahalanobis distance, summed covariances) count as one, "
+        "so hypotheses differing only in them merge; None: no merging (budget keeps the top worlds)",
+    )
+    max_per_world: int = Field(
+        10, ge=1, le=100_000,
+        description="once the budget is full, hypotheses kept per distinct set of objects; a further "
+        "child with the same objects adds its probability to that world's best hypothesis",
+    )
+    max_expanded_children: int = Field(
+        2000, ge=1, le=10_000_000,
+        description="children drawn per scan at most once the budget is full (bounds update time)",
+    )
 
     @model_validator(mode="after")
     def _priors_sum_to_one(self) -> "WorldModelConfig":

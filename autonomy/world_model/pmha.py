@@ -22,15 +22,28 @@ children with identical anchor sets are merged (probabilities added), which also
 when unconfirmed anchors age out (``drop_tentative_after_s``). The most probable
 hypothesis is the world model.
 
+Two measures keep near-identical hypotheses from crowding out distinct worlds. Detections
+of one scan consistent with a single point (two boxes on one object) enter as one cluster
+measurement (``scan_cluster_mahalanobis2``, :mod:`autonomy.estimation.clustering`), so one
+object never spawns a phantom twin. When the budget is full, anchor versions of one symbol
+with the same detection count within ``merge_mahalanobis2`` of each other are taken as one
+(hypotheses differing only in them merge, probabilities added), each distinct set of
+objects keeps at most ``max_per_world`` hypotheses, and children are drawn until the budget
+again holds ``max_hypotheses`` distinct worlds: the budget keeps the best of each world
+rather than permutations of one, and a birth is not starved. Below the budget the tree is
+exact.
+
 The model is assembled from the estimation roles of :mod:`autonomy.estimation`: a
 constant-position transition with a Kalman predictor (and its fixed-Gaussian fallback), an
 identity position-fix measurement model with a Kalman updater and a single-measurement
-initiator, a Mahalanobis gater, a k-best (Murty) data associator and an update-time deleter
-for tentative anchors; PMHA adds the hypothesis tree, detection probabilities and class pmf.
+initiator, a same-scan clusterer, a Mahalanobis gater, a k-best (Murty) data associator and
+an update-time deleter for tentative anchors; PMHA adds the hypothesis tree, detection
+probabilities and class pmf.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import heapq
 import math
 from collections.abc import Callable, Sequence
@@ -41,6 +54,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from autonomy.estimation.assignment import LazyRanked
 from autonomy.estimation.association import KBestAssociator
+from autonomy.estimation.clustering import cluster_consistent, fuse_cluster
 from autonomy.estimation.deleter import UpdateTimeDeleter
 from autonomy.estimation.gater import MahalanobisGater, innovation_log_likelihoods
 from autonomy.estimation.initiator import SingleMeasurementInitiator
@@ -159,6 +173,7 @@ class PMHA:
         t_s = float(t_s)
         if t_s < self.t_s:
             raise ValueError(f"PMHA.update: time went backwards ({t_s} < {self.t_s})")
+        measurements = self._cluster_scan(measurements)
         m = len(measurements)
         uids = list(range(self._next_uid, self._next_uid + m))
         self._next_uid += m
@@ -226,7 +241,35 @@ class PMHA:
         children: dict[frozenset[int], int] = {}
         child_logw: list[float] = []
         log_floor = -np.inf
-        while heap and len(children) < cfg.max_hypotheses:
+        # Once the budget is full: versions describing the same anchor state are merged
+        # (``canon``: version -> representative), each distinct set of objects (a world) keeps
+        # at most ``max_per_world`` hypotheses (further children add their probability to its
+        # best), and children are drawn until the budget is full again (or a budget's worth
+        # of draws brings no new world), so the budget holds the best of each distinct world
+        # instead of near-copies of one.
+        canon: dict[int, int] | None = None
+        reps: dict[int, list[Anchor]] = {}
+        id_of: dict[int, int] = {}  # registered version -> symbol
+        world_of: dict[frozenset[int], list[int]] = {}  # object ids -> child indices, best first
+        parent_keys: dict[int, tuple[frozenset[int], frozenset[int]]] = {}  # h -> (versions, ids)
+        n_drawn = since_new_world = 0
+        while heap:
+            if canon is None and len(children) >= cfg.max_hypotheses:
+                if cfg.merge_mahalanobis2 is None:
+                    break
+                canon = {}
+                created = sorted((*update_cache.values(), *birth_cache.values()), key=lambda a: a.version)
+                for a in (*anchors, *created):
+                    self._register(a, canon, reps, id_of)
+                children, child_logw = self._merged(children, child_logw, canon)
+                for child, i in children.items():
+                    world_of.setdefault(frozenset(map(id_of.__getitem__, child)), []).append(i)
+            if canon is not None:
+                if (len(children) >= cfg.max_hypotheses or n_drawn >= cfg.max_expanded_children
+                        or since_new_world >= cfg.max_hypotheses):
+                    break
+                n_drawn += 1
+                since_new_world += 1
             neg, h, rank = heapq.heappop(heap)
             labels = parent_stream[h].get(rank)[1]
             logw = -neg
@@ -236,6 +279,7 @@ class PMHA:
                 break
             removed: list[int] = []
             added: list[int] = []
+            born: list[int] = []
             for j, lab in enumerate(labels):
                 if lab >= 0:
                     key = (lab, j)
@@ -244,19 +288,48 @@ class PMHA:
                         a = update_cache[key] = self._updated(
                             anchor_of[lab], P_pred[row_of[lab]], measurements[j], Z[j], R[j], uids[j], t_s
                         )
+                        if canon is not None:
+                            self._register(a, canon, reps, id_of)
                     removed.append(lab)
                     added.append(a.version)
                 elif lab == _NEW:
                     a = birth_cache.get(j)
                     if a is None:
                         a = birth_cache[j] = self._born(measurements[j], Z[j], R[j], uids[j])
+                        if canon is not None:
+                            self._register(a, canon, reps, id_of)
                     added.append(a.version)
-            child = self._hyps[h]
-            if removed or stale:
-                child = child.difference(removed, stale)
-            if added:
-                child = child.union(added)
+                    born.append(a.id)
+            if canon is None:
+                child = self._hyps[h]
+                if removed or stale:
+                    child = child.difference(removed, stale)
+                if added:
+                    child = child.union(added)
+            else:  # the parent's representative versions and objects, changed by this scan
+                parent = parent_keys.get(h)
+                if parent is None:
+                    rep = frozenset(map(canon.__getitem__, self._hyps[h]))
+                    parent = parent_keys[h] = (rep, frozenset(map(id_of.__getitem__, rep)))
+                child, objects = parent
+                gone = [canon[v] for v in stale if v in self._hyps[h]] if stale else []
+                if removed or gone:
+                    child = child.difference(map(canon.__getitem__, removed), gone)
+                if added:
+                    child = child.union(map(canon.__getitem__, added))
+                if gone:
+                    objects = objects.difference(map(id_of.__getitem__, gone))
+                if born:
+                    objects = objects.union(born)
             i = children.get(child)
+            if i is None and canon is not None:
+                world = world_of.setdefault(objects, [])
+                if not world:
+                    since_new_world = 0
+                if len(world) >= cfg.max_per_world:
+                    i = world[0]  # the world's best hypothesis absorbs the child
+                else:
+                    world.append(len(child_logw))
             if i is None:
                 children[child] = len(child_logw)
                 child_logw.append(logw)
@@ -268,6 +341,10 @@ class PMHA:
 
         child_hyps = list(children)
         lw = np.asarray(child_logw)
+        if len(child_hyps) > cfg.max_hypotheses:  # worlds found beyond the budget: keep the best
+            keep = np.sort(np.argsort(-lw, kind="stable")[: cfg.max_hypotheses])
+            child_hyps = [child_hyps[i] for i in keep]
+            lw = lw[keep]
         lw -= lw.max()
         lw -= math.log(np.exp(lw).sum())
         order = np.argsort(-lw, kind="stable")
@@ -280,6 +357,70 @@ class PMHA:
         self._anchors = {v: self._anchors[v] for v in live}
         self.t_s = t_s
         self.n_scans += 1
+
+    def _cluster_scan(self, measurements: Sequence[LocalizedDetection]) -> list[LocalizedDetection]:
+        """The scan with detections consistent with one point fused into one measurement
+        (:mod:`autonomy.estimation.clustering`; visited by decreasing ATR score). A fused
+        measurement's class score is its members' mean. Order: by each cluster's first
+        detection."""
+        gate = self.cfg.scan_cluster_mahalanobis2
+        measurements = list(measurements)
+        if gate is None or len(measurements) < 2:
+            return measurements
+        Z = np.stack([np.asarray(z.pos_ned, dtype=float) for z in measurements])
+        R = np.stack([measurement_cov(z, self.cfg) for z in measurements])
+        order = sorted(range(len(measurements)), key=lambda j: (-measurements[j].class_score, j))
+        clusters = cluster_consistent(Z, R, gate, order)
+        if len(clusters) == len(measurements):
+            return measurements
+        out = []
+        for members in sorted(clusters, key=min):
+            first = measurements[min(members)]
+            if len(members) == 1:
+                out.append(first)
+                continue
+            pos, cov = fuse_cluster(Z[members], R[members])
+            score = float(np.mean([measurements[j].class_score for j in members]))
+            out.append(dataclasses.replace(first, pos_ned=pos, cov_ned=cov, class_score=score))
+        return out
+
+    def _register(
+        self, a: Anchor, canon: dict[int, int], reps: dict[int, list[Anchor]], id_of: dict[int, int]
+    ) -> None:
+        """Map version ``a`` to the first registered version of its symbol with the same
+        detection count whose position is within the merge gate (else to itself)."""
+        gate = self.cfg.merge_mahalanobis2
+        id_of[a.version] = a.id
+        same = reps.setdefault(a.id, [])
+        for r in same:
+            if r.n_detections == a.n_detections:
+                d = a.pos_ned - r.pos_ned
+                if float(d @ np.linalg.solve(a.cov_ned + r.cov_ned, d)) <= gate:
+                    canon[a.version] = r.version
+                    return
+        same.append(a)
+        canon[a.version] = a.version
+
+
+    @staticmethod
+    def _merged(
+        children: dict[frozenset[int], int], child_logw: list[float], canon: dict[int, int]
+    ) -> tuple[dict[frozenset[int], int], list[float]]:
+        """Children re-keyed by representative versions; equal worlds' weights added."""
+        moved = frozenset(v for v, r in canon.items() if v != r)
+        if not moved:
+            return children, child_logw
+        merged: dict[frozenset[int], int] = {}
+        logw: list[float] = []
+        for child, i in children.items():
+            key = child if child.isdisjoint(moved) else frozenset(map(canon.__getitem__, child))
+            k = merged.get(key)
+            if k is None:
+                merged[key] = len(logw)
+                logw.append(child_logw[i])
+            else:
+                logw[k] = float(np.logaddexp(logw[k], child_logw[i]))
+        return merged, logw
 
     def _in_region(self, pos_ned: np.ndarray) -> bool:
         if self._region is None:
