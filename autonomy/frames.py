@@ -18,6 +18,14 @@ from numpy.typing import ArrayLike, NDArray
 FloatArray = NDArray[np.float64]
 
 
+def cross3(a: FloatArray, b: FloatArray) -> FloatArray:
+    """Cross product ``a x b`` of two (3,) vectors, same frame in and out.
+
+    Written out because ``np.cross`` is slow for single vectors.
+    """
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
 def skew(v: ArrayLike) -> FloatArray:
     """Skew-symmetric matrix S(v) with S(v) @ w == cross(v, w). Shape (3, 3)."""
     x, y, z = np.asarray(v, dtype=float)

@@ -6,6 +6,8 @@ Errors name the file, the dotted key path and what is allowed, as a single
 
 from __future__ import annotations
 
+import json
+import re
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -18,6 +20,49 @@ from scenarios.schema import Scenario
 
 class ScenarioError(ValueError):
     """A scenario could not be loaded; the message says where and why."""
+
+
+class _UniqueKeyLoader(yaml.SafeLoader):
+    """YAML safe loader that rejects a key repeated in one mapping (YAML itself keeps the last)."""
+
+    def construct_mapping(self, node, deep=False):  # noqa: ANN001 - PyYAML's signature
+        seen: dict = {}
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=deep)
+            if key in seen:
+                raise yaml.constructor.ConstructorError(
+                    None, None, f"key {key!r} appears twice in one mapping (lines {seen[key] + 1} and "
+                    f"{key_node.start_mark.line + 1})", key_node.start_mark)
+            seen[key] = key_node.start_mark.line
+        return super().construct_mapping(node, deep=deep)
+
+
+# YAML 1.1 (PyYAML) reads 1e12 and 5e-3 as strings (its floats need a dot); read them as numbers.
+_UniqueKeyLoader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
+    list("-+0123456789"),
+)
+
+
+def _yaml_load(text: str) -> Any:
+    return yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 - a SafeLoader subclass
+
+
+def _validate(data: dict[str, Any], source: str, overrides: list[str] | tuple[str, ...] = ()) -> Scenario:
+    """Validate strictly: no coercion of booleans to numbers or strings to numbers/booleans.
+
+    Runs through pydantic's JSON mode so YAML lists fill tuple fields.
+    """
+    try:
+        text = json.dumps(data, allow_nan=True)
+    except (TypeError, ValueError) as exc:
+        raise ScenarioError(f"{source}: unsupported value type in the scenario ({exc}); use numbers, strings, "
+                            "booleans, lists and mappings") from None
+    try:
+        return Scenario.model_validate_json(text, strict=True)
+    except ValidationError as exc:
+        raise ScenarioError(_format_validation_error(exc, source, overrides)) from None
 
 
 def scenarios_dir() -> Path:
@@ -69,7 +114,7 @@ def _parse_override(item: str, source: str) -> tuple[list[str], Any]:
     if not key or any(not part for part in key.split(".")):
         raise ScenarioError(f"{source} {item}: has an empty key (must look like key.path=value)")
     try:
-        value = yaml.safe_load(raw) if raw.strip() else ""
+        value = _yaml_load(raw) if raw.strip() else ""
     except yaml.YAMLError as exc:
         problem = str(getattr(exc, "problem", "") or exc).splitlines()[0]
         raise ScenarioError(f"{source} {item}: cannot parse the value {raw!r} as YAML ({problem})") from None
@@ -200,10 +245,10 @@ def load_scenario(name_or_path: str | Path, overrides: list[str] | tuple[str, ..
             by ``autonomy.atr.model_path`` does not exist.
     """
     path = resolve_path(name_or_path)
-    source = str(path)
+    source = f"{path.stem} (shipped scenario)" if path.parent == scenarios_dir() else str(path)
     text = _read_text(path)
     try:
-        data = yaml.safe_load(text)
+        data = _yaml_load(text)
     except yaml.YAMLError as exc:
         raise ScenarioError(f"{source}: not valid YAML: {' '.join(str(exc).split())}") from None
     if data is None:
@@ -213,10 +258,7 @@ def load_scenario(name_or_path: str | Path, overrides: list[str] | tuple[str, ..
         raise ScenarioError(f"{source}: top level must be a mapping of keys, got {type(data).__name__}")
     data = apply_overrides(data, list(overrides), source)
     data.setdefault("name", path.stem)
-    try:
-        scenario = Scenario.model_validate(data)
-    except ValidationError as exc:
-        raise ScenarioError(_format_validation_error(exc, source, overrides)) from None
+    scenario = _validate(data, source, overrides)
     check_scenario(scenario, source, overrides)
     return scenario
 
@@ -259,9 +301,6 @@ def check_scenario(scenario: Scenario, source: str, overrides: list[str] | tuple
 
 def scenario_from_dict(data: dict[str, Any], source: str = "<dict>") -> Scenario:
     """Validate an in-memory mapping (tests, gym envs) with the same error format."""
-    try:
-        scenario = Scenario.model_validate(data)
-    except ValidationError as exc:
-        raise ScenarioError(_format_validation_error(exc, source)) from None
+    scenario = _validate(data, source)
     check_scenario(scenario, source)
     return scenario

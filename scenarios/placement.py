@@ -124,6 +124,45 @@ def vehicle_half_height_m(model: str) -> float:
         return 0.0
 
 
+def survey_corners_ne(scenario: Scenario) -> np.ndarray:
+    """(4, 2) north-east corners of the lawnmower area, run-in included, m."""
+    sv = scenario.autonomy.guidance.survey
+    h = math.radians(sv.leg_heading_deg)
+    along = np.array([math.cos(h), math.sin(h)])
+    side = 1.0 if sv.first_turn == "starboard" else -1.0
+    across = side * np.array([-math.sin(h), math.cos(h)])
+    o = np.asarray(sv.origin_ne_m, dtype=float)
+    a0, a1 = -sv.run_in_m, sv.length_m + sv.run_in_m
+    return np.array([o + a0 * along, o + a1 * along, o + a1 * along + sv.width_m * across,
+                     o + a0 * along + sv.width_m * across])
+
+
+def _survey_problems(scenario: Scenario, relief_m: float) -> list[str]:
+    """The survey area must lie over the seabed, inside the walls, and its altitude or depth
+    must put the hull in the water above the seabed everywhere."""
+    sv = scenario.autonomy.guidance.survey
+    key = "autonomy.guidance.survey"
+    corners = survey_corners_ne(scenario)
+    margin = 0.5 * scenario.world.basin.wall_thickness_m
+    out = [c for c in corners if not _inside_patch(scenario, *c)]
+    if out:
+        return [f"{key}: the survey area (corner {tuple(round(float(v), 2) for v in out[0])} m) reaches past the "
+                "seabed patch (world.seabed extent_m / center_ne_m)"]
+    problems = []
+    if any(not _inside_basin(scenario, *c, margin) for c in corners):
+        problems.append(f"{key}: the survey area reaches past the basin walls (world.basin); move origin_ne_m or "
+                        "shrink length_m / width_m")
+    half_h = vehicle_half_height_m(scenario.vehicle.model)
+    shallowest = min(seabed_mean_depth_m(scenario, *c) for c in corners) - relief_m
+    if sv.vertical_mode == "altitude" and sv.altitude_m + half_h >= shallowest:
+        problems.append(f"{key}.altitude_m: {sv.altitude_m:g} m above the seabed is out of the water where the "
+                        f"seabed is {shallowest:.2f} m deep (the hull needs {half_h:.2f} m below the surface)")
+    if sv.vertical_mode == "depth" and sv.depth_m + half_h >= shallowest:
+        problems.append(f"{key}.depth_m: {sv.depth_m:g} m is at or below the seabed, {shallowest:.2f} m deep "
+                        "in the survey area")
+    return problems
+
+
 def placement_problems(scenario: Scenario) -> list[str]:
     """Every impossible placement in ``scenario``, one message each (empty if none)."""
     problems: list[str] = []
@@ -164,6 +203,7 @@ def placement_problems(scenario: Scenario) -> list[str]:
                             f"the seabed is at {bed:.2f} m there)")
         elif top > bed + relief + 1e-6:
             problems.append(f"{key}: buried below the seabed (its top at {top:.2f} m, the seabed at {bed:.2f} m)")
+    problems += _survey_problems(scenario, relief)
     polys = [_inscribed_footprint(t) for t in targets]
     for i in range(len(targets)):
         for j in range(i + 1, len(targets)):

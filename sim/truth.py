@@ -7,12 +7,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from autonomy.frames import cross3
+
 FloatArray = NDArray[np.float64]
-
-
-def cross3(a: FloatArray, b: FloatArray) -> FloatArray:
-    """Cross product of two 3-vectors (``np.cross`` is slow for single vectors)."""
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
 
 
 @dataclass(frozen=True, slots=True)

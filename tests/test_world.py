@@ -38,10 +38,16 @@ def test_flat_seabed_depth_and_targets_on_it():
         assert obj.centroid_ned[2] == pytest.approx(4.0 - 3 * 0.5 / 8, abs=0.01)
 
 
+# a survey that fits the small seabed patches below (20-30 m squares centred at (-4, 17))
+SMALL_SURVEY = ("autonomy.guidance.survey.origin_ne_m=[-8, 10]", "autonomy.guidance.survey.length_m=10",
+                "autonomy.guidance.survey.width_m=4")
+
+
 @pytest.mark.parametrize("slope_deg,az_deg", [(5.0, 0.0), (10.0, 90.0)])
 def test_sloped_seabed_matches_analytic_plane(slope_deg, az_deg):
     scn = load_scenario("cssn_lawnmower", [f"world.seabed.kind=slope", f"world.seabed.slope_deg={slope_deg}",
                                            f"world.seabed.slope_azimuth_deg={az_deg}", "world.basin.shape=none",
+                                           "autonomy.guidance.survey.altitude_m=0.5",
                                            "world.targets=[]"])
     world = build_world(scn, with_vehicle=False)
     cn, ce = scn.world.seabed.center_ne_m
@@ -57,7 +63,7 @@ def test_terrain_mesh_raycast_matches_depth_lookup(kind):
     scn = load_scenario("cssn_lawnmower", [f"world.seabed.kind={kind}", "world.seabed.extent_m=30",
                                            "world.seabed.mesh_resolution_m=0.5", "world.seabed.roughness_m=0.1",
                                            "world.seabed.ripple_amplitude_m=0.2", "world.basin.shape=none",
-                                           "vehicle.initial_pos_ned=[-4, 17, 0.3]",
+                                           "vehicle.initial_pos_ned=[-4, 17, 0.3]", *SMALL_SURVEY,
                                            "world.targets=[]"])
     world = build_world(scn, with_vehicle=False)
     rng = np.random.default_rng(0)
@@ -72,7 +78,7 @@ def test_terrain_mesh_raycast_matches_depth_lookup(kind):
 
 
 def test_rough_seabed_is_seeded():
-    over = ["world.seabed.kind=rough", "world.seabed.extent_m=20", "vehicle.initial_pos_ned=[-4, 17, 0.3]"]
+    over = ["world.seabed.kind=rough", "world.seabed.extent_m=20", "vehicle.initial_pos_ned=[-4, 17, 0.3]", *SMALL_SURVEY]
     a = build_world(load_scenario("cssn_lawnmower", over), with_vehicle=False).seabed.depth_grid_m
     b = build_world(load_scenario("cssn_lawnmower", over), with_vehicle=False).seabed.depth_grid_m
     c = build_world(load_scenario("cssn_lawnmower", over + ["seed=1"]), with_vehicle=False).seabed.depth_grid_m

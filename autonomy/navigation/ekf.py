@@ -29,7 +29,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from autonomy.estimation.measurement import PositionFix, RangeBearingElevation
-from autonomy.frames import euler_rate_matrix, rot_from_euler, rot_x, rot_y, rot_z, wrap_angle
+from autonomy.frames import cross3, euler_rate_matrix, rot_from_euler, rot_x, rot_y, rot_z, wrap_angle
 from autonomy.messages import AltimeterMsg, DepthMsg, DvlMsg, GpsMsg, ImuMsg, NavEstimate, UsblMsg
 from autonomy.navigation.config import NavigationConfig
 from autonomy.navigation.noise_model import NavNoiseModel
@@ -46,18 +46,13 @@ SEABED_RELIEF_M_PER_SQRT_M = 0.03
 _MIN_ALTITUDE_VAR_M2 = 1e-6
 
 
-def _cross(a, b):
-    """3-vector cross product (np.cross is slow for single vectors)."""
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
-
-
 def rotated_vector_jacobian(rpy_rad: FloatArray, v: FloatArray) -> FloatArray:
     """d(R(rpy) v)/d(roll, pitch, yaw) for ZYX Euler angles, shape (3, 3)."""
     roll, pitch, yaw = rpy_rad
     Rx, Ry, Rz = rot_x(roll), rot_y(pitch), rot_z(yaw)
     R = Rz @ Ry @ Rx
     return np.column_stack(
-        [R @ _cross(_E[0], v), Rz @ Ry @ _cross(_E[1], Rx @ v), _cross(_E[2], R @ v)]
+        [R @ cross3(_E[0], v), Rz @ Ry @ cross3(_E[1], Rx @ v), cross3(_E[2], R @ v)]
     )
 
 
@@ -148,7 +143,7 @@ class NavigationFilter:
 
     def _vel_body(self) -> FloatArray:
         v_m = self._vel_dvl_meas - self._x[DVEL]
-        return v_m / (1.0 + self._x[SCALE]) - _cross(self._omega_at_dvl, self._r_dvl)
+        return v_m / (1.0 + self._x[SCALE]) - cross3(self._omega_at_dvl, self._r_dvl)
 
     # ------------------------------------------------------------------ propagation
     def predict(self, t_s: float) -> None:
@@ -161,7 +156,7 @@ class NavigationFilter:
         R = rot_from_euler(*att)
         one_s = 1.0 + x[SCALE]
         v_m = self._vel_dvl_meas - x[DVEL]
-        v_body = v_m / one_s - _cross(self._omega_at_dvl, self._r_dvl)
+        v_body = v_m / one_s - cross3(self._omega_at_dvl, self._r_dvl)
         J_att = rotated_vector_jacobian(att, v_body)
 
         F = np.eye(N_STATES)

@@ -22,6 +22,8 @@ def _checked(convert, ok, allowed: str):
 
 
 positive_int = _checked(int, lambda v: v >= 1, "a whole number >= 1")
+MAX_DATASET_FRAMES = 1_000_000
+frame_count = _checked(int, lambda v: 1 <= v <= MAX_DATASET_FRAMES, f"a whole number from 1 to {MAX_DATASET_FRAMES}")
 non_negative_int = _checked(int, lambda v: 0 <= v <= 2**63 - 1, "a whole number from 0 to 2**63-1")
 probability = _checked(float, lambda v: math.isfinite(v) and 0.0 <= v <= 1.0, "a number from 0 to 1")
 positive_float = _checked(float, lambda v: math.isfinite(v) and v > 0.0, "a finite number > 0")

@@ -4,14 +4,17 @@ from __future__ import annotations
 
 import argparse
 
-from sim.cli.args import non_negative_int, positive_int
+from sim.cli.args import MAX_DATASET_FRAMES, frame_count, non_negative_int, positive_int
 from sim.cli.errors import CliError
 
 
 def _cmd_dataset(args: argparse.Namespace) -> int:
     from sim.dataset.generate import RANDOMIZATION_PRESETS, RAY_HINT, generate_dataset
 
-    preset = "heldout" if args.heldout else args.randomization
+    if args.heldout and args.randomization not in (None, "heldout"):
+        raise CliError(f"--heldout and --randomization {args.randomization} contradict each other; give one "
+                       "(--heldout is --randomization heldout)")
+    preset = "heldout" if args.heldout else (args.randomization or "train")
     try:
         path = generate_dataset(args.out, args.n, seed=args.seed, workers=args.workers,
                                 use_ray=args.ray is not None, ray_address=args.ray or None,
@@ -28,15 +31,15 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     from sim.dataset.generate import RANDOMIZATION_PRESETS
 
     p = sub.add_parser("dataset", help="render a labelled, domain-randomised FLS dataset")
-    p.add_argument("--n", type=positive_int, required=True, help="number of frames (>= 1)")
+    p.add_argument("--n", type=frame_count, required=True, help=f"number of frames (1 to {MAX_DATASET_FRAMES})")
     p.add_argument("--out", required=True,
                    help="output folder: new, or a dataset folder to resume with the same arguments")
     p.add_argument("--seed", type=non_negative_int, default=0)
     p.add_argument("--workers", type=positive_int, default=None, help="local processes (default: all cores)")
     p.add_argument("--ray", nargs="?", const="", default=None, metavar="ADDRESS",
                    help="distribute with Ray (local instance, or the cluster at ADDRESS)")
-    p.add_argument("--randomization", choices=sorted(RANDOMIZATION_PRESETS), default="train",
-                   help="randomisation ranges preset (default %(default)s)")
+    p.add_argument("--randomization", choices=sorted(RANDOMIZATION_PRESETS), default=None,
+                   help="randomisation ranges preset (default train)")
     p.add_argument("--heldout", action="store_true",
                    help="use the held-out (distribution-shifted) randomisation ranges")
     p.add_argument("--no-progress", action="store_true")

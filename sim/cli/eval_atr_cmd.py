@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from sim.cli.args import positive_int, probability
+from sim.cli.errors import CliError
 
 
 def _fmt(v) -> str:
@@ -20,6 +21,10 @@ def _detector_config(args: argparse.Namespace):
     from autonomy.atr.model_file import ModelFileError
     from autonomy.atr.config import AtrConfig
 
+    if args.model is not None and args.detector != "cnn":
+        raise CliError(f"--model applies to the cnn detector; --detector {args.detector} has no model file")
+    if args.model is not None and Path(args.model).expanduser().is_dir():
+        raise ModelFileError(f"--model {args.model}: is a folder; name the ONNX file")
     cfg = AtrConfig(detector=args.detector, model_path=args.model, intra_op_threads=1,
                     **({} if args.threshold is None else {"score_threshold": args.threshold}))
     if args.detector == "cnn" and not model_path(cfg).is_file():

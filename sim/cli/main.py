@@ -1,4 +1,4 @@
-"""The ``auvsim`` command line.
+"""auvsim: closed-loop AUV mission simulator (MuJoCo, Fossen hydrodynamics, sonar, onboard autonomy).
 
 Subcommands: ``scenarios``, ``validate``, ``run``, ``bench``, ``dataset``, ``train-atr``,
 ``eval-atr``. Anything a user can get wrong (arguments, scenario files and keys, output
@@ -13,13 +13,14 @@ written), 130 interrupted.
 from __future__ import annotations
 
 import argparse
+import errno
 import os
 import sys
 import traceback
 from collections.abc import Callable, Sequence
 
 from sim.cli import bench_cmd, dataset_cmd, eval_atr_cmd, run_cmd, scenario_cmds, train_cmd
-from sim.cli.errors import EXIT_INTERNAL_ERROR, EXIT_INTERRUPTED, EXIT_USAGE, user_error_types
+from sim.cli.errors import EXIT_INTERNAL_ERROR, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE, user_error_types
 
 DEBUG_ENV = "AUVSIM_DEBUG"
 
@@ -29,6 +30,17 @@ class _Parser(argparse.ArgumentParser):
 
     def error(self, message: str):  # type: ignore[override]
         self.exit(EXIT_USAGE, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+    def parse_args(self, args=None, namespace=None):  # type: ignore[override]
+        # Unknown arguments are reported by the subcommand that received them.
+        ns, extra = self.parse_known_args(args, namespace)
+        if extra:
+            prog = self.prog
+            sub = getattr(ns, "command", None)
+            if sub:
+                prog = f"{self.prog} {sub}"
+            self.exit(EXIT_USAGE, f"{prog}: error: unrecognized arguments: {' '.join(extra)} (see {prog} --help)\n")
+        return ns
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -66,14 +78,45 @@ def main(argv: Sequence[str] | None = None) -> int:
         return int(func(args) or 0)
     except user_error_types() as exc:
         message = " ".join(str(exc).split("\n")[0].split()) if not isinstance(exc, _multi_line_types()) else str(exc)
-        print(f"auvsim {args.command}: error: {message}", file=sys.stderr)
+        _say(f"auvsim {args.command}: error: {message}")
+        return EXIT_USAGE
+    except BrokenPipeError:  # the reader went away (| head): stop quietly
+        _silence_stdout()
+        return EXIT_OK
+    except OSError as exc:
+        if exc.errno not in ENVIRONMENT_ERRNOS:
+            _report_internal_error(exc, debug)
+            return EXIT_INTERNAL_ERROR
+        where = f"{exc.filename}: " if exc.filename else ""
+        _say(f"auvsim {args.command}: error: {where}{exc.strerror or exc} (nothing was kept from this run)")
         return EXIT_USAGE
     except KeyboardInterrupt:
-        print(f"auvsim {args.command}: interrupted", file=sys.stderr)
+        _say(f"auvsim {args.command}: interrupted")
         return EXIT_INTERRUPTED
     except Exception as exc:  # noqa: BLE001 - the last resort that keeps bugs visible
         _report_internal_error(exc, debug)
         return EXIT_INTERNAL_ERROR
+
+
+# Failures of the machine, not of auvsim: a full disk, a read-only or vanished folder.
+ENVIRONMENT_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EACCES, errno.EPERM})
+
+
+def _say(line: str) -> None:
+    """Print one line to stderr; a closed stderr (| head) is not an error."""
+    try:
+        print(line, file=sys.stderr)
+    except BrokenPipeError:
+        pass
+
+
+def _silence_stdout() -> None:
+    """After a broken pipe, point stdout at /dev/null so the interpreter's flush at exit is quiet."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except OSError:
+        pass
 
 
 def _multi_line_types() -> tuple[type[BaseException], ...]:

@@ -51,6 +51,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if mission["aborted"]:
         print(f"ABORTED: {mission['abort_reason']}", file=sys.stderr)
         return EXIT_MISSION_ABORTED
+    if not mission["finished"]:
+        print(f"NOT FINISHED: the run reached duration_s = {metrics['sim_time_s']:g} s in mode "
+              f"{mission['final_mode']} before the survey ended (raise duration_s to fly it all)", file=sys.stderr)
     return EXIT_OK
 
 

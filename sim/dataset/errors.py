@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 
@@ -28,7 +29,16 @@ def require_dataset(path: str | Path, arg: str = "--data") -> Path:
         raise DatasetError(f"{arg} {p}: no such folder")
     if not p.is_dir():
         raise DatasetError(f"{arg} {p}: is a file, expected a dataset folder written by `auvsim dataset`")
-    if not (p / ANNOTATIONS_FILE).is_file():
+    ann = p / ANNOTATIONS_FILE
+    if not ann.is_file():
         raise DatasetError(f"{arg} {p}: no {ANNOTATIONS_FILE} here (not a dataset folder, or its generation "
                            "did not finish: rerun `auvsim dataset` with the same arguments to complete it)")
+    try:
+        doc = json.loads(ann.read_text())
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        raise DatasetError(f"{arg} {ann}: not a readable COCO JSON file ({exc}); regenerate the dataset") from None
+    missing = [k for k in ("images", "annotations", "categories") if not isinstance(doc, dict) or k not in doc]
+    if missing:
+        raise DatasetError(f"{arg} {ann}: not a COCO detection file (missing {', '.join(missing)}); regenerate "
+                           "the dataset")
     return p.resolve()

@@ -185,7 +185,12 @@ def generate_dataset(out_dir: str | Path, n_frames: int, seed: int = 0, workers:
     manifest = _manifest(n_frames, seed, randomization, settings)
     man_path = out_dir / MANIFEST_FILE
     if man_path.is_file():
-        old = json.loads(man_path.read_text())
+        try:
+            old = json.loads(man_path.read_text())
+            if not isinstance(old, dict):
+                raise ValueError("not a JSON object")
+        except (OSError, UnicodeDecodeError, ValueError) as exc:
+            raise DatasetError(f"--out {out_dir}: its {MANIFEST_FILE} is damaged ({exc}); use a new --out folder") from None
         old.pop("complete", None)
         if old != manifest:
             diff = sorted(k for k in set(old) | set(manifest) if old.get(k) != manifest.get(k))

@@ -72,6 +72,10 @@ def evaluate_detector(detector, data_dir: str | Path, score_threshold: float,
     img_ids = sorted(coco_gt.getImgIds())[:max_images]
     if not img_ids:
         raise DatasetError(f"--data {data_dir}: the dataset holds no images")
+    gt_ids = coco_gt.getAnnIds(imgIds=img_ids, catIds=target_cats, iscrowd=False)
+    if not gt_ids:
+        raise DatasetError(f"--data {data_dir}: the {len(img_ids)} frames evaluated hold no labelled "
+                           f"{'/'.join(target_classes)} object, so recall and AP are undefined; use a larger set")
     bands = list(range_bands_m)
     n_bands = len(bands) - 1
     tp = fp = n_gt = 0

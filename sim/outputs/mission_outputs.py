@@ -98,6 +98,15 @@ def collect_metrics(mission: Mission, log: TrajectoryLog) -> dict[str, Any]:
     return metrics
 
 
+def _outcome_suffix(metrics: dict[str, Any]) -> str:
+    m = metrics["mission"]
+    if m["aborted"]:
+        return f"\nABORTED at {metrics['sim_time_s']:.0f} s: {m['abort_reason']}"
+    if not m["finished"]:
+        return f"\nnot finished: stopped at duration_s ({metrics['sim_time_s']:.0f} s)"
+    return ""
+
+
 class _ProgressObserver:
     """Feeds the mission's step records to a :class:`MissionProgress`."""
 
@@ -158,7 +167,7 @@ def run_mission(
             true_pos_ned=log.true_pos_ned, est_pos_ned=log.est_pos_ned, waypoints_ne=mission.waypoints_ne,
             targets=[(o.name, o.centroid_ned, o.is_target) for o in mission.world.objects],
             estimates=estimates, rejected_ned=rejected,
-            title=f"{scenario.name} seed {mission.seed} (nav: {nav_source})",
+            title=f"{scenario.name} seed {mission.seed} (nav: {nav_source})" + _outcome_suffix(metrics),
         )
         write_json(partial / "metrics.json", metrics, decimals=METRICS_DECIMALS)
         staged.commit()

@@ -146,6 +146,12 @@ def check_output_dir(path: str | os.PathLike[str], *, kind: str, overwrite: bool
             if not (overwrite or resume):
                 raise OutputDirError(f"{arg} {out}: holds an earlier {kind}; pass --overwrite to replace it, "
                                      "or name a new folder")
+            if overwrite and kind == "run":
+                extra = sorted(set(entries) - RUN_FILES - {MARKER_FILE})
+                if extra:
+                    shown = ", ".join(extra[:5]) + (f" and {len(extra) - 5} more" if len(extra) > 5 else "")
+                    raise OutputDirError(f"{arg} {out}: holds files an auvsim run did not write ({shown}); "
+                                         "--overwrite would delete them: move them out first, or name a new folder")
         if not os.access(out, os.W_OK | os.X_OK):
             raise OutputDirError(f"{arg} {out}: folder is not writable")
     _check_parent_writable(out, arg)

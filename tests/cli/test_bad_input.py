@@ -41,6 +41,7 @@ def sandbox(tmp_path, monkeypatch):
 
 
 def _run(argv, capsys) -> tuple[int, str]:
+    capsys.readouterr()  # only this command's output
     code = main(argv)
     err = capsys.readouterr().err
     return code, err
@@ -247,3 +248,105 @@ def test_sigint_leaves_no_partial_folder(sandbox):
     assert "Traceback" not in err
     assert not partial.exists()
     assert not (sandbox / "work/runs/i").exists()
+
+
+def test_overwrite_refuses_a_run_folder_holding_the_users_own_files(sandbox, capsys):
+    assert main(["run", "--out", "runs/k", *SHORT_RUN]) == 0
+    (sandbox / "work/runs/k/notes.txt").write_text("mine")
+    (sandbox / "work/runs/k/analysis").mkdir()
+    before = _snapshot(sandbox)
+    code, err = _run(["run", "--out", "runs/k", "--overwrite", *SHORT_RUN], capsys)
+    _assert_clean_error(code, err, "notes.txt", "analysis", "did not write")
+    assert _snapshot(sandbox) == before
+
+
+@pytest.mark.parametrize("override,named", [
+    ("duration_s=true", "duration_s"),
+    ("seed='3'", "seed"),
+    ("autonomy.guidance.survey.origin_ne_m=[200, 200]", "past the seabed patch"),
+    ("autonomy.guidance.survey.origin_ne_m=[30, 0]", "past the basin walls"),
+    ("autonomy.guidance.survey.altitude_m=10", "autonomy.guidance.survey.altitude_m"),
+])
+def test_types_and_surveys_that_cannot_be_are_rejected(capsys, override, named):
+    code, err = _run(["validate", "cssn_lawnmower", "--set", override], capsys)
+    _assert_clean_error(code, err, named, "--set")
+
+
+def test_scientific_notation_without_a_dot_is_a_number(capsys):
+    assert main(["validate", "cssn_lawnmower", "--set", "duration_s=5e2"]) == 0
+    assert "duration_s: 500.0" in capsys.readouterr().out
+
+
+def test_a_key_given_twice_is_an_error(sandbox, capsys):
+    path = sandbox / "work" / "dup.yaml"
+    path.write_text("duration_s: 900\nduration_s: 5\n")
+    code, err = _run(["validate", str(path)], capsys)
+    _assert_clean_error(code, err, "dup.yaml", "'duration_s' appears twice")
+
+
+def _tiny_dataset_copy(sandbox, name: str) -> Path:
+    folder = sandbox / "work" / name
+    (folder / "images").mkdir(parents=True)
+    return folder
+
+
+@pytest.mark.parametrize("content,why", [("{bad", "not a readable COCO JSON"), ("", "not a readable COCO JSON"),
+                                         ("{}", "missing images"), ("[]", "missing images")])
+def test_corrupt_dataset_annotations_are_named(sandbox, capsys, content, why):
+    folder = _tiny_dataset_copy(sandbox, "ds")
+    (folder / "annotations.json").write_text(content)
+    code, err = _run(["eval-atr", "--data", str(folder), "--detector", "classical"], capsys)
+    _assert_clean_error(code, err, "annotations.json", why)
+
+
+def test_damaged_manifest_on_resume_is_named(sandbox, capsys):
+    folder = _tiny_dataset_copy(sandbox, "ds")
+    (folder / "manifest.json").write_text("{bad")
+    (folder / ".auvsim-output").write_text('{"kind": "dataset"}')
+    code, err = _run(["dataset", "--n", "2", "--out", str(folder), "--workers", "1", "--no-progress"], capsys)
+    _assert_clean_error(code, err, "manifest.json", "damaged")
+
+
+@pytest.mark.parametrize("argv,named", [
+    (["dataset", "--n", "99999999999", "--out", "ds"], "--n"),
+    (["dataset", "--n", "2", "--out", "ds", "--heldout", "--randomization", "wide"], "contradict"),
+    (["eval-atr", "--detector", "classical", "--model", "m.onnx"], "--model applies to the cnn detector"),
+    (["eval-atr", "--model", "src"], "is a folder"),
+    (["run", "--out", "x", "--bogus"], "auvsim run: error: unrecognized arguments"),
+])
+def test_contradictions_and_limits(sandbox, capsys, argv, named):
+    before = _snapshot(sandbox)
+    code, err = _run(argv, capsys)
+    _assert_clean_error(code, err, named)
+    assert _snapshot(sandbox) == before
+
+
+def test_a_full_disk_is_reported_as_such_not_as_a_bug(sandbox, capsys, monkeypatch):
+    import errno
+
+    import sim.outputs.mission_outputs as mo
+
+    def full(*a, **k):
+        raise OSError(errno.ENOSPC, "No space left on device", "runs/f/.partial/trajectory.csv")
+
+    monkeypatch.setattr(mo.TrajectoryLog, "write_csv", full)
+    code, err = _run(["run", "--out", "runs/f", *SHORT_RUN], capsys)
+    _assert_clean_error(code, err, "No space left on device")
+    assert not (sandbox / "work/runs/f").exists() and not (sandbox / "work/runs/.f.partial").exists()
+
+
+def test_a_closed_pipe_ends_quietly(sandbox):
+    proc = subprocess.run(f"{sys.executable} -m sim.cli validate cssn_lawnmower | head -1", shell=True,
+                          capture_output=True, text=True, cwd=sandbox / "work")
+    assert "Traceback" not in proc.stderr and "internal error" not in proc.stderr, proc.stderr
+
+
+def test_the_entry_point_loads_nothing_heavy_before_its_interrupt_guard():
+    proc = subprocess.run([sys.executable, "-c", "import sys, sim.cli; print('numpy' in sys.modules)"],
+                          capture_output=True, text=True)
+    assert proc.stdout.strip() == "False", proc.stderr
+
+
+def test_a_run_stopped_by_its_duration_says_so(sandbox, capsys):
+    assert main(["run", "--out", "runs/d", *SHORT_RUN]) == 0
+    assert "NOT FINISHED: the run reached duration_s = 4 s" in capsys.readouterr().err

@@ -15,25 +15,17 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
 from autonomy.sonar_frame import sonar_to_spherical
+from sim.sensors.base import SceneObjectLike
 from sim.sensors.raycast import BACKGROUND_ID, RayCaster
 from sim.sensors.sonar.display import FanRemap
 from sim.sensors.sonar.echo_lines import EchoSegments, spread_segments
 
 FloatArray = NDArray[np.float64]
-
-
-class SceneObjectLike(Protocol):
-    id: int
-    name: str
-    class_name: str
-    is_target: bool
-    centroid_ned: FloatArray
 
 
 @dataclass(frozen=True, slots=True)
