@@ -30,6 +30,7 @@ from sim.mission_build import NAV_SOURCES, MissionParts, build_mission_parts
 from sim.physics import Physics
 from sim.records import MissionInfo, MissionObserver, MissionSummary, StepRecord
 from sim.sensors.base import SceneView
+from sim.stage_timer import NULL_TIMER, StageTimer
 from sim.truth import VehicleTruth
 
 __all__ = ["NAV_SOURCES", "Mission", "MissionSummary"]
@@ -45,6 +46,8 @@ class Mission:
         observers: readers of the mission's outputs (logs, plots, recordings).
         perception: run ATR/localisation/world model on the sonar's frames (False: frames
             are still rendered at their rate when the sonar is enabled, but not processed).
+        timer: a :class:`sim.stage_timer.StageTimer` to time the loop's stages (benchmarks);
+            default: none.
 
     Raises:
         ValueError: unknown ``nav_source``; a sensor mount site missing on the hull.
@@ -57,12 +60,14 @@ class Mission:
         nav_source: str = "estimate",
         observers: Sequence[MissionObserver] = (),
         perception: bool = True,
+        timer: StageTimer | None = None,
     ) -> None:
         if nav_source not in NAV_SOURCES:
             raise ValueError(f"nav_source must be one of {NAV_SOURCES}, got {nav_source!r}")
         self.scenario = scenario
         self.nav_source = nav_source
         self.observers = list(observers)
+        self.timer = timer if timer is not None else NULL_TIMER
         self.perception_enabled = perception
         self.physics = Physics(scenario)
         self.dt_s = self.physics.dt_s
@@ -168,28 +173,35 @@ class Mission:
 
     def step(self, setpoint: Setpoint | None = None) -> StepRecord:
         """Advance one autonomy period. ``setpoint`` overrides guidance (gym envs)."""
-        physics, scheduler = self.physics, self.parts.scheduler
+        physics, scheduler, timer = self.physics, self.parts.scheduler, self.timer
         truth = self._truth
-        for _ in range(self.substeps):
-            physics.step(self.thruster_cmd)
-            due = scheduler.due(physics.t_s)
-            if due:
-                truth = physics.truth()
-                scene = physics.scene()
-                for name in due:
-                    self._fire(name, truth, scene)
+        with timer.stage("physics"):
+            for _ in range(self.substeps):
+                physics.step(self.thruster_cmd)
+                due = scheduler.due(physics.t_s)
+                if due:
+                    with timer.stage("truth"):
+                        truth = physics.truth()
+                        scene = physics.scene()
+                    for name in due:
+                        with timer.stage(f"sensor:{name}"):
+                            self._fire(name, truth, scene)
         if truth.t_s != physics.t_s:  # not already taken for a sensor on the last substep
-            truth = physics.truth()
+            with timer.stage("truth"):
+                truth = physics.truth()
         self._truth = truth
         for name, msg in scheduler.pop_ready(physics.t_s):
             self._deliver(name, msg)
         parts = self.parts
-        self.nav_filter.predict(physics.t_s)
-        nav = self.nav_filter.estimate()
-        sp = setpoint if setpoint is not None else parts.fsm.update(physics.t_s, nav, self.last_dvl_lock)
+        with timer.stage("nav_filter"):
+            self.nav_filter.predict(physics.t_s)
+            nav = self.nav_filter.estimate()
+        with timer.stage("guidance"):
+            sp = setpoint if setpoint is not None else parts.fsm.update(physics.t_s, nav, self.last_dvl_lock)
         self._setpoint = sp
-        self.wrench_body = np.zeros(6) if sp is None else parts.autopilot.update(nav, sp, self.autonomy_dt_s)
-        self.thruster_cmd = parts.allocator.allocate(self.wrench_body)
+        with timer.stage("control"):
+            self.wrench_body = np.zeros(6) if sp is None else parts.autopilot.update(nav, sp, self.autonomy_dt_s)
+            self.thruster_cmd = parts.allocator.allocate(self.wrench_body)
         rec = self._record(truth, nav, parts.fsm.mode)
         self._wall_s = time.perf_counter() - self._wall_start
         return rec
@@ -229,14 +241,18 @@ class Mission:
 
     def _deliver(self, name: str, msg: Any) -> None:
         self._delivered[name] += 1
-        for handler in self._by_type.get(type(msg), ()):
-            handler(msg)
+        timer = self.timer
+        with timer.stage("nav_filter"):
+            for handler in self._by_type.get(type(msg), ()):
+                handler(msg)
         process = self._by_source.get(name)
-        result = process(msg, self.nav_filter.estimate()) if process is not None else None
-        for obs in self.observers:
-            obs.on_message(name, msg)
-            if result is not None:
-                obs.on_message(name, result)
+        with timer.stage("perception"):
+            result = process(msg, self.nav_filter.estimate()) if process is not None else None
+        with timer.stage("observers"):
+            for obs in self.observers:
+                obs.on_message(name, msg)
+                if result is not None:
+                    obs.on_message(name, result)
 
     def _record(self, truth: VehicleTruth, nav: NavEstimate, mode: str) -> StepRecord:
         sp = self._setpoint
@@ -249,6 +265,7 @@ class Mission:
             setpoint_depth_m=(sp.depth_m if sp and sp.depth_m is not None else nan),
             wrench_body=self.wrench_body.copy(), thruster_cmd=self.thruster_cmd.copy(), mode=mode,
         )
-        for obs in self.observers:
-            obs.on_step(rec)
+        with self.timer.stage("observers"):
+            for obs in self.observers:
+                obs.on_step(rec)
         return rec

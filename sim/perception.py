@@ -18,13 +18,12 @@ from autonomy.localization import fls_visibility, localize
 from autonomy.messages import NavEstimate
 from autonomy.world_model import CLASS_NAMES, PMHA
 from scenarios.schema import Scenario
-from sim.evaluation.detection_matching import match_frame
+from sim.evaluation.detection_matching import MISSION_DETECTION_MATCH_IOU, match_frame
 from sim.evaluation.world_model_score import score_world_model
 from sim.records import PerceptionResult
 from sim.seabed import Seabed
 from sim.sensors.fls import FlsRender, FlsSensor
 
-MATCH_IOU = 0.3  # a detection is true when it overlaps a visible target's box this much
 TARGET_CLASS = CLASS_NAMES[0]  # the world model's class of objects of potential interest
 
 
@@ -95,7 +94,7 @@ class Perception:
         gt_boxes = np.array([o.bbox_xyxy for o in gt], dtype=float).reshape(-1, 4)
         state, gt_hit = match_frame(np.array([d.box_xyxy_px for d in detections], dtype=float).reshape(-1, 4),
                                     np.array([d.score for d in detections], dtype=float), gt_boxes,
-                                    np.zeros(len(gt), dtype=bool), MATCH_IOU)
+                                    np.zeros(len(gt), dtype=bool), MISSION_DETECTION_MATCH_IOU)
         self.n_detections += len(detections)
         self.n_true += int(np.sum(state == 1))
         self.n_false += int(np.sum(state != 1))

@@ -8,7 +8,7 @@ import pytest
 from autonomy.frames import rot_from_euler
 from autonomy.guidance.lawnmower import fls_swath_width_m
 from scenarios.config.fls import FlsConfig
-from sim import bench_fls
+from sim.bench import fls as bench_fls
 from sim.sensors.fls import FlsSensor
 from sim.truth import VehicleTruth
 from sim.physics import Physics

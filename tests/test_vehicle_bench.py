@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from sim.bench_physics import run
+from sim.bench.physics import run
 
 
 def test_bench_physics_reports_rates(cssn_scenario):

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from sim.bench_pmha import measure
+from sim.bench.pmha import measure
 
 
 def test_bench_measure_small_case():

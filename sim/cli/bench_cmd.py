@@ -8,20 +8,9 @@ import inspect
 import json
 
 from scenarios.load import load_scenario
+from sim.bench import BENCHES
 from sim.cli.args import non_negative_int
 from sim.cli.scenario_cmds import DEFAULT_SCENARIO, add_scenario_args
-
-# bench name -> (module, function, help). The function takes the scenario (or only a seed)
-# and returns a dict.
-BENCHES: dict[str, tuple[str, str, str]] = {
-    "physics": ("sim.bench_physics", "run", "hull + hydrodynamics + thrusters at the physics rate"),
-    "fls": ("sim.bench_fls", "run", "forward-looking sonar frame rendering"),
-    "mission": ("sim.bench_mission", "run", "closed-loop mission, sensors and FLS included"),
-    "pmha": ("sim.bench_pmha", "run", "PMHA world-model update time"),
-    "gym": ("sim.bench_gym", "run", "gymnasium environment step rate"),
-    "atr": ("sim.evaluation.atr_metrics", "bench_atr", "ATR inference frame rate (CNN and classical)"),
-}
-
 
 def _cmd_bench(args: argparse.Namespace) -> int:
     module_name, func_name, _ = BENCHES[args.name]

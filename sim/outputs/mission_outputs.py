@@ -20,7 +20,7 @@ from sim.outputs.map_plot import plot_map
 from sim.mission import Mission
 from sim.outputs.progress import MissionProgress
 from sim.outputs.run_dir import StagedOutput, check_output_dir
-from sim.trajectory_log import TrajectoryLog
+from sim.outputs.trajectory_log import TrajectoryLog
 
 METRICS_DECIMALS = 4
 
@@ -144,7 +144,7 @@ def run_mission(
         log = TrajectoryLog()
         observers: list[Any] = [log]
         if rerun:
-            from sim.rerun_recording import RerunRecorder
+            from sim.outputs.rerun_recording import RerunRecorder
 
             observers.append(RerunRecorder(partial / "recording.rrd"))
         mission = Mission(scenario, nav_source=nav_source, observers=observers)

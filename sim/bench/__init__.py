@@ -1,0 +1,17 @@
+"""Benchmarks behind ``auvsim bench NAME``: one registry (:data:`BENCHES`), one module each.
+
+Each entry names the module and function to run and a one-line description; the function
+takes the scenario (or only a seed, or nothing) and returns a JSON-serialisable dict.
+"""
+
+from __future__ import annotations
+
+# name -> (module, function, help)
+BENCHES: dict[str, tuple[str, str, str]] = {
+    "physics": ("sim.bench.physics", "run", "hull + hydrodynamics + thrusters at the physics rate"),
+    "fls": ("sim.bench.fls", "run", "forward-looking sonar frame rendering"),
+    "mission": ("sim.bench.mission", "run", "closed-loop mission, sensors and FLS included; time per stage"),
+    "pmha": ("sim.bench.pmha", "run", "PMHA world-model update time"),
+    "gym": ("sim.bench.gym", "run", "gymnasium environment step rate"),
+    "atr": ("sim.evaluation.atr_metrics", "bench_atr", "ATR inference frame rate (CNN and classical)"),
+}
