@@ -52,7 +52,7 @@ def test_bubbles_rise_at_their_speed_and_are_recycled():
 
 
 def _crossing_scenario(**fls) -> Scenario:
-    diver = dict(name="diver", kind="diver", initial_pos_ned=(6.0, 0.5, 5.0), initial_course_deg=90.0,
+    diver = dict(name="diver", kind="diver", initial_pos_ned=(6.0, -0.5, 5.0), initial_course_deg=90.0,
                  surge_mps=0.5, surge_sigma_mps=0.0, course_rate_sigma_dps=0.0, heave_sigma_mps=0.0,
                  reflectivity=0.9)
     return Scenario(
@@ -73,9 +73,9 @@ def test_fls_echo_of_a_moving_diver_is_where_the_diver_is_at_ping_time():
     phys.advance(np.zeros(phys.params.n_thrusters), n)
     truth = phys.truth()
     render = fls.measure(truth, phys.scene(), noise=False)
-    # independent expectation: the diver moves east at 0.5 m/s from (6, 0.5, 5)
+    # independent expectation: the diver moves east at 0.5 m/s from (6, -0.5, 5)
     t = phys.t_s
-    diver_ned = np.array([6.0, 0.5 + 0.5 * t, 5.0])
+    diver_ned = np.array([6.0, -0.5 + 0.5 * t, 5.0])
     head = truth.point_ned(fls.mount_pos_body_m)
     rel = (truth.R_nb @ fls.R_bs).T @ (diver_ned - head)
     exp_range, exp_az = float(np.linalg.norm(rel)), float(math.atan2(rel[1], rel[0]))
@@ -94,7 +94,7 @@ def test_fls_echo_of_a_moving_diver_is_where_the_diver_is_at_ping_time():
     assert az.min() - g.beam_spacing_rad <= exp_az <= az.max() + g.beam_spacing_rad
     assert abs(0.5 * (az.min() + az.max()) - exp_az) < math.radians(2.0)
     # ... and not where it started (1 m west at t = 0)
-    rel0 = (truth.R_nb @ fls.R_bs).T @ (np.array([6.0, 0.5, 5.0]) - head)
+    rel0 = (truth.R_nb @ fls.R_bs).T @ (np.array([6.0, -0.5, 5.0]) - head)
     assert abs(math.atan2(rel0[1], rel0[0]) - 0.5 * (az.min() + az.max())) > math.radians(3.0)
     # the echo is strong there: the object bins outshine the water around them
     mean = render.mean_intensity
