@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import Field, model_validator
+from pydantic import Field
 
 from scenarios.config.base import Vec3
 from scenarios.config.sensor import SensorConfig, sensor_config
@@ -32,7 +32,7 @@ class UsblConfig(SensorConfig):
     rate_hz: float = Field(0.5, ge=1.0 / 3.0, le=1.0, description="fix every 1-3 s")
     latency_s: float = Field(0.2, ge=0.0, le=5.0, description="processing delay added to the travel time, s")
     transponder: str = Field("beacon", min_length=1, description='"beacon" or the scene object carrying it')
-    beacon_pos_ned: Vec3 | None = Field(None, description="known beacon position (transponder: beacon), m")
+    beacon_pos_ned: Vec3 = Field((0.0, 0.0, 0.0), description="known beacon position (transponder: beacon), m")
     sound_speed_mps: float = Field(1500.0, ge=1400.0, le=1600.0)
     turnaround_s: float = Field(0.0, ge=0.0, le=2.0, description="transponder reply delay, s")
     max_range_m: float = Field(1000.0, gt=0.0, le=10000.0, description="no fix beyond, m")
@@ -44,12 +44,6 @@ class UsblConfig(SensorConfig):
     outlier_extra_range_m: float = Field(5.0, ge=0.0, le=500.0)
     outlier_angle_sigma_deg: float = Field(10.0, ge=0.0, le=180.0)
     dropout_prob: float = Field(0.1, ge=0.0, le=1.0)
-
-    @model_validator(mode="after")
-    def _beacon_known(self) -> "UsblConfig":
-        if self.transponder == "beacon" and self.beacon_pos_ned is None:
-            raise ValueError('transponder "beacon" needs beacon_pos_ned')
-        return self
 
     def range_sigma_at(self, range_m: float) -> float:
         """Range noise sigma (m) at ``range_m``."""

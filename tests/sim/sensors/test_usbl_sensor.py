@@ -98,8 +98,7 @@ def test_beacon_and_missing_transponder():
     other = UsblSensor(UsblConfig(transponder="nobody"), np.zeros(3), np.random.default_rng(0))
     with pytest.raises(ValueError, match="nobody"):
         other.measure(_truth([0, 0, 0], [0, 0, 0]), _scene([1, 0, 0]))
-    with pytest.raises(ValueError, match="beacon_pos_ned"):
-        UsblConfig()
+    assert UsblConfig().beacon_pos_ned == (0.0, 0.0, 0.0)  # default: a beacon at the mission origin
 
 
 def test_same_seed_same_fixes():
