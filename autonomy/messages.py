@@ -61,12 +61,21 @@ class GpsMsg:
 
 @dataclass(frozen=True, slots=True)
 class UsblMsg:
-    """USBL fix of a transponder, in the vehicle frame (range, bearing, elevation)."""
+    """USBL fix of a transponder, in the USBL head's frame (range, bearing, elevation).
+
+    ``t_s`` is the time the fix was measured (the interrogation), not its arrival: the fix
+    reaches the vehicle later by the acoustic two-way travel time and the processing delay,
+    so a consumer must apply it at ``t_s``. ``valid`` is False (NaN values) when the
+    transponder did not answer. ``transponder`` names the transponder ("beacon": a fixed
+    beacon at a known position, for navigation).
+    """
 
     t_s: float
     range_m: float
-    bearing_rad: float
-    elevation_rad: float
+    bearing_rad: float  # starboard > 0
+    elevation_rad: float  # down > 0
+    transponder: str = "beacon"
+    valid: bool = True
 
 
 @dataclass(frozen=True, slots=True)

@@ -22,6 +22,7 @@ from sim.sensors.base import SceneView
 from sim.sensors.raycast import MujocoRayCaster
 from sim.truth import VehicleTruth
 from sim.vehicle import VehicleDynamics
+from sim.movers import MovingBodies
 from sim.vehicle_params import VehicleParams, load_vehicle_params
 from sim.world import SceneObject, World, build_world
 
@@ -41,6 +42,7 @@ class Physics:
         params: the vehicle's parameters.
         vehicle: the vehicle dynamics bound to ``model`` / ``data``.
         current: the water current acting on the vehicle.
+        movers: the moving targets (mocap bodies) and their seeded trajectories.
         caster: ray caster over the acoustic geoms (the hull excluded).
         dt_s: physics step, s.
         t_s: simulated time since :meth:`reset`, s.
@@ -62,8 +64,10 @@ class Physics:
 
     # ------------------------------------------------------------------ set-up
     def reseed(self, seed: int) -> None:
-        """New current from the scenario's config with ``component_rng(seed, "current")``."""
+        """New current from the scenario's config with ``component_rng(seed, "current")``, and
+        new mover trajectories (``component_rng(seed, "mover:<name>")``)."""
         self.set_current(self.scenario.world.current, component_rng(int(seed), "current"))
+        self.movers = MovingBodies(self.model, self.scenario.world.movers, int(seed), self.scenario.duration_s)
 
     def set_current(self, cfg: CurrentConfig, rng: np.random.Generator | None) -> OceanCurrent:
         """Replace the current (e.g. one drawn per episode); the vehicle uses it from the next step.
@@ -81,6 +85,8 @@ class Physics:
         mujoco.mj_resetData(self.model, self.data)
         self.current.reset()
         self.vehicle.reset(pos_ned, rpy_rad)
+        if self.movers:
+            self.movers.apply(self.data, 0.0)
         mujoco.mj_forward(self.model, self.data)
         self.t_s = 0.0
 
@@ -88,6 +94,8 @@ class Physics:
     def step(self, thruster_cmd: ArrayLike) -> None:
         """One physics step with normalised thruster commands (n_thr,) in [-1, 1]."""
         self.vehicle.step_inputs(thruster_cmd, self.dt_s)
+        if self.movers:
+            self.movers.apply(self.data, self.t_s)
         mujoco.mj_step(self.model, self.data)
         self.t_s += self.dt_s
         self.current.step(self.dt_s)
@@ -98,8 +106,11 @@ class Physics:
         step_inputs, mj_step, current_step = self.vehicle.step_inputs, mujoco.mj_step, self.current.step
         model, data, dt = self.model, self.data, self.dt_s
         contact = False
+        movers = self.movers if self.movers else None
         for _ in range(n_steps):
             step_inputs(thruster_cmd, dt)
+            if movers is not None:
+                movers.apply(data, self.t_s)
             mj_step(model, data)
             self.t_s += dt
             current_step(dt)
@@ -113,7 +124,12 @@ class Physics:
         return self.vehicle.truth(self.t_s)
 
     def scene(self) -> SceneView:
-        """What sensors see now: the ray caster and the scene objects at their present poses."""
+        """What sensors see now: the ray caster and the scene objects at their present poses
+        (movers are placed at the present time first: ``mj_step`` leaves geom poses at the
+        start of the step)."""
+        if self.movers:
+            self.movers.apply(self.data, self.t_s)
+            mujoco.mj_kinematics(self.model, self.data)
         return SceneView(self.t_s, self.caster, self.objects())
 
     def objects(self) -> tuple[SceneObject, ...]:

@@ -224,6 +224,16 @@ def build_world(scenario: Scenario, *, with_vehicle: bool = True) -> World:
         target_geoms.append(geom)
         objects.append(obj)
 
+    from sim.movers import add_mover_bodies
+
+    mover_geoms = add_mover_bodies(spec, wcfg.movers, ACOUSTIC_GROUP)
+    for j, mg in enumerate(mover_geoms):
+        target_geoms.append(mg.geom)
+        objects.append(SceneObject(
+            id=len(wcfg.targets) + j, name=mg.name, class_name=mg.class_name, is_target=mg.is_target,
+            shape=mg.shape, centroid_ned=np.zeros(3), base_ned=np.zeros(3), bounding_radius_m=mg.radius_m,
+            height_m=mg.height_m, reflectivity=mg.reflectivity))
+
     if with_vehicle:
         from sim.vehicle_params import load_vehicle_params
 
@@ -241,10 +251,13 @@ def build_world(scenario: Scenario, *, with_vehicle: bool = True) -> World:
         geom_object_id[gid] = BACKGROUND_ID
         geom_reflectivity[gid] = reflect_of[id(g)]
     final_objects = []
+    mujoco.mj_kinematics(model, data)  # mover geoms at their initial poses
     for g, obj in zip(target_geoms, objects):
         gid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, g.name)
         geom_object_id[gid] = obj.id
         geom_reflectivity[gid] = obj.reflectivity
+        if model.body_mocapid[model.geom_bodyid[gid]] >= 0:  # a mover: centroid and base at its geom centre
+            obj = replace(obj, centroid_ned=data.geom_xpos[gid].copy(), base_ned=data.geom_xpos[gid].copy())
         final_objects.append(replace(obj, geom_id=gid))
 
     vehicle_body_id = -1

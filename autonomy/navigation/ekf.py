@@ -304,7 +304,10 @@ class NavigationFilter:
 
     def on_usbl(self, msg: UsblMsg) -> bool:
         """Range/bearing/elevation of the known beacon seen from the vehicle's USBL head.
-        Returns whether it was applied (EKF mode, inside the innovation gate)."""
+        Returns whether it was applied (EKF mode, inside the innovation gate); fixes of other
+        transponders (a tracked target's) and missing fixes are ignored."""
+        if not msg.valid or msg.transponder != "beacon":
+            return False
         if self._beacon_ned is None:
             raise ValueError("NavigationFilter.on_usbl needs usbl_beacon_pos_ned at construction")
         if self.cfg.mode != "ekf":

@@ -6,6 +6,7 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
+from scenarios.config.movers import MoverConfig
 from scenarios.config.base import NonNegFloat, PositiveFloat, Probability, StrictModel, Vec2, Vec3
 
 
@@ -80,11 +81,12 @@ class WorldConfig(StrictModel):
     seabed: SeabedConfig = SeabedConfig()
     basin: BasinConfig = BasinConfig()
     targets: tuple[TargetConfig, ...] = ()
+    movers: tuple[MoverConfig, ...] = Field((), description="moving targets on mocap bodies (diver, vehicle)")
     current: CurrentConfig = CurrentConfig()
 
     @model_validator(mode="after")
     def _unique_names(self) -> "WorldConfig":
-        names = [t.name for t in self.targets]
+        names = [t.name for t in self.targets] + [m.name for m in self.movers]
         dup = {n for n in names if names.count(n) > 1}
         if dup:
             raise ValueError(f"target names must be unique, repeated: {sorted(dup)}")

@@ -13,5 +13,6 @@ BENCHES: dict[str, tuple[str, str, str]] = {
     "mission": ("sim.bench.mission", "run", "closed-loop mission, sensors and FLS included; time per stage"),
     "pmha": ("sim.bench.pmha", "run", "PMHA world-model update time"),
     "gym": ("sim.bench.gym", "run", "gymnasium environment step rate"),
+    "tracking": ("sim.bench.tracking", "run", "USBL + sonar target tracker time per 10 Hz tick"),
     "atr": ("sim.evaluation.atr_metrics", "bench_atr", "ATR inference frame rate (CNN and classical)"),
 }

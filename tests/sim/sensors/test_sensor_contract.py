@@ -187,6 +187,10 @@ def _expected(kind: str, sensor: Sensor, truth: VehicleTruth) -> dict[str, objec
         return {"valid": bool(surfaced), "pos_ne_m": p_mount[:2] if surfaced else np.full(2, np.nan)}
     if kind == "test_ranger":
         return {"range_m": float(np.linalg.norm(np.asarray(sensor.cfg.beacon_ned) - p_mount))}
+    if kind == "usbl":  # default: a beacon at the mission origin, head aligned with the body
+        d = R.T @ (np.asarray(sensor.cfg.beacon_pos_ned, dtype=float) - p_mount)
+        return {"range_m": float(np.sqrt(d @ d)), "bearing_rad": float(np.arctan2(d[1], d[0])),
+                "elevation_rad": float(np.arcsin(d[2] / np.sqrt(d @ d))), "valid": True}
     return None
 
 

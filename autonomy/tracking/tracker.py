@@ -1,0 +1,338 @@
+"""EKF tracking one target from USBL fixes and sonar detections, late fixes re-processed.
+
+Paper 004 section 3: an EKF over the target's kinematic states (eq. 6) updated by USBL range,
+bearing and elevation and by sonar range and azimuth (eq. 8-10), relative to the vehicle,
+whose pose comes from navigation (the paper's vehicle states, taken as known as in its
+section 4.1). USBL fixes arrive late by the acoustic travel time; "to account for measurement
+delays methods of backward recalculation can be applied" (section 3): every measurement is
+kept with its measurement time and the vehicle pose then, and a measurement older than the
+newest one applied re-runs the filter from the checkpoint before it (re-processing from a
+stored history), so a late fix is applied at the time it was measured, never as new.
+
+The sonar measurement is (range, azimuth) and, since a target echoes only inside the
+vertical beam, an elevation of 0 with the variance of a uniform over the beam
+(``beam^2 / 12``). Each update passes a chi-square gate; rejected measurements stay in the
+history (re-processing re-decides them).
+"""
+
+from __future__ import annotations
+
+import bisect
+import logging
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.stats import chi2
+
+from autonomy.estimation.measurement import RangeBearingElevation
+from autonomy.estimation.updater import ExtendedKalmanUpdater
+from autonomy.frames import rot_from_euler
+from autonomy.messages import UsblMsg
+from autonomy.tracking.config import TrackingConfig
+from autonomy.tracking.kinematics import COURSE, COURSE_RATE, HEAVE, N_STATES, POS, SURGE, TargetKinematics
+from autonomy.tracking.roi import PolarRoi, polar_roi
+
+FloatArray = NDArray[np.float64]
+log = logging.getLogger(__name__)
+USBL, SONAR = "usbl", "sonar"
+
+
+class RelativeSpherical:
+    """Range, bearing and elevation of the target seen from a head on the vehicle, as a
+    function of the tracker state (the shape :class:`ExtendedKalmanUpdater` takes).
+
+    Args:
+        head_ned: (3,) NED position of the sensor head at measurement time, m.
+        R_nh: (3, 3) head frame -> NED rotation at measurement time.
+        ndim: 3 (range, bearing, elevation) or 2 (range, azimuth).
+    """
+
+    _rbe = RangeBearingElevation()
+
+    def __init__(self, head_ned: FloatArray, R_nh: FloatArray, ndim: int = 3) -> None:
+        self.head_ned = head_ned
+        self.R_hn = R_nh.T
+        self.ndim_meas = ndim
+
+    def _rel(self, x: FloatArray) -> FloatArray:
+        return self.R_hn @ (x[POS] - self.head_ned)
+
+    def function(self, x: ArrayLike) -> FloatArray:
+        return self._rbe.function(self._rel(np.asarray(x, dtype=float)))[: self.ndim_meas]
+
+    def jacobian(self, x: ArrayLike) -> FloatArray:
+        H = np.zeros((self.ndim_meas, N_STATES))
+        H[:, POS] = (self._rbe.jacobian(self._rel(np.asarray(x, dtype=float))) @ self.R_hn)[: self.ndim_meas]
+        return H
+
+    def residual(self, z: ArrayLike, z_pred: ArrayLike) -> FloatArray:
+        res = np.asarray(z, dtype=float) - z_pred
+        res[1:] = np.angle(np.exp(1j * res[1:]))
+        return res
+
+
+@dataclass
+class _Event:
+    t_s: float
+    seq: int
+    kind: str
+    z: FloatArray
+    R: FloatArray
+    model: RelativeSpherical
+    accepted: bool = field(default=False)
+
+    @property
+    def key(self) -> tuple[float, int]:
+        return (self.t_s, self.seq)
+
+
+@dataclass
+class _Pose:
+    t_s: float
+    pos_ned: FloatArray
+    rpy_rad: FloatArray
+
+
+class TargetTracker:
+    """Tracks one target; feed it vehicle poses, USBL fixes and sonar detections.
+
+    Args:
+        cfg: tracker settings (mode, noise model, gates, ROI).
+        usbl_mount_body_m: (3,) FRD position of the USBL head; ``usbl_mount_rpy_rad`` its frame.
+        sonar_mount_body_m: (3,) FRD position of the sonar head; ``sonar_mount_rpy_rad`` its
+            frame (roll, pitch, yaw of the sonar frame w.r.t. the body).
+
+    Attributes:
+        rejected: (time, reason) of each input refused (bad input or outside the gate).
+        n_usbl_used, n_sonar_used: accepted updates in the current history's run.
+    """
+
+    def __init__(self, cfg: TrackingConfig, usbl_mount_body_m: ArrayLike = (0.0, 0.0, 0.0),
+                 sonar_mount_body_m: ArrayLike = (0.0, 0.0, 0.0), *, usbl_mount_rpy_rad: ArrayLike = (0.0, 0.0, 0.0),
+                 sonar_mount_rpy_rad: ArrayLike = (0.0, 0.0, 0.0)) -> None:
+        self.cfg = cfg
+        self.kinematics = TargetKinematics(cfg.pos_noise_m2_per_s, cfg.course_rate_noise_rad2_per_s3,
+                                           cfg.surge_noise_m2_per_s3, cfg.heave_noise_m2_per_s3)
+        self._usbl_mount = np.asarray(usbl_mount_body_m, dtype=float).reshape(3)
+        self._R_b_usbl = rot_from_euler(*np.asarray(usbl_mount_rpy_rad, dtype=float))
+        self._sonar_mount = np.asarray(sonar_mount_body_m, dtype=float).reshape(3)
+        self._R_b_sonar = rot_from_euler(*np.asarray(sonar_mount_rpy_rad, dtype=float))
+        self._gate = {3: float(chi2.ppf(cfg.gate_probability, 3))}
+        self.reset()
+
+    # ------------------------------------------------------------------ inputs
+    def reset(self) -> None:
+        """Forget everything (no estimate until the first accepted measurement)."""
+        self._poses: list[_Pose] = []
+        self._events: list[_Event] = []
+        self._checkpoints: list[tuple[float, FloatArray, FloatArray] | None] = []
+        self._base: tuple[float, FloatArray, FloatArray] | None = None  # state before the kept history
+        self._seq = 0
+        self.rejected: list[tuple[float, str]] = []
+
+    @property
+    def now_s(self) -> float:
+        """Time of the newest vehicle pose (-inf before any)."""
+        return self._poses[-1].t_s if self._poses else -math.inf
+
+    def record_pose(self, t_s: float, pos_ned: ArrayLike, rpy_rad: ArrayLike) -> None:
+        """Vehicle pose (body origin NED, m; roll/pitch/yaw, rad) at ``t_s`` from navigation;
+        times must increase."""
+        if self._poses and t_s <= self._poses[-1].t_s:
+            return
+        self._poses.append(_Pose(float(t_s), np.asarray(pos_ned, dtype=float).copy(),
+                                 np.asarray(rpy_rad, dtype=float).copy()))
+        horizon = t_s - self.cfg.history_s - 1.0
+        while len(self._poses) > 2 and self._poses[1].t_s < horizon:
+            self._poses.pop(0)
+        self._prune(t_s - self.cfg.history_s)
+
+    def pose_at(self, t_s: float) -> tuple[FloatArray, FloatArray] | None:
+        """Vehicle (position (3,), R_nb (3, 3)) at ``t_s`` by linear interpolation (yaw along
+        the short way), or None outside the pose history."""
+        ps = self._poses
+        if not ps or t_s > ps[-1].t_s + 1e-9 or t_s < ps[0].t_s - 1e-9:
+            return None
+        i = bisect.bisect_left([p.t_s for p in ps], t_s)
+        if i < len(ps) and abs(ps[i].t_s - t_s) <= 1e-9 or i == 0:
+            p = ps[min(i, len(ps) - 1)]
+            return p.pos_ned, rot_from_euler(*p.rpy_rad)
+        a, b = ps[i - 1], ps[i]
+        f = (t_s - a.t_s) / (b.t_s - a.t_s)
+        d_rpy = np.angle(np.exp(1j * (b.rpy_rad - a.rpy_rad)))
+        return a.pos_ned + f * (b.pos_ned - a.pos_ned), rot_from_euler(*(a.rpy_rad + f * d_rpy))
+
+    def on_usbl(self, msg: UsblMsg) -> bool:
+        """Add a USBL fix at its measurement time ``msg.t_s``. Returns whether it was taken
+        into the history (bad input, another transponder, sonar-only mode: refused and logged)."""
+        if self.cfg.mode == "sonar":
+            return False
+        if not msg.valid:
+            return False
+        if msg.transponder != self.cfg.transponder:
+            return self._refuse(msg.t_s, f"USBL fix of unknown transponder {msg.transponder!r}")
+        z = np.array([msg.range_m, msg.bearing_rad, msg.elevation_rad], dtype=float)
+        if not np.all(np.isfinite(z)) or z[0] <= 0.0:
+            return self._refuse(msg.t_s, f"USBL fix not finite or range <= 0: {z}")
+        pose = self._pose_for(msg.t_s, "USBL")
+        if pose is None:
+            return False
+        pos, R_nb = pose
+        cfg = self.cfg
+        sig_r = cfg.usbl_range_sigma_m + cfg.usbl_range_sigma_frac * z[0]
+        sig_a = math.radians(cfg.usbl_angle_sigma_deg + cfg.usbl_angle_sigma_deg_per_100m * z[0] / 100.0)
+        model = RelativeSpherical(pos + R_nb @ self._usbl_mount, R_nb @ self._R_b_usbl)
+        self._insert(_Event(float(msg.t_s), self._next_seq(), USBL, z, np.diag([sig_r**2, sig_a**2, sig_a**2]), model))
+        return True
+
+    def on_sonar(self, t_s: float, range_m: float, azimuth_rad: float, elevation_rad: float = 0.0) -> bool:
+        """Add a sonar detection (sonar frame range m, azimuth rad, starboard > 0) at ``t_s``;
+        ``elevation_rad`` (down > 0) when the sonar resolves it, else 0 within the beam."""
+        if self.cfg.mode == "usbl":
+            return False
+        if not (math.isfinite(range_m) and math.isfinite(azimuth_rad) and range_m > 0.0):
+            return self._refuse(t_s, f"sonar detection not finite or range <= 0: {range_m}, {azimuth_rad}")
+        pose = self._pose_for(t_s, "sonar")
+        if pose is None:
+            return False
+        pos, R_nb = pose
+        cfg = self.cfg
+        sig_e2 = math.radians(cfg.sonar_vertical_beam_deg) ** 2 / 12.0
+        R = np.diag([cfg.sonar_range_sigma_m**2, math.radians(cfg.sonar_azimuth_sigma_deg) ** 2, sig_e2])
+        model = RelativeSpherical(pos + R_nb @ self._sonar_mount, R_nb @ self._R_b_sonar)
+        self._insert(_Event(float(t_s), self._next_seq(), SONAR, np.array([range_m, azimuth_rad, elevation_rad]), R,
+                            model))
+        return True
+
+    # ------------------------------------------------------------------ outputs
+    @property
+    def initialised(self) -> bool:
+        return self._last_state() is not None
+
+    def estimate(self, t_s: float | None = None) -> tuple[FloatArray, FloatArray] | None:
+        """Mean (7,) ``[n, e, d, course, course_rate, surge, heave]`` and covariance (7, 7) at
+        ``t_s`` (default: now) predicted from the last measurement, or None before the first."""
+        last = self._last_state()
+        if last is None:
+            return None
+        t = self.now_s if t_s is None else float(t_s)
+        t0, x, P = last
+        return self.kinematics.predict(x, P, max(t - t0, 0.0))
+
+    def roi(self, t_s: float | None = None) -> PolarRoi | None:
+        """Polar ROI in the sonar frame at ``t_s`` (default: now), or None before the first
+        estimate or without a pose then."""
+        t = self.now_s if t_s is None else float(t_s)
+        est = self.estimate(t)
+        pose = self.pose_at(t)
+        if est is None or pose is None:
+            return None
+        pos, R_nb = pose
+        x, P = est
+        try:
+            return polar_roi(x[POS], P[POS, POS], pos + R_nb @ self._sonar_mount, R_nb @ self._R_b_sonar,
+                             self.cfg.roi_sigma, self.cfg.target_size_m)
+        except ValueError:
+            return None
+
+    def used_counts(self) -> dict[str, int]:
+        """Accepted updates per kind in the kept history."""
+        out = {USBL: 0, SONAR: 0}
+        for e in self._events:
+            out[e.kind] += int(e.accepted)
+        return out
+
+    # ------------------------------------------------------------------ internals
+    def _next_seq(self) -> int:
+        self._seq += 1
+        return self._seq
+
+    def _refuse(self, t_s: float, reason: str) -> bool:
+        log.warning("tracker: refused at t=%.3f s: %s", t_s, reason)
+        self.rejected.append((float(t_s), reason))
+        return False
+
+    def _pose_for(self, t_s: float, what: str) -> tuple[FloatArray, FloatArray] | None:
+        if not math.isfinite(t_s):
+            self._refuse(t_s, f"{what} time not finite")
+            return None
+        if t_s > self.now_s + 1e-9:
+            self._refuse(t_s, f"{what} measurement from the future (now {self.now_s:.3f} s)")
+            return None
+        if self._base is not None and t_s < self._base[0]:
+            self._refuse(t_s, f"{what} measurement older than the kept history ({self.cfg.history_s} s)")
+            return None
+        pose = self.pose_at(t_s)
+        if pose is None:
+            self._refuse(t_s, f"no vehicle pose at the {what} measurement time")
+        return pose
+
+    def _last_state(self) -> tuple[float, FloatArray, FloatArray] | None:
+        for cp in reversed(self._checkpoints):
+            if cp is not None:
+                return cp
+        return self._base
+
+    def _insert(self, ev: _Event) -> None:
+        keys = [e.key for e in self._events]
+        i = bisect.bisect_right(keys, ev.key)
+        self._events.insert(i, ev)
+        del self._checkpoints[i:]
+        state = self._base if i == 0 else self._last_before(i)
+        for j in range(i, len(self._events)):
+            state = self._apply(state, self._events[j])
+            self._checkpoints.append(state)
+
+    def _last_before(self, i: int) -> tuple[float, FloatArray, FloatArray] | None:
+        for cp in reversed(self._checkpoints[:i]):
+            if cp is not None:
+                return cp
+        return self._base
+
+    def _apply(self, state: tuple[float, FloatArray, FloatArray] | None, ev: _Event
+               ) -> tuple[float, FloatArray, FloatArray] | None:
+        """Posterior after ``ev`` from ``state`` (None: not initialised; the event initialises)."""
+        if state is None:
+            ev.accepted = True
+            return ev.t_s, *self._initial(ev)
+        t0, x, P = state
+        x, P = self.kinematics.predict(x, P, ev.t_s - t0)
+        H = ev.model.jacobian(x)
+        S = H @ P @ H.T + ev.R
+        r = ev.model.residual(ev.z, ev.model.function(x))
+        d2 = float(r @ np.linalg.solve(S, r))
+        ev.accepted = d2 <= self._gate[3]
+        if not ev.accepted:
+            return ev.t_s, x, P
+        x, P = ExtendedKalmanUpdater(ev.model).update(x, P, ev.z, ev.R)
+        return ev.t_s, x, P
+
+    def _initial(self, ev: _Event) -> tuple[FloatArray, FloatArray]:
+        """State from one measurement: its inverse for the position (covariance through the
+        inverse Jacobian), course towards the vehicle's bearing unknown (sigma pi)."""
+        rbe = RangeBearingElevation()
+        J = ev.model.R_hn.T @ rbe.inverse_jacobian(ev.z)
+        x = np.zeros(N_STATES)
+        x[POS] = ev.model.head_ned + ev.model.R_hn.T @ rbe.inverse(ev.z)
+        x[SURGE] = self.cfg.initial_surge_mps
+        P = np.zeros((N_STATES, N_STATES))
+        P[POS, POS] = J @ ev.R @ J.T + 0.01 * np.eye(3)
+        P[COURSE, COURSE] = math.pi**2
+        P[COURSE_RATE, COURSE_RATE] = math.radians(self.cfg.initial_course_rate_sigma_dps) ** 2
+        P[SURGE, SURGE] = self.cfg.initial_surge_sigma_mps**2
+        P[HEAVE, HEAVE] = 0.05**2
+        return x, P
+
+    def _prune(self, t_keep_s: float) -> None:
+        """Fold events older than ``t_keep_s`` into the base state."""
+        n = 0
+        while n < len(self._events) and self._events[n].t_s < t_keep_s:
+            n += 1
+        if n == 0:
+            return
+        cp = self._last_before(n)
+        self._base = cp
+        del self._events[:n]
+        del self._checkpoints[:n]
