@@ -126,6 +126,10 @@ def vehicle_half_height_m(model: str) -> float:
 
 def placement_problems(scenario: Scenario) -> list[str]:
     """Every impossible placement in ``scenario``, one message each (empty if none)."""
+    if scenario.world.seabed.kind == "file":
+        from scenarios.bathymetry import bathymetry_problems
+
+        return bathymetry_problems(scenario)
     problems: list[str] = []
     relief = seabed_relief_m(scenario)
     basin = scenario.world.basin
