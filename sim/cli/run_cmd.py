@@ -7,7 +7,7 @@ import sys
 
 from scenarios.load import load_scenario
 from sim.cli.args import non_negative_int, positive_int
-from sim.cli.errors import EXIT_MISSION_ABORTED, EXIT_OK
+from sim.cli.errors import EXIT_MISSION_ABORTED, EXIT_OK, CliError
 from sim.cli.scenario_cmds import add_scenario_args
 
 
@@ -37,6 +37,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from sim.outputs.mission_outputs import run_mission
     from sim.outputs.run_dir import check_output_dir
 
+    if args.rosbag:
+        try:
+            import rosbags  # noqa: F401
+        except ImportError:
+            raise CliError("--rosbag: needs the rosbags package (pip install 'auvsim[rosbag]')") from None
     overrides = list(args.overrides)
     if args.seed is not None:
         overrides.append(f"seed={args.seed}")
