@@ -109,3 +109,41 @@ def euler_rate_matrix(roll_rad: float, pitch_rad: float) -> FloatArray:
     return np.array(
         [[1.0, sphi * tth, cphi * tth], [0.0, cphi, -sphi], [0.0, sphi / cth, cphi / cth]]
     )
+
+
+# -- ROS conventions (REP 103 / REP 105) -----------------------------------------------
+# ROS uses ENU world frames (x east, y north, z up) and FLU body frames (x forward, y left,
+# z up). Both conversions are fixed axis permutations/reflections, each its own inverse.
+
+#: (3, 3) maps NED vectors to ENU: ``v_enu = R_ENU_NED @ v_ned`` (swap x/y, negate z).
+R_ENU_NED: FloatArray = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
+#: (3, 3) maps FRD vectors to FLU: ``v_flu = R_FLU_FRD @ v_frd`` (negate y and z).
+R_FLU_FRD: FloatArray = np.diag([1.0, -1.0, -1.0])
+
+
+def enu_from_ned(v_ned: ArrayLike) -> FloatArray:
+    """World vectors/points (..., 3) from NED to ENU (m, m/s, ...): ``(y, x, -z)``."""
+    v = np.asarray(v_ned, dtype=float)
+    return v @ R_ENU_NED.T
+
+
+def flu_from_frd(v_frd: ArrayLike) -> FloatArray:
+    """Body vectors (..., 3) from FRD to FLU (velocities, rates, forces): ``(x, -y, -z)``."""
+    v = np.asarray(v_frd, dtype=float)
+    return v @ R_FLU_FRD.T
+
+
+def rot_enu_flu(R_nb: ArrayLike) -> FloatArray:
+    """(3, 3) FLU-body -> ENU rotation of a body whose FRD -> NED rotation is ``R_nb``."""
+    return R_ENU_NED @ np.asarray(R_nb, dtype=float) @ R_FLU_FRD
+
+
+def cov_enu_from_ned(cov_ned: ArrayLike) -> FloatArray:
+    """(3, 3) covariance of a NED vector expressed in ENU (m^2): ``A C A^T``."""
+    return R_ENU_NED @ np.asarray(cov_ned, dtype=float) @ R_ENU_NED.T
+
+
+def quat_xyzw(q_wxyz: ArrayLike) -> FloatArray:
+    """Scalar-last ``(x, y, z, w)`` order (ROS, rerun) of a scalar-first quaternion (4,)."""
+    w, x, y, z = np.asarray(q_wxyz, dtype=float)
+    return np.array([x, y, z, w])

@@ -256,11 +256,23 @@ def load_scenario(name_or_path: str | Path, overrides: list[str] | tuple[str, ..
                             "and a survey; start from a shipped one: auvsim validate cssn_lawnmower)")
     if not isinstance(data, dict):
         raise ScenarioError(f"{source}: top level must be a mapping of keys, got {type(data).__name__}")
+    _resolve_seabed_file(data, path.parent)
     data = apply_overrides(data, list(overrides), source)
     data.setdefault("name", path.stem)
     scenario = _validate(data, source, overrides)
     check_scenario(scenario, source, overrides)
     return scenario
+
+
+def _resolve_seabed_file(data: dict[str, Any], folder: Path) -> None:
+    """Make a relative ``world.seabed.file.path`` relative to the scenario file's folder."""
+    try:
+        f = data["world"]["seabed"]["file"]
+        p = Path(str(f["path"])).expanduser()
+    except (KeyError, TypeError):
+        return
+    if not p.is_absolute():
+        f["path"] = str(folder / p)
 
 
 def check_scenario(scenario: Scenario, source: str, overrides: list[str] | tuple[str, ...] = ()) -> None:

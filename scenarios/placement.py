@@ -165,6 +165,10 @@ def _survey_problems(scenario: Scenario, relief_m: float) -> list[str]:
 
 def placement_problems(scenario: Scenario) -> list[str]:
     """Every impossible placement in ``scenario``, one message each (empty if none)."""
+    if scenario.world.seabed.kind == "file":
+        from scenarios.bathymetry import bathymetry_problems
+
+        return bathymetry_problems(scenario)
     problems: list[str] = []
     relief = seabed_relief_m(scenario)
     basin = scenario.world.basin

@@ -70,10 +70,19 @@ class Seabed:
         return n / np.linalg.norm(n)
 
     def terrain_mesh(self) -> trimesh.Trimesh:
-        """Closed slab mesh (top = terrain, 1 m thick) for rough/ripple seabeds."""
+        """Slab mesh (top = terrain, 1 m thick below the deepest node) for mesh seabeds.
+
+        Closed for a complete grid; a grid with missing (NaN) nodes gets the terrain
+        triangles of its complete cells only (holes over nodata, no bottom or rim).
+
+        Raises:
+            ValueError: a plane seabed (no mesh).
+        """
         if not self.is_mesh:
             raise ValueError("plane seabeds have no terrain mesh")
         n, e, z = self.grid_n_m, self.grid_e_m, self.depth_grid_m
+        if not np.all(np.isfinite(z)):
+            return self._holed_terrain_mesh()
         nx, ny = z.shape
         nn, ee = np.meshgrid(n, e, indexing="ij")
         top = np.c_[nn.ravel(), ee.ravel(), z.ravel()]
@@ -93,6 +102,26 @@ class Seabed:
         trimesh.repair.fix_normals(mesh)
         return mesh
 
+    def _holed_terrain_mesh(self) -> trimesh.Trimesh:
+        """Terrain triangles (normals up, -z) of the grid cells whose four nodes hold depths."""
+        return _holed_terrain_mesh_impl(self.grid_n_m, self.grid_e_m, self.depth_grid_m)
+
+
+def _holed_terrain_mesh_impl(n: NDArray, e: NDArray, z: NDArray) -> trimesh.Trimesh:
+    nx, ny = z.shape
+    nn, ee = np.meshgrid(n, e, indexing="ij")
+    verts = np.c_[nn.ravel(), ee.ravel(), np.nan_to_num(z, nan=0.0).ravel()]
+    idx = np.arange(nx * ny).reshape(nx, ny)
+    ok = np.isfinite(z)
+    cell = (ok[:-1, :-1] & ok[1:, :-1] & ok[1:, 1:] & ok[:-1, 1:]).ravel()
+    a, b, c_, d = (idx[:-1, :-1].ravel()[cell], idx[1:, :-1].ravel()[cell], idx[1:, 1:].ravel()[cell],
+                   idx[:-1, 1:].ravel()[cell])
+    if not len(a):
+        raise ValueError("the depth grid has no complete cell to mesh")
+    mesh = trimesh.Trimesh(verts, np.vstack([np.c_[a, d, b], np.c_[b, d, c_]]), process=False)
+    mesh.remove_unreferenced_vertices()
+    return mesh
+
 
 def _gaussian_random_field(shape: tuple[int, int], spacing_m: float, rms_m: float, corr_m: float, rng: np.random.Generator) -> NDArray:
     white = rng.standard_normal(shape)
@@ -106,9 +135,26 @@ def _gaussian_random_field(shape: tuple[int, int], spacing_m: float, rms_m: floa
 
 
 def make_seabed(cfg: SeabedConfig, rng: np.random.Generator) -> Seabed:
-    """Build the seabed described by ``cfg`` (``rng`` draws rough-seabed heights)."""
+    """Build the seabed described by ``cfg`` (``rng`` draws rough-seabed heights).
+
+    ``kind: file`` reads the grid (:func:`scenarios.bathymetry.read_depth_grid`); the
+    returned seabed's ``cfg`` then gives the grid's square hull as ``extent_m`` /
+    ``center_ne_m`` and its median depth as ``depth_m``.
+
+    Raises:
+        scenarios.bathymetry.BathymetryError: an unusable bathymetry file.
+    """
     if cfg.kind in ("plane", "slope"):
         return Seabed(cfg)
+    if cfg.kind == "file":
+        from scenarios.bathymetry import read_depth_grid
+
+        g = read_depth_grid(cfg.file)
+        span = max(g.n_m[-1] - g.n_m[0], g.e_m[-1] - g.e_m[0])
+        centre = (0.5 * float(g.n_m[0] + g.n_m[-1]), 0.5 * float(g.e_m[0] + g.e_m[-1]))
+        resolved = cfg.model_copy(update={"extent_m": float(span), "center_ne_m": centre,
+                                          "depth_m": float(np.nanmedian(g.depth_m))})
+        return Seabed(resolved, g.n_m, g.e_m, g.depth_m)
     half = 0.5 * cfg.extent_m
     nx = max(int(round(cfg.extent_m / cfg.mesh_resolution_m)) + 1, 3)
     n = cfg.center_ne_m[0] + np.linspace(-half, half, nx)

@@ -132,7 +132,7 @@ def _add_seabed(spec: mujoco.MjSpec, seabed: Seabed) -> list[mujoco.MjsGeom]:
         contype=0, conaffinity=0, rgba=[0.55, 0.5, 0.4, 1.0],
     )
     half = 0.5 * cfg.extent_m
-    proxy_depth = float(np.max(seabed.depth_grid_m))
+    proxy_depth = float(np.nanmax(seabed.depth_grid_m))
     spec.worldbody.add_geom(
         name="seabed_collision", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[half, half, 1.0],
         pos=[center[0], center[1], proxy_depth], quat=[0.0, 1.0, 0.0, 0.0], group=COLLISION_PROXY_GROUP,

@@ -10,11 +10,36 @@ from scenarios.config.movers import MoverConfig
 from scenarios.config.base import NonNegFloat, PositiveFloat, Probability, StrictModel, Vec2, Vec3
 
 
-class SeabedConfig(StrictModel):
-    """Seabed surface. ``plane`` and ``slope`` are MuJoCo planes; ``rough`` and ``ripple``
-    are trimesh triangle meshes (never height fields: their ray casts are ~10x slower)."""
+class BathymetryFileConfig(StrictModel):
+    """A measured depth grid read from a file (``world.seabed.kind: file``).
 
-    kind: Literal["plane", "slope", "rough", "ripple"] = "plane"
+    Formats: a GeoTIFF in a projected CRS in metres (read with rasterio), an ASCII XYZ
+    point grid (``easting northing value`` per line, metres, a regular grid), or a NumPy
+    ``.npy`` 2-D array (rows northwards from ``origin_ne_m``, columns eastwards, every
+    ``spacing_m``). The grid is placed in the mission NED frame by ``origin_en_m``: the
+    projected (easting, northing) of the mission origin (GeoTIFF and XYZ).
+    """
+
+    path: str = Field(min_length=1, description="file path; relative paths start at the scenario file's folder")
+    format: Literal["auto", "geotiff", "xyz", "npy"] = Field("auto", description="auto: from the suffix")
+    values: Literal["depth", "elevation"] = Field(
+        "depth", description="depth: positive down (m); elevation: positive up, below sea level negative")
+    origin_en_m: Vec2 | None = Field(
+        None, description="projected (easting, northing) of the mission NED origin, m (GeoTIFF, XYZ)")
+    origin_ne_m: Vec2 = Field((0.0, 0.0), description=".npy: NED north/east of cell [0, 0], m")
+    spacing_m: PositiveFloat | None = Field(None, le=1000.0, description=".npy: grid spacing, m")
+    crop_ne_m: tuple[Vec2, Vec2] | None = Field(
+        None, description="keep ((north_min, north_max), (east_min, east_max)) in mission NED, m")
+    decimate: int = Field(1, ge=1, le=100, description="keep every n-th grid node")
+    nodata: float | None = Field(None, description="value marking missing cells (GeoTIFF: from the file)")
+
+
+class SeabedConfig(StrictModel):
+    """Seabed surface. ``plane`` and ``slope`` are MuJoCo planes; ``rough``, ``ripple`` and
+    ``file`` (a measured grid, :class:`BathymetryFileConfig`) are trimesh triangle meshes
+    (never height fields: their ray casts are ~10x slower)."""
+
+    kind: Literal["plane", "slope", "rough", "ripple", "file"] = "plane"
     depth_m: PositiveFloat = Field(
         4.0, le=11000.0, description="depth (m) of the mean seabed surface at center_ne_m, the patch centre "
         "(a slope passes through it; elsewhere the depth follows the slope)")
@@ -29,6 +54,13 @@ class SeabedConfig(StrictModel):
     center_ne_m: Vec2 = Field((0.0, 0.0), description="north/east centre (m) of the patch, where the depth is depth_m")
     mesh_resolution_m: PositiveFloat = Field(0.5, ge=0.05, le=10.0)
     reflectivity: Probability = 0.3
+    file: BathymetryFileConfig | None = Field(None, description="the depth grid of kind: file")
+
+    @model_validator(mode="after")
+    def _file_given(self) -> "SeabedConfig":
+        if (self.kind == "file") != (self.file is not None):
+            raise ValueError("world.seabed.file is required with kind: file and only allowed with it")
+        return self
 
 
 class BasinConfig(StrictModel):

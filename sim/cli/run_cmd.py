@@ -6,8 +6,8 @@ import argparse
 import sys
 
 from scenarios.load import load_scenario
-from sim.cli.args import non_negative_int
-from sim.cli.errors import EXIT_MISSION_ABORTED, EXIT_OK
+from sim.cli.args import non_negative_int, positive_int
+from sim.cli.errors import EXIT_MISSION_ABORTED, EXIT_OK, CliError
 from sim.cli.scenario_cmds import add_scenario_args
 
 
@@ -37,6 +37,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from sim.outputs.mission_outputs import run_mission
     from sim.outputs.run_dir import check_output_dir
 
+    if args.rosbag:
+        try:
+            import rosbags  # noqa: F401
+        except ImportError:
+            raise CliError("--rosbag: needs the rosbags package (pip install 'auvsim[rosbag]')") from None
     overrides = list(args.overrides)
     if args.seed is not None:
         overrides.append(f"seed={args.seed}")
@@ -45,7 +50,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     scenario = load_scenario(args.scenario, overrides)
     check_output_dir(args.out, kind="run", overwrite=args.overwrite)  # before the slow build
     metrics = run_mission(scenario, args.out, nav_source=args.nav, rerun=not args.no_rerun,
-                          overwrite=args.overwrite, progress=not args.quiet)
+                          overwrite=args.overwrite, progress=not args.quiet, rosbag=args.rosbag,
+                          rosbag_fls_every=args.rosbag_fls_every)
     print_summary(metrics, args.out)
     mission = metrics["mission"]
     if mission["aborted"]:
@@ -65,6 +71,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", required=True, help="output folder (new, or an earlier run with --overwrite)")
     p.add_argument("--seed", type=non_negative_int, default=None)
     p.add_argument("--no-rerun", action="store_true", help="skip the rerun recording")
+    p.add_argument("--rosbag", action="store_true",
+                   help="also write a ROS 2 bag (rosbag2 folder, MCAP storage) into OUT/rosbag")
+    p.add_argument("--rosbag-fls-every", type=positive_int, default=1, metavar="N",
+                   help="export every N-th sonar frame into the bag (default 1: all; frames are ~1 MB)")
     p.add_argument("--overwrite", action="store_true",
                    help="replace an earlier run's output folder (only a folder written by auvsim run)")
     p.add_argument("--nav", choices=["estimate", "truth"], default="estimate",

@@ -128,10 +128,12 @@ class _ProgressObserver:
 
 def run_mission(
     scenario: Scenario, out: str | Path, *, nav_source: str = "estimate", rerun: bool = True,
-    progress: bool = True, overwrite: bool = False,
+    progress: bool = True, overwrite: bool = False, rosbag: bool = False, rosbag_fls_every: int = 1,
 ) -> dict[str, Any]:
     """Run ``scenario`` and write metrics.json, trajectory.csv, world_model.json, map.png
-    (and recording.rrd) into ``out``. Returns the metrics.
+    (and recording.rrd; with ``rosbag``, a ROS 2 bag folder ``rosbag/`` in MCAP storage,
+    :class:`sim.ros2bag.recorder.RosbagRecorder`, every ``rosbag_fls_every``-th sonar frame)
+    into ``out``. Returns the metrics.
 
     Raises:
         OutputDirError: ``out`` is protected, a file, not creatable, or holds files that
@@ -147,6 +149,10 @@ def run_mission(
             from sim.outputs.rerun_recording import RerunRecorder
 
             observers.append(RerunRecorder(partial / "recording.rrd"))
+        if rosbag:
+            from sim.ros2bag.recorder import RosbagRecorder
+
+            observers.append(RosbagRecorder(partial / "rosbag", fls_every=rosbag_fls_every))
         mission = Mission(scenario, nav_source=nav_source, observers=observers)
         mission.observers.append(_ProgressObserver(MissionProgress(scenario.name, planned_length_s(mission),
                                                                    enabled=progress)))
