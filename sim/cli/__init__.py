@@ -11,9 +11,9 @@ from collections.abc import Sequence
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; returns the exit status (see :mod:`sim.cli.main`)."""
+    """Run the command line; returns the exit status (see :mod:`sim.cli.app`)."""
     try:
-        from sim.cli.main import main as run_main
+        from sim.cli.app import main as run_main
     except KeyboardInterrupt:
         print("auvsim: interrupted", file=sys.stderr)
         return 130

@@ -24,7 +24,7 @@ from sim.ros2bag.ros_messages import RosConverter  # noqa: E402
 from sim.ros2bag.typestore import make_typestore  # noqa: E402
 from sim.sensors.fls import FlsRender  # noqa: E402
 from sim.sensors.fls_presets import resolve_geometry  # noqa: E402
-from sim.trajectory_log import TrajectoryLog  # noqa: E402
+from sim.outputs.trajectory_log import TrajectoryLog  # noqa: E402
 
 DURATION_S = 8.0
 
