@@ -27,7 +27,7 @@ from sim.sensors.analytic_caster import AnalyticCaster, AnalyticSphere
 from sim.sensors.base import Mount, SceneView, Sensor
 from sim.sensors.registry import build_sensor, register_sensor, sensor_classes
 from sim.truth import VehicleTruth
-from tests.test_nav_kinematics import static_truth, wiggle_truth
+from tests.autonomy.navigation.test_kinematics import static_truth, wiggle_truth
 
 SEABED_DEPTH_M = 6.0
 MOUNT = Mount(np.array([0.3, -0.1, 0.15]))

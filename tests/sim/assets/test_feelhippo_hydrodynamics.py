@@ -24,7 +24,7 @@ import pytest
 import yaml
 from scipy.integrate import quad
 
-PARAMS_YAML = Path(__file__).resolve().parents[1] / "sim" / "assets" / "feelhippo" / "params.yaml"
+PARAMS_YAML = Path(__file__).resolve().parents[3] / "sim" / "assets" / "feelhippo" / "params.yaml"
 GRAVITY_MPS2 = 9.81
 
 

@@ -17,7 +17,7 @@ from scenarios.schema import SensorsConfig
 from sim.sensors.base import SceneView
 from sim.sensors.nav_noise import nav_noise_model
 from sim.sensors.nav_suite import build_nav_sensors
-from tests.test_nav_kinematics import flat_seabed, survey_truths
+from tests.autonomy.navigation.test_kinematics import flat_seabed, survey_truths
 
 MOUNTS = {"imu": np.zeros(3), "dvl": np.array([0.15, 0.0, 0.25]), "depth": np.array([-0.2, 0.0, 0.0]),
           "altimeter": np.array([0.2, 0.0, 0.25]), "gps": np.array([-0.1, 0.0, -0.4])}
