@@ -129,6 +129,23 @@ def test_motion_during_a_turn_shifts_the_wall_by_the_distance_travelled():
     shift = _first_return_m(renders[0]) - _first_return_m(renders[100])
     assert shift == pytest.approx(travelled, abs=2 * sensor.sample_spacing_m)
     assert travelled > 0.5  # the distortion is much larger than a sample
+    # the buffer places each echo with the pose of its own ping: the wall is straight again
+    from autonomy.messages import NavEstimate
+    from autonomy.msis.sonar_buffer import SonarBuffer
+
+    buf, static = SonarBuffer(threshold_u8=200, max_age_s=60.0), SonarBuffer(threshold_u8=200, max_age_s=60.0)
+    last = renders[-1].truth.pos_ned - sensor.mount_pos_body_m
+    for r in renders:
+        body = r.truth.pos_ned - sensor.mount_pos_body_m
+        nav = NavEstimate(r.ping.t_s, body, np.zeros(3), np.array([v_mps, 0, 0]), np.zeros(3), np.eye(3))
+        buf.add_ping(r.ping, nav)
+        static.add_ping(r.ping, NavEstimate(r.ping.t_s, last, np.zeros(3), np.zeros(3), np.zeros(3), np.eye(3)))
+    on_wall = lambda pts: pts[np.abs(pts[:, 1]) < 2.5]  # noqa: E731  (within ~17 deg of the wall normal)
+    comp, raw = on_wall(buf.points_ne()), on_wall(static.points_ne())
+    assert len(comp) >= 10
+    # up to D tan(theta) half-beamwidth short at theta off the normal: the beam's near edge echoes first
+    assert np.all(np.abs(comp[:, 0] - 8.0) < 0.05)
+    assert np.ptp(raw[:, 0]) > 0.8 * travelled
 
 
 def test_scan_image_places_the_wall_and_labels_its_pixels():
