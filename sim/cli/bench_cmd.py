@@ -20,6 +20,7 @@ BENCHES: dict[str, tuple[str, str, str]] = {
     "pmha": ("sim.bench_pmha", "run", "PMHA world-model update time"),
     "gym": ("sim.bench_gym", "run", "gymnasium environment step rate"),
     "atr": ("sim.evaluation.atr_metrics", "bench_atr", "ATR inference frame rate (CNN and classical)"),
+    "msis": ("sim.bench_msis", "run", "scanning sonar pings per second and feature-extraction cost per ping"),
 }
 
 
