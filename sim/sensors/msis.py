@@ -75,6 +75,11 @@ class MsisRender:
     ping: MsisPing
     truth: MsisPingTruth
 
+    @property
+    def t_s(self) -> float:
+        """Capture time of the ping, s."""
+        return self.ping.t_s
+
 
 @register_sensor(MsisConfig)
 class MsisSensor(Sensor[MsisRender]):
@@ -139,12 +144,16 @@ class MsisSensor(Sensor[MsisRender]):
 
     # -- sensor contract ------------------------------------------------------------------
     def ideal(self, truth: VehicleTruth, scene: SceneView) -> MsisRender:
-        """The noise-free ping at the head's next angle (the head steps)."""
+        """The noise-free ping at the head's next angle (the head does not step)."""
         return self.measure(truth, scene, noise=False)
 
     def measure(self, truth: VehicleTruth, scene: SceneView, *, noise: bool = True) -> MsisRender:
-        """Step the head and ping from the true pose at ``truth.t_s``."""
-        return self.render(truth.t_s, self.head.next_angle(), truth.point_ned(self.mount_pos_body_m), truth.R_nb,
+        """Step the head and ping from the true pose at ``truth.t_s``. ``noise=False`` returns
+        the exact ping at the angle the head would take next, drawing nothing and leaving the
+        head where it is (a query, as for every sensor); to sweep without noise, call
+        :meth:`render` with ``head.next_angle()``."""
+        angle = self.head.next_angle() if noise else self.head.peek_angle()
+        return self.render(truth.t_s, angle, truth.point_ned(self.mount_pos_body_m), truth.R_nb,
                            scene.require_caster("MsisSensor"), noise=noise)
 
     # -- public -----------------------------------------------------------------------------

@@ -48,6 +48,13 @@ class HeadSweep:
         """+1 clockwise, -1 anticlockwise (the direction of the next step)."""
         return self._direction
 
+    def peek_angle(self) -> float:
+        """The angle :meth:`next_angle` would give, without stepping."""
+        saved = (self._offset, self._direction, self._first)
+        angle = self.next_angle()
+        self._offset, self._direction, self._first = saved
+        return angle
+
     def next_angle(self) -> float:
         """Angle of the next ping, gradians in [0, 400); the first call gives the start."""
         if self._first:

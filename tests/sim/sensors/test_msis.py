@@ -110,20 +110,23 @@ def _truth(t_s, pos, yaw=0.0):
                         np.zeros(6), np.zeros(6), np.zeros(3))
 
 
+def _sweep_ping(sensor, truth, caster):
+    """The next ping of the sweep, noise-free (the head steps)."""
+    return sensor.render(truth.t_s, sensor.head.next_angle(), truth.point_ned(sensor.mount_pos_body_m), truth.R_nb,
+                         caster, noise=False)
+
+
 def _first_return_m(render, threshold=200):
     above = np.flatnonzero(render.ping.intensity >= threshold)
     return (above[0] + 0.5) * render.ping.sample_spacing_m if above.size else np.nan
 
 
 def test_motion_during_a_turn_shifts_the_wall_by_the_distance_travelled():
-    from sim.sensors.base import SceneView
-
     cfg = MsisConfig(range_m=10.0, step_grad=4, speckle="none")
     sensor = MsisSensor(cfg)
     caster = AnalyticCaster(None, boxes=(_wall_north(8.0),))
     v_mps, T = 0.3, cfg.ping_duration_s
-    renders = [sensor.measure(_truth(k * T, [v_mps * k * T, 0, 1.0]), SceneView(k * T, caster), noise=False)
-               for k in range(101)]
+    renders = [_sweep_ping(sensor, _truth(k * T, [v_mps * k * T, 0, 1.0]), caster) for k in range(101)]
     assert renders[0].ping.angle_grad == renders[100].ping.angle_grad == 0.0
     travelled = v_mps * 100 * T
     shift = _first_return_m(renders[0]) - _first_return_m(renders[100])
@@ -149,14 +152,12 @@ def test_motion_during_a_turn_shifts_the_wall_by_the_distance_travelled():
 
 
 def test_scan_image_places_the_wall_and_labels_its_pixels():
-    from sim.sensors.base import SceneView
-
     cfg = MsisConfig(range_m=10.0, step_grad=2, speckle="none", scan_image_px=200)
     sensor = MsisSensor(cfg)
     caster = AnalyticCaster(None, boxes=(_wall_north(5.0),))
     scan = ScanImage.for_sensor(sensor)
     for k in range(200):
-        scan.add(sensor.measure(_truth(0.0, [0, 0, 1.0]), SceneView(0.0, caster), noise=False))
+        scan.add(_sweep_ping(sensor, _truth(0.0, [0, 0, 1.0]), caster))
     assert len(scan.poses) == 200 and np.all(scan.polar_labels[:, 0] == NO_ECHO_ID)
     img, lab = scan.cartesian(), scan.cartesian_labels()
     c = 0.5 * (200 - 1)
@@ -167,6 +168,17 @@ def test_scan_image_places_the_wall_and_labels_its_pixels():
     assert np.all(lab[row_wall + 3: int(c) - 2, col] == NO_ECHO_ID)  # water between head and wall
     # behind the head (south) there is no wall
     assert not np.any(lab[int(c) + 5:, col] == WALL_ID)
+
+
+def test_measure_steps_the_head_and_an_exact_query_does_not():
+    from sim.sensors.base import SceneView
+
+    sensor = MsisSensor(MsisConfig(range_m=10.0, step_grad=5))
+    scene = SceneView(0.0, AnalyticCaster(None, boxes=(_wall_north(5.0),)))
+    angles = [sensor.measure(_truth(0.0, [0, 0, 1.0]), scene).ping.angle_grad for _ in range(3)]
+    exact = sensor.measure(_truth(0.0, [0, 0, 1.0]), scene, noise=False)
+    assert angles == [0.0, 5.0, 10.0] and exact.ping.angle_grad == 15.0
+    assert sensor.measure(_truth(0.0, [0, 0, 1.0]), scene).ping.angle_grad == 15.0
 
 
 def test_registered_by_kind():
