@@ -120,3 +120,40 @@ class NavEstimate:
     cov_pos_ned: FloatArray  # (3, 3) position covariance, m^2
     cov_yaw_rad2: float = 0.0
     altitude_m: float = float("nan")
+
+
+@dataclass(frozen=True, slots=True)
+class MsisPing:
+    """One ping of a mechanically scanned imaging sonar (Ping360 ``device_data``-like).
+
+    Sample ``k`` covers slant range ``[k, k + 1) * sample_spacing_m`` from the head along the
+    beam at ``angle_grad`` (gradians, 400 per turn, 0 = the mount's boresight, clockwise seen
+    from above). ``mount_*`` give the head's fixed extrinsics on the hull ([P002], [Ping360]).
+    """
+
+    t_s: float
+    angle_grad: float
+    step_grad: int
+    sample_period_ticks: int  # 25 ns ticks
+    sample_spacing_m: float  # c * 25 ns * sample_period / 2
+    transmit_duration_us: float
+    speed_of_sound_mps: float
+    intensity: NDArray[np.uint8]  # (number_of_samples,)
+    mount_pos_body_m: FloatArray  # (3,) FRD offset of the head from the body origin
+    mount_rpy_rad: FloatArray  # (3,) head frame at angle 0 w.r.t. body (tilt is the pitch, down > 0)
+
+    @property
+    def angle_rad(self) -> float:
+        """Head angle, rad (clockwise seen from above, starboard > 0)."""
+        return float(self.angle_grad) * (np.pi / 200.0)
+
+
+@dataclass(frozen=True, slots=True)
+class PositionFixMsg:
+    """A horizontal position fix of the body origin with its covariance (feature-based
+    localisation, e.g. a pool's circle or a tank's walls)."""
+
+    t_s: float
+    pos_ne_m: FloatArray  # (2,) north, east of the body origin, mission NED frame
+    cov_ne_m2: FloatArray  # (2, 2)
+    source: str = ""

@@ -12,6 +12,7 @@ from autonomy.atr.config import AtrConfig
 from autonomy.control.config import ControlConfig
 from autonomy.guidance.config import GuidanceConfig
 from autonomy.localization.config import LocalizationConfig
+from autonomy.msis.config import MsisLocalizationConfig
 from autonomy.navigation.config import NavigationConfig
 from autonomy.world_model.config import WorldModelConfig
 from scenarios.config.base import StrictModel
@@ -121,6 +122,7 @@ class AutonomyConfig(StrictModel):
     atr: AtrConfig = AtrConfig()
     localization: LocalizationConfig = LocalizationConfig()
     world_model: WorldModelConfig = WorldModelConfig()
+    msis_localization: MsisLocalizationConfig = MsisLocalizationConfig()
 
 
 class Scenario(StrictModel):

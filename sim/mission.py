@@ -150,6 +150,9 @@ class Mission:
         self._by_source: dict[str, Callable[[Any, NavEstimate], Any]] = {}
         if parts.perception is not None:
             self._by_source[parts.sonar.name] = parts.perception.process
+        for name, process in parts.processors.items():
+            getattr(process, "reset", lambda: None)()
+            self._by_source[name] = process
         parts.guidance.start(init_pos[:2], float(init_rpy[2]))
         parts.fsm.reset()
         parts.autopilot.reset()
@@ -248,6 +251,9 @@ class Mission:
         process = self._by_source.get(name)
         with timer.stage("perception"):
             result = process(msg, self.nav_filter.estimate()) if process is not None else None
+        with timer.stage("nav_filter"):
+            for handler in self._by_type.get(type(result), ()) if result is not None else ():
+                handler(result)  # onboard results the filter fuses (position fixes)
         with timer.stage("observers"):
             for obs in self.observers:
                 obs.on_message(name, msg)

@@ -9,7 +9,9 @@ thrust allocation and, for the first forward-looking sonar, perception).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -18,10 +20,12 @@ from autonomy.control.allocation import ThrustAllocator
 from autonomy.control.autopilot import Autopilot
 from autonomy.guidance.mission import MissionFsm
 from autonomy.guidance.survey import SurveyGuidance
+from autonomy.msis.localization import MsisLocalizer
 from autonomy.navigation import NavigationFilter, NavNoiseModel
 from scenarios.schema import Scenario
 from sim.perception import Perception
 from sim.physics import Physics
+from sim.rng import component_rng
 from sim.scheduler import SensorScheduler
 from sim.sensors.base import Sensor
 from sim.sensors.nav_noise import nav_noise_model
@@ -47,6 +51,8 @@ class MissionParts:
         waypoints_ne: (k, 2) survey plan, m.
         sonar: the sonar perception runs on (None: no forward-looking sonar).
         perception: ATR -> geolocalisation -> world model on ``sonar``'s frames (or None).
+        processors: sensor name -> onboard processing of its messages ``(msg, nav) -> result``;
+            a result the navigation filter handles (a position fix) is fused.
     """
 
     seed: int
@@ -61,12 +67,27 @@ class MissionParts:
     waypoints_ne: NDArray[np.float64]
     sonar: Sensor | None
     perception: Perception | None
+    processors: dict[str, Callable[[Any, Any], Any]] = field(default_factory=dict)
 
     def make_nav_filter(self, scenario: Scenario) -> NavigationFilter:
         """A fresh navigation filter at the scenario's start pose."""
         return NavigationFilter(scenario.autonomy.navigation, np.asarray(scenario.vehicle.initial_pos_ned, dtype=float),
                                 float(np.deg2rad(scenario.vehicle.initial_rpy_deg[2])), self.nav_noise,
                                 mounts=self.nav_mounts)
+
+
+class MsisPingProcessor:
+    """Onboard processing of a scanning sonar's renders: the ping (never its truth) goes to
+    the localiser, which may return a position fix."""
+
+    def __init__(self, localizer: MsisLocalizer) -> None:
+        self.localizer = localizer
+
+    def __call__(self, render: Any, nav: Any) -> Any:
+        return self.localizer.process(render.ping, nav)
+
+    def reset(self) -> None:
+        self.localizer.reset()
 
 
 def build_mission_parts(scenario: Scenario, physics: Physics, seed: int, *, nav_source: str = "estimate",
@@ -107,7 +128,13 @@ def build_mission_parts(scenario: Scenario, physics: Physics, seed: int, *, nav_
     fsm = MissionFsm(auto.guidance.mission, guidance)
     perceive = (Perception(scenario, sonar, physics.world.seabed, waypoints_ne, nav_source=nav_source)
                 if sonar is not None and perception else None)
+    processors: dict[str, Callable[[Any, Any], Any]] = {}
+    msis = first.get("msis")
+    if msis is not None and auto.msis_localization.method != "none":
+        localizer = MsisLocalizer(auto.msis_localization, component_rng(seed, f"{msis.name}_localizer"))
+        processors[msis.name] = MsisPingProcessor(localizer)
     return MissionParts(
+        processors=processors,
         seed=int(seed), sensors=sensors, scheduler=scheduler, nav_noise=nav_noise, nav_mounts=nav_mounts,
         guidance=guidance, fsm=fsm, autopilot=Autopilot(auto.control),
         allocator=ThrustAllocator.from_layout(physics.params.layout), waypoints_ne=waypoints_ne, sonar=sonar,

@@ -30,7 +30,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from autonomy.estimation.measurement import PositionFix, RangeBearingElevation
 from autonomy.frames import cross3, euler_rate_matrix, rot_from_euler, rot_x, rot_y, rot_z, wrap_angle
-from autonomy.messages import AltimeterMsg, DepthMsg, DvlMsg, GpsMsg, ImuMsg, NavEstimate, UsblMsg
+from autonomy.messages import AltimeterMsg, DepthMsg, DvlMsg, GpsMsg, ImuMsg, NavEstimate, PositionFixMsg, UsblMsg
 from autonomy.navigation.config import NavigationConfig
 from autonomy.navigation.noise_model import NavNoiseModel
 
@@ -331,10 +331,24 @@ class NavigationFilter:
         residual = model.residual(z, predicted)
         return self._update(residual, H, model.covar(msg.range_m), self.cfg.usbl_gate_chi2)
 
+    def on_position_fix(self, msg: PositionFixMsg) -> bool:
+        """North/east fix of the body origin with its own covariance (feature-based localisation,
+        e.g. a scanning sonar in a known pool). Returns whether it was applied (EKF mode; no
+        innovation gate: the fixes come out of their own outlier rejection)."""
+        if self.cfg.mode != "ekf":
+            return False
+        self.predict(msg.t_s)
+        model = PositionFix(3, (0, 1), np.asarray(msg.cov_ne_m2, dtype=float).reshape(2, 2))
+        H = np.zeros((2, N_STATES))
+        H[:, POS] = model.jacobian()
+        return self._update(model.residual(np.asarray(msg.pos_ne_m, dtype=float), model.function(self._x[POS])), H,
+                            model.covar(), None)
+
     def message_handlers(self) -> dict[type, Callable[[Any], Any]]:
         """Message type -> the method that fuses it (what a message bus dispatches on)."""
         return {ImuMsg: self.on_imu, DvlMsg: self.on_dvl, DepthMsg: self.on_depth,
-                AltimeterMsg: self.on_altimeter, GpsMsg: self.on_gps, UsblMsg: self.on_usbl}
+                AltimeterMsg: self.on_altimeter, GpsMsg: self.on_gps, UsblMsg: self.on_usbl,
+                PositionFixMsg: self.on_position_fix}
 
     # ------------------------------------------------------------------ output
     def estimate(self) -> NavEstimate:

@@ -107,6 +107,8 @@ def build_map_figure(
     estimates: Sequence[tuple[str, NDArray, NDArray]] = (),
     rejected_ned: Sequence[NDArray] = (),
     title: str = "",
+    overlay=None,
+    extent_points_ne: NDArray | None = None,
 ):
     """Plan-view map as a matplotlib ``Figure`` on an Agg canvas (no pyplot state to close).
 
@@ -119,6 +121,9 @@ def build_map_figure(
             their 2-sigma horizontal ellipse.
         rejected_ned: (3,) NED positions of world-model objects classified as not-targets.
         title: figure title.
+        overlay: optional ``draw(ax)`` adding artists (x east, y north, metres; labelled
+            artists join the legend; their points do not change the extent).
+        extent_points_ne: (m, 2) more north/east points the map must show (an overlay's).
 
     Returns:
         matplotlib.figure.Figure, its size set from the map's aspect (``axes_size_in``) plus
@@ -140,6 +145,8 @@ def build_map_figure(
     pts += [np.asarray(p, dtype=float)[None, :2] for _, p, _ in targets]
     pts += [np.asarray(p, dtype=float)[None, :2] for _, p, _ in estimates]
     pts += [np.asarray(p, dtype=float)[None, :2] for p in rejected_ned]
+    if extent_points_ne is not None:
+        pts.append(np.asarray(extent_points_ne, dtype=float).reshape(-1, 2))
     (n0, n1), (e0, e1) = map_extent_ne(np.concatenate(pts, axis=0))
 
     ax_w, ax_h = axes_size_in(e1 - e0, n1 - n0)
@@ -191,6 +198,8 @@ def build_map_figure(
         ax.plot(ne[:, 1], ne[:, 0], ls="none", mec="white", mew=0.7,
                 label=STYLES["wm_not_target"].label, **style("wm_not_target"))
 
+    if overlay is not None:
+        overlay(ax)
     ax.set_xlim(e0, e1)
     ax.set_ylim(n0, n1)
     ax.set_aspect("equal", adjustable="box")

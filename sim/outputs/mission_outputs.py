@@ -154,12 +154,25 @@ def run_mission(
 
             observers.append(RosbagRecorder(partial / "rosbag", fls_every=rosbag_fls_every))
         mission = Mission(scenario, nav_source=nav_source, observers=observers)
+        msis = next(iter(p for p in mission.parts.processors.values() if hasattr(p, "localizer")), None)
+        if msis is not None:
+            from sim.msis_evaluation import LocalizationErrorObserver
+
+            msis_obs = LocalizationErrorObserver(mission)
+            mission.observers.append(msis_obs)
         mission.observers.append(_ProgressObserver(MissionProgress(scenario.name, planned_length_s(mission),
                                                                    enabled=progress)))
         mission.reset()
         mission.run(progress=False)
 
         metrics = collect_metrics(mission, log)
+        overlay = extent = None
+        if msis is not None and msis_obs.err_fused_m:
+            from sim.outputs.msis_overlay import basin_outline_ne, msis_overlay
+
+            metrics["msis_localization"] = msis_obs.rms()
+            overlay = msis_overlay(msis_obs, scenario.world.basin, msis.localizer)
+            extent = basin_outline_ne(scenario.world.basin)
         log.write_csv(partial / "trajectory.csv")
         estimates, rejected = [], []
         if mission.perception is not None:
@@ -174,6 +187,7 @@ def run_mission(
             targets=[(o.name, o.centroid_ned, o.is_target) for o in mission.world.objects],
             estimates=estimates, rejected_ned=rejected,
             title=f"{scenario.name} seed {mission.seed} (nav: {nav_source})" + _outcome_suffix(metrics),
+            overlay=overlay, extent_points_ne=extent,
         )
         write_json(partial / "metrics.json", metrics, decimals=METRICS_DECIMALS)
         staged.commit()

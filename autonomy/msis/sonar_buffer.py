@@ -1,0 +1,123 @@
+"""The sonar buffer of [P002] section 3.1: echo points of recent pings, motion-compensated.
+
+Each ping gives its echo ranges above an intensity threshold (the first strong return, or all
+local peaks); each is placed where the head saw it, with the navigation estimate of the ping
+time (extrapolated from the estimate's own time with its velocity): body point
+``mount + R_bs Rz(angle) [r, 0, 0]`` (the head frame of :mod:`autonomy.sonar_frame` turned by
+the head angle), then ``pos + R(rpy) p_body`` in NED. Points older than ``max_age_s`` age out.
+Stored in the navigation frame, the points are the vehicle-centred consistent local map of the
+paper expressed once: :meth:`SonarBuffer.points_body` gives them about the current pose.
+Motion during a sweep is thus removed as well as the navigation estimate allows.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+
+import numpy as np
+from numpy.typing import NDArray
+
+from autonomy.frames import rot_from_euler, rot_z
+from autonomy.messages import MsisPing, NavEstimate
+from autonomy.sonar_frame import sonar_to_body_rotation
+
+FloatArray = NDArray[np.float64]
+
+
+def echo_ranges_m(ping: MsisPing, threshold_u8: int, min_range_m: float, mode: str = "first",
+                  min_gap_m: float = 0.3) -> FloatArray:
+    """Slant ranges (m, sample centres) of a ping's echoes.
+
+    ``first``: the first sample at or above ``threshold_u8`` beyond ``min_range_m`` (at most
+    one); ``peaks``: every local maximum at or above it, at least ``min_gap_m`` apart (the
+    strongest kept first).
+
+    Raises:
+        ValueError: an unknown mode.
+    """
+    x = ping.intensity
+    dr = ping.sample_spacing_m
+    k0 = int(np.ceil(min_range_m / dr))
+    if mode == "first":
+        above = np.flatnonzero(x[k0:] >= threshold_u8)
+        return (np.array([above[0] + k0]) + 0.5) * dr if above.size else np.zeros(0)
+    if mode != "peaks":
+        raise ValueError(f"mode must be 'first' or 'peaks', got {mode!r}")
+    xi = x.astype(np.int16)
+    k = np.arange(max(k0, 1), len(x) - 1)
+    cand = k[(xi[k] >= threshold_u8) & (xi[k] >= xi[k - 1]) & (xi[k] > xi[k + 1])]
+    gap = max(int(round(min_gap_m / dr)), 1)
+    kept: list[int] = []
+    for c in cand[np.argsort(-xi[cand], kind="stable")]:
+        if all(abs(int(c) - j) >= gap for j in kept):
+            kept.append(int(c))
+    return (np.sort(np.array(kept, dtype=float)) + 0.5) * dr
+
+
+class SonarBuffer:
+    """Echo points of recent pings in the navigation (NED) frame.
+
+    Args:
+        threshold_u8: echo threshold on the raw samples.
+        min_range_m: samples nearer than this are ignored (ringing, the vehicle's own frame).
+        max_age_s: points older than this age out.
+        mode: ``first`` or ``peaks`` (:func:`echo_ranges_m`).
+    """
+
+    def __init__(self, threshold_u8: int = 200, min_range_m: float = 0.75, max_age_s: float = 30.0,
+                 mode: str = "first") -> None:
+        self.threshold_u8 = int(threshold_u8)
+        self.min_range_m = float(min_range_m)
+        self.max_age_s = float(max_age_s)
+        self.mode = mode
+        self._pts: deque[tuple[float, float, float, int]] = deque()  # (t_s, north, east, ping index)
+        self._n_pings = 0
+        self._R_head: dict[tuple, FloatArray] = {}
+
+    def __len__(self) -> int:
+        return len(self._pts)
+
+    def clear(self) -> None:
+        self._pts.clear()
+
+    def add_ping(self, ping: MsisPing, nav: NavEstimate) -> int:
+        """Add a ping's echoes with the navigation estimate ``nav`` (extrapolated to the ping
+        time); age out old points. Returns the number of points added."""
+        self._n_pings += 1
+        ranges = echo_ranges_m(ping, self.threshold_u8, self.min_range_m, self.mode)
+        self.age_out(ping.t_s)
+        if ranges.size == 0:
+            return 0
+        key = (float(ping.angle_grad), *np.asarray(ping.mount_rpy_rad, dtype=float).tolist())
+        R_bh = self._R_head.get(key)
+        if R_bh is None:
+            R_bh = sonar_to_body_rotation(ping.mount_rpy_rad) @ rot_z(ping.angle_rad)
+            self._R_head[key] = R_bh
+        R_nb = rot_from_euler(*nav.rpy_rad)
+        pos = np.asarray(nav.pos_ned, dtype=float) + R_nb @ np.asarray(nav.vel_body_mps) * (ping.t_s - nav.t_s)
+        p_body = np.asarray(ping.mount_pos_body_m)[None, :] + ranges[:, None] * R_bh[:, 0][None, :]
+        p_ned = pos[None, :] + p_body @ R_nb.T
+        for q in p_ned:
+            self._pts.append((float(ping.t_s), float(q[0]), float(q[1]), self._n_pings))
+        return len(ranges)
+
+    def age_out(self, t_s: float) -> None:
+        while self._pts and self._pts[0][0] < t_s - self.max_age_s:
+            self._pts.popleft()
+
+    def points_ne(self) -> FloatArray:
+        """(N, 2) north, east of the points in ping order, m."""
+        if not self._pts:
+            return np.zeros((0, 2))
+        return np.array([(p[1], p[2]) for p in self._pts])
+
+    def times_s(self) -> FloatArray:
+        """(N,) ping times of the points, s."""
+        return np.array([p[0] for p in self._pts])
+
+    def points_body(self, nav: NavEstimate) -> FloatArray:
+        """(N, 2) the points about the current pose: forward, starboard of the body origin
+        (horizontal, heading only), m."""
+        d = self.points_ne() - np.asarray(nav.pos_ned[:2])[None, :]
+        c, s = np.cos(nav.rpy_rad[2]), np.sin(nav.rpy_rad[2])
+        return np.column_stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]])

@@ -1,0 +1,91 @@
+"""Localisation error of a scanning-sonar mission against dead reckoning in the same run.
+
+:class:`LocalizationErrorObserver` feeds a second navigation filter with every message the
+mission's filter gets except the sonar position fixes (:class:`autonomy.messages.PositionFixMsg`):
+the dead reckoning of the same run, same sensor noise, same path. At each step it records the
+horizontal error of both against the true body position.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from autonomy.messages import PositionFixMsg
+from autonomy.msis.localization import tank_walls
+from sim.records import MissionInfo, MissionSummary, StepRecord
+
+
+@dataclass
+class LocalizationErrorObserver:
+    """Horizontal errors (m) of the mission's estimate and of a fix-free shadow filter.
+
+    Args:
+        mission: the :class:`sim.mission.Mission` observed (its parts build the shadow filter).
+        t_start_s: errors are recorded from this time on.
+    """
+
+    mission: object
+    t_start_s: float = 0.0
+    t_s: list[float] = field(default_factory=list)
+    err_fused_m: list[float] = field(default_factory=list)
+    err_dr_m: list[float] = field(default_factory=list)
+    fixes: list[PositionFixMsg] = field(default_factory=list)
+    dr_path_ne: list[np.ndarray] = field(default_factory=list)
+    wall_angle_err_deg: dict[int, list[float]] = field(default_factory=dict)
+
+    def on_start(self, info: MissionInfo) -> None:
+        self._dr = self.mission.parts.make_nav_filter(info.scenario)
+        self._handlers = {t: h for t, h in self._dr.message_handlers().items() if t is not PositionFixMsg}
+
+    def on_message(self, name: str, msg) -> None:
+        if isinstance(msg, PositionFixMsg):
+            self.fixes.append(msg)
+            self._note_walls(name)
+            return
+        h = self._handlers.get(type(msg))
+        if h is not None:
+            h(msg)
+
+    def on_step(self, rec: StepRecord) -> None:
+        self._dr.predict(rec.t_s)
+        dr = self._dr.estimate().pos_ned[:2]
+        self.dr_path_ne.append(dr.copy())
+        if rec.t_s < self.t_start_s:
+            return
+        true = rec.truth.pos_ned[:2]
+        self.t_s.append(rec.t_s)
+        self.err_fused_m.append(float(np.linalg.norm(rec.nav.pos_ned[:2] - true)))
+        self.err_dr_m.append(float(np.linalg.norm(dr - true)))
+
+    def on_end(self, summary: MissionSummary) -> None:
+        pass
+
+    def _note_walls(self, name: str) -> None:
+        """Angle error (deg) of each fuzzy segment of the latest wall fix against the true wall
+        it lies along (normal within 10 deg, offset within 1 m), per wall index."""
+        proc = self.mission.parts.processors.get(name)
+        loc = getattr(proc, "localizer", None)
+        if loc is None or loc.cfg.method != "walls":
+            return
+        basin = self.mission.scenario.world.basin
+        walls = tank_walls(np.asarray(basin.center_ne_m, float), np.asarray(basin.size_ne_m, float))
+        for s in loc.last_segments:
+            for i, (n_w, c_w) in enumerate(walls):
+                n_s, rho = s.normal, s.rho_m
+                if n_s @ n_w < 0.0:
+                    n_s, rho = -n_s, -rho
+                if n_s @ n_w > np.cos(np.radians(10.0)) and abs(rho - c_w) < 1.0:
+                    ang = np.degrees(np.arctan2(n_s[0] * n_w[1] - n_s[1] * n_w[0], n_s @ n_w))
+                    self.wall_angle_err_deg.setdefault(i, []).append(float(abs(ang)))
+                    break
+
+    def rms(self) -> dict[str, float]:
+        """RMS and final horizontal errors (m) of the fused estimate and of dead reckoning."""
+        f, d = np.asarray(self.err_fused_m), np.asarray(self.err_dr_m)
+        walls = {f"wall{i}_median_angle_err_deg": float(np.median(v)) for i, v in sorted(self.wall_angle_err_deg.items())}
+        walls.update({f"wall{i}_max_angle_err_deg": float(np.max(v)) for i, v in sorted(self.wall_angle_err_deg.items())})
+        walls.update({f"wall{i}_seen_fixes": len(v) for i, v in sorted(self.wall_angle_err_deg.items())})
+        return {**walls, "rms_fused_m": float(np.sqrt(np.mean(f ** 2))), "rms_dead_reckoning_m": float(np.sqrt(np.mean(d ** 2))),
+                "final_fused_m": float(f[-1]), "final_dead_reckoning_m": float(d[-1]), "n_fixes": len(self.fixes)}
