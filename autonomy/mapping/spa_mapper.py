@@ -209,21 +209,8 @@ class SpaMapper:
         veh = self._object_frame_particles()
         rel = self._relevant(veh)
         k_r = len(rel)
-        sig2 = cfg.sigma_meas_m ** 2
-        norm = 1.0 / (2.0 * np.pi * sig2)
         if k_r and m_n:
-            perm = self.rng.permutation(n)
-            vp, vpsi = veh[perm, :2], heading_rad(veh[perm])
-            L = rotate_to_local(self.X[rel] - vp[None], vpsi[None])  # (Kr, N, 2)
-            inside = self._in_tile(L)
-            d2 = ((ell[None, None, :, :] - L[:, :, None, :]) ** 2).sum(-1)  # (Kr, N, M)
-            f_l = norm * np.exp(-0.5 * d2 / sig2)
-            cls = np.einsum("kic,mc->kim", self.W[rel], f_pi)  # (Kr, N, M)
-            rr = self.r[rel]
-            beta = np.empty((k_r, m_n + 1))
-            beta[:, 1:] = rr[:, None] * cfg.pd * ratio * np.einsum("ki,kim->km", inside, f_l * cls)
-            miss = (self.W[rel].sum(-1) * (1.0 - cfg.pd * inside)).sum(1)
-            beta[:, 0] = (1.0 - rr) + rr * miss
+            beta = self.association_weights(rel, veh, ell, f_pi)
             bp = loopy_bp(beta, xi, tol=cfg.bp_tol)
             nu, phi_sum = bp.nu, bp.phi.sum(axis=0)
             self.last_association = bp
@@ -237,6 +224,35 @@ class SpaMapper:
         self._add_new(veh, ell, f_pi, xi, phi_sum)
         keep = self.r >= cfg.prune_threshold
         self.r, self.X, self.W = self.r[keep], self.X[keep], self.W[keep]
+
+    def association_weights(self, rel: NDArray[np.intp], veh: FloatArray, ell: FloatArray, f_pi: FloatArray
+                            ) -> FloatArray:
+        """Association weights ``beta`` (Kr, M + 1) of POs ``rel`` (paper 003, messages from
+        ``q_k`` to ``a_k``): column 0 ``(1 - r) + r E[1 - P_d]``, column m
+        ``r pd E[in tile f(ell_m | x, s) f(pi_m | c)] / (mu_0 f_FA(z_m))``, expectations over the
+        PO particles paired with a random permutation of the vehicle particles ``veh`` (N, 5).
+
+        Args:
+            rel: (Kr,) PO indices; veh: (N, 5) vehicle states; ell: (M, 2) detections (vehicle
+                frame, m); f_pi: (M, C) class likelihoods ``f(pi_m | c)``.
+        """
+        cfg = self.cfg
+        n, m_n = cfg.n_particles, len(ell)
+        sig2 = cfg.sigma_meas_m ** 2
+        ratio = self.tile_area_m2 / cfg.clutter_mean
+        perm = self.rng.permutation(n)
+        vp, vpsi = veh[perm, :2], heading_rad(veh[perm])
+        L = rotate_to_local(self.X[rel] - vp[None], vpsi[None])  # (Kr, N, 2)
+        inside = self._in_tile(L)
+        d2 = ((ell[None, None, :, :] - L[:, :, None, :]) ** 2).sum(-1)  # (Kr, N, M)
+        f_l = np.exp(-0.5 * d2 / sig2) / (2.0 * np.pi * sig2)
+        cls = np.einsum("kic,mc->kim", self.W[rel], f_pi)  # (Kr, N, M)
+        rr = self.r[rel]
+        beta = np.empty((len(rel), m_n + 1))
+        beta[:, 1:] = rr[:, None] * cfg.pd * ratio * np.einsum("ki,kim->km", inside, f_l * cls)
+        miss = (self.W[rel].sum(-1) * (1.0 - cfg.pd * inside)).sum(1)
+        beta[:, 0] = (1.0 - rr) + rr * miss
+        return beta
 
     def _relevant(self, veh: FloatArray) -> NDArray[np.intp]:
         """POs whose belief may reach the tile (mean within the tile grown by 3 sigma + 10 m)."""

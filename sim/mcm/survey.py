@@ -63,6 +63,8 @@ class McmSurveyConfig(StrictModel):
     varsigma_p: float = Field(7.5, ge=0.0)
     varsigma_h_deg_per_sqrt_h: float = Field(0.6, ge=0.0)
     n_particles: int = Field(1000, ge=10, le=100000)
+    sigma_lin_mps2: float = Field(0.5, ge=0.0, description="mapper's NCT process noise, linear")
+    sigma_ang_degps2: float = Field(20.0, ge=0.0, description="mapper's NCT process noise, angular")
     confirm_threshold: float = Field(0.8, gt=0.0, lt=1.0)
     modes: tuple[MapperMode, ...] = MODES
     gospa_cutoff_m: float = Field(50.0, gt=0.0)
@@ -89,7 +91,8 @@ class McmSurveyConfig(StrictModel):
             class_beta_2=self.class_beta_2, sigma_meas_m=self.sigma_meas_m,
             clutter_mean=max(self.clutter_mean, 1e-6), tile_length_m=self.tile_length_m,
             tile_width_m=self.tile_width_m, tile_near_m=self.tile_near_m, varsigma_p=self.varsigma_p,
-            varsigma_h_deg_per_sqrt_h=self.varsigma_h_deg_per_sqrt_h, confirm_threshold=self.confirm_threshold)
+            varsigma_h_deg_per_sqrt_h=self.varsigma_h_deg_per_sqrt_h, confirm_threshold=self.confirm_threshold,
+            sigma_lin_mps2=self.sigma_lin_mps2, sigma_ang_degps2=self.sigma_ang_degps2)
 
 
 class LawnmowerPath:
