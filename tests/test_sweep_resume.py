@@ -49,6 +49,19 @@ def test_bad_input_exits_2(tmp_path, capsys, argv, needle):
     assert not (tmp_path / "s").exists()
 
 
+def test_ray_address_that_does_not_answer_exits_2(tmp_path, capsys):
+    import socket
+
+    sock = socket.socket()
+    sock.bind(("127.0.0.1", 0))
+    port = sock.getsockname()[1]
+    sock.close()  # a free port: nothing listens there
+    code = main(["sweep", "mcm_survey", "--runs", "1", "--out", str(tmp_path / "s"), "--no-progress",
+                 "--ray", f"127.0.0.1:{port}"])
+    assert code == 2 and "no Ray cluster answers" in capsys.readouterr().err
+    assert not (tmp_path / "s").exists()
+
+
 def test_unknown_scenario_is_a_sweep_error(tmp_path):
     with pytest.raises(SweepError, match="sweepable"):
         run_sweep(tmp_path / "x", SweepSpec("nope", 1, 0, {}), progress=False)

@@ -109,6 +109,26 @@ def _write_atomic(path: Path, text: str) -> None:
     os.replace(tmp, path)
 
 
+def probe_ray_address(address: str, timeout_s: float = 3.0) -> None:
+    """Fail fast when a Ray head does not answer at ``host:port`` (``ray://host:port``);
+    ``auto`` and addresses without a port are left to Ray.
+
+    Raises:
+        SweepError: nothing accepts a TCP connection there within ``timeout_s``.
+    """
+    import socket
+
+    hostport = address.split("://", 1)[-1]
+    host, sep, port = hostport.rpartition(":")
+    if not sep or not port.isdigit() or address == "auto":
+        return
+    try:
+        socket.create_connection((host or "127.0.0.1", int(port)), timeout=timeout_s).close()
+    except OSError as exc:
+        raise SweepError(f"--ray {address}: no Ray cluster answers there ({exc.strerror or exc}); "
+                         "start one with `ray start --head` or omit the address for a local instance") from None
+
+
 def _connect_ray(address: str | None):
     try:
         import ray
@@ -171,6 +191,8 @@ def run_sweep(out: str | os.PathLike[str], spec: SweepSpec, *, workers: int = 1,
     build, job, finish = SWEEPABLE[spec.scenario]
     cfg = build(spec)
     folder = check_output_dir(out, kind=SWEEP_KIND, resume=True)
+    if use_ray and ray_address:
+        probe_ray_address(ray_address)
     runs_dir = folder / "runs"
     spec_path = folder / "sweep.json"
     if spec_path.exists():
