@@ -16,6 +16,7 @@ from sim.cli.scenario_cmds import DEFAULT_SCENARIO, add_scenario_args
 BENCHES: dict[str, tuple[str, str, str]] = {
     "physics": ("sim.bench_physics", "run", "hull + hydrodynamics + thrusters at the physics rate"),
     "fls": ("sim.bench_fls", "run", "forward-looking sonar frame rendering"),
+    "sss": ("sim.bench_sss", "run", "side-scan sonar ping rendering (1000 bins per side)"),
     "mission": ("sim.bench_mission", "run", "closed-loop mission, sensors and FLS included"),
     "pmha": ("sim.bench_pmha", "run", "PMHA world-model update time"),
     "gym": ("sim.bench_gym", "run", "gymnasium environment step rate"),
