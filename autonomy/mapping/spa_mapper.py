@@ -21,7 +21,8 @@ association weights ``beta_k(m)`` are particle integrals over the PO and vehicle
 (:mod:`autonomy.mapping.data_association`), then the messages back to the vehicle state
 (``spa`` mode) and the PO beliefs, new POs from the measurements, pruning at ``P_th`` and
 confirmation at ``E_th``. Resampled particles are roughened (Gordon, Salmond and Smith 1993:
-jitter of standard deviation ``K E N^(-1/d)``, E the particle range per dimension).
+jitter of standard deviation ``K E N^(-1/d)``, E the particle range per dimension, here the
+1-99 percentile range so that a few outliers do not inflate it).
 
 Implementation choice (documented deviation): the paper's particle messages are quadratic in
 N (every vehicle particle against every PO particle). Here the two cross integrals that need
@@ -160,7 +161,7 @@ class SpaMapper:
 
     def _roughening(self, particles: FloatArray) -> FloatArray:
         n, d = particles.shape
-        span = particles.max(axis=0) - particles.min(axis=0)
+        span = np.percentile(particles, 99.0, axis=0) - np.percentile(particles, 1.0, axis=0)
         return self.rng.standard_normal(particles.shape) * (self.cfg.roughening_k * span * n ** (-1.0 / d))
 
     def vehicle_estimate(self) -> FloatArray:
