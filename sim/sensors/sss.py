@@ -65,6 +65,11 @@ class SssRender:
     pos_ned: FloatArray
     R_nb: FloatArray
 
+    @property
+    def t_s(self) -> float:
+        """Ping time, s."""
+        return self.ping.t_s
+
 
 def ground_range_resample(lines: NDArray, altitude_m: float, bin_size_m: float, *, nearest: bool = False
                           ) -> NDArray:
