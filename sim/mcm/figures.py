@@ -54,7 +54,8 @@ def write_figures(folder: Path, results: list[dict]) -> list[Path]:
         for m in modes:
             ax.plot(np.mean([r[m][key] for r in results], axis=0), label=LABELS[m])
         if key == "cardinality":
-            ax.axhline(len(results[0].get("truth", [])) or 50, color="k", lw=0.5, ls="--")
+            if "n_objects" in results[0]:
+                ax.axhline(results[0]["n_objects"], color="k", lw=0.5, ls="--", label="true objects")
         ax.set_xlabel("tile step")
         ax.set_ylabel(ylabel)
         ax.set_title(f"mcm_survey, {len(results)} runs")

@@ -136,7 +136,7 @@ def run_survey(cfg: McmSurveyConfig, run_index: int, thresholds: FloatArray | No
     run's result does not depend on which worker runs it or in what order.
 
     Returns:
-        JSON-ready dict: ``run``, ``seed``, ``n_tiles``, ``lambda0_rad``, ``iota``, and per mode
+        JSON-ready dict: ``run``, ``seed``, ``n_tiles``, ``n_objects``, ``lambda0_rad``, ``iota``, and per mode
         ``gospa`` (per tile), ``cardinality`` (per tile), ``auv_err_m`` (per tile),
         ``final_gospa``, ``auv_rmse_m``, ``class_accuracy``, ``correct`` / ``false`` (per
         threshold of ``thresholds``, default 20 log-spaced in 0.02-0.99).
@@ -163,7 +163,8 @@ def run_survey(cfg: McmSurveyConfig, run_index: int, thresholds: FloatArray | No
     t_tiles = cfg.tile_period_s * np.arange(1, n_tiles + 1)
     detector = TileDetector(cfg, component_rng(seed, "mcm/atr"))
     tiles = [detector.detect(path.state(np.array([t]))[0], truth_pos, truth_cls) for t in t_tiles]
-    out: dict = {"run": int(run_index), "seed": seed, "n_tiles": n_tiles, "lambda0_rad": lam, "iota": iota}
+    out: dict = {"run": int(run_index), "seed": seed, "n_tiles": n_tiles, "n_objects": int(len(truth_pos)),
+                 "lambda0_rad": lam, "iota": iota}
     s0 = path.state(np.array([0.0]))[0]
     for mode in cfg.modes:
         mapper = SpaMapper(cfg.mapper_config(mode), s0, component_rng(seed, f"mcm/mapper/{mode}"))
