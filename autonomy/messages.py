@@ -157,3 +157,26 @@ class PositionFixMsg:
     pos_ne_m: FloatArray  # (2,) north, east of the body origin, mission NED frame
     cov_ne_m2: FloatArray  # (2, 2)
     source: str = ""
+
+
+@dataclass(frozen=True, slots=True)
+class SssPing:
+    """One side-scan sonar ping: a port and a starboard echo line.
+
+    Attributes:
+        t_s: ping time, s.
+        lines_u8: (2, n_bins) uint8 display lines, row 0 port, row 1 starboard; bin k of a
+            side is slant range ``[k, k + 1) * bin_size_m`` from its transducer.
+        bin_size_m: slant-range bin size, m.
+        altitude_m: range of the first bottom return (the vertical ray), m; ``nan`` without one.
+        ground_lines_u8: (2, n_ground) the lines resampled to ground range (bin size
+            ``bin_size_m``, from nadir outwards) when the sonar's ``ground_range`` is on, else None.
+        mount_pos_body_m: (3,) FRD position of the transducers, m.
+    """
+
+    t_s: float
+    lines_u8: NDArray[np.uint8]
+    bin_size_m: float
+    altitude_m: float
+    ground_lines_u8: NDArray[np.uint8] | None = None
+    mount_pos_body_m: FloatArray = field(default_factory=lambda: np.zeros(3))

@@ -14,6 +14,7 @@ BENCHES: dict[str, tuple[str, str, str]] = {
     "pmha": ("sim.bench.pmha", "run", "PMHA world-model update time"),
     "gym": ("sim.bench.gym", "run", "gymnasium environment step rate"),
     "tracking": ("sim.bench.tracking", "run", "USBL + sonar target tracker time per 10 Hz tick"),
+    "sss": ("sim.bench.sss", "run", "side-scan sonar ping rendering (1000 bins per side)"),
     "msis": ("sim.bench.msis", "run", "scanning sonar pings per second and feature-extraction cost per ping"),
     "atr": ("sim.evaluation.atr_metrics", "bench_atr", "ATR inference frame rate (CNN and classical)"),
 }

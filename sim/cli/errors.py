@@ -20,5 +20,6 @@ def user_error_types() -> tuple[type[BaseException], ...]:
     from scenarios.load import ScenarioError
     from sim.dataset.errors import DatasetError
     from sim.outputs.run_dir import OutputDirError
+    from sim.sweep.runner import SweepError
 
-    return (CliError, ScenarioError, OutputDirError, DatasetError, ModelFileError)
+    return (CliError, ScenarioError, OutputDirError, DatasetError, ModelFileError, SweepError)

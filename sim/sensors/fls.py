@@ -43,7 +43,8 @@ from sim.sensors.sonar.ground_truth import (
     visible_fraction,
 )
 from sim.sensors.registry import register_sensor
-from sim.sensors.sonar.ray_fan import RayFan, RayTable, column_neighbours
+from sim.sensors.sonar.object_rays import add_object_rays
+from sim.sensors.sonar.ray_fan import RayFan, RayTable
 from sim.truth import VehicleTruth
 
 FloatArray = NDArray[np.float64]
@@ -193,40 +194,11 @@ class FlsSensor(Sensor[FlsRender]):
     def _add_object_rays(self, base: RayTable, caster: RayCaster, origin: FloatArray, R_ns: FloatArray,
                          objects: Sequence[SceneObjectLike]
                          ) -> tuple[RayTable, NDArray[np.int64], tuple[NDArray[np.intp], NDArray[np.intp]] | None]:
-        """Sample objects the base rays sample coarsely with finer sub-columns
-        (:meth:`RayFan.strip_rays` on the caster's bounding sphere of each object in the range
-        window, if the caster offers one), so that an object between two base rays still
-        echoes, is labelled and has its nearest range resolved.
-
-        Returns:
-            The base rays followed by the new rays; per row the object whose sphere it samples
-            (-1 for a base ray, -2 for a sub-column ray at a base elevation); and the elevation
-            intervals to form echoes from (``None``: the base rays' own).
-        """
+        """Finer rays over objects the base rays sample coarsely
+        (:func:`sim.sensors.sonar.object_rays.add_object_rays` over the range window)."""
         g = self.geometry
-        n0 = len(base.dist)
-        if not objects or not hasattr(caster, "object_bounding_sphere"):
-            return base, np.full(n0, -1, dtype=np.int64), None
-        spheres = []
-        for o in objects:
-            centre, radius = caster.object_bounding_sphere(int(o.id))
-            v = np.asarray(centre, dtype=float) - origin
-            dist = float(np.linalg.norm(v))
-            if dist - radius <= g.window_far_m and dist + radius >= g.window_near_m:
-                spheres.append((int(o.id), R_ns.T @ v, float(radius)))
-        strips = self.rays.strip_rays(spheres, OBJECT_RAYS_ACROSS)
-        if strips.empty:
-            return base, np.full(n0, -1, dtype=np.int64), None
-        extra = self.rays.cast_rays(caster, origin, R_ns, strips.col, strips.az, strips.phi, strips.weight,
-                                    g.range_max_m)
-        sampled = base.concat(extra)
-        owner = np.concatenate([np.full(n0, -1, dtype=np.int64), np.where(strips.owner < 0, -2, strips.owner)])
-        # the replaced columns' base rays leave the echo chains
-        chain = np.ones(len(sampled.dist), dtype=bool)
-        chain[:n0] = ~np.isin(base.col, strips.columns)
-        rows = np.flatnonzero(chain)
-        a, b = column_neighbours(sampled.col[rows], sampled.az[rows], sampled.phi[rows])
-        return sampled, owner, (rows[a], rows[b])
+        return add_object_rays(self.rays, base, caster, origin, R_ns, objects, g.window_near_m, g.window_far_m,
+                               g.range_max_m, OBJECT_RAYS_ACROSS)
 
     def _object_truth(self, obj: SceneObjectLike, origin: FloatArray, R_ns: FloatArray, sampled: RayTable,
                       owner: NDArray[np.int64], in_win: NDArray[np.bool_],

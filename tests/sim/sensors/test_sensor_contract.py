@@ -224,6 +224,15 @@ def test_noise_free_values_are_exact(kind):
             want = np.clip(np.round(255 * (db + cfg.dynamic_range_db) / cfg.dynamic_range_db), 0, 255)
             assert np.max(np.abs(msg.ping.intensity.astype(int) - want)) <= 1  # float32 rounding
             continue
+        if kind == "sss":
+            # expected lines = mean echo + noise floor; altitude = the body-down ray to the seabed plane
+            floor = np.float32(10.0 ** (0.1 * sensor.cfg.noise_floor_db))
+            np.testing.assert_array_equal(msg.intensity, msg.mean_intensity + floor)
+            head = truth.pos_ned + truth.R_nb @ sensor.mount_pos_body_m
+            np.testing.assert_allclose(msg.pos_ned, head, atol=1e-12)
+            down = truth.R_nb[:, 2]
+            assert msg.ping.altitude_m == pytest.approx((SEABED_DEPTH_M - head[2]) / down[2], abs=1e-9)
+            continue
         expected = _expected(kind, sensor, truth)
         assert expected is not None, f"no independent oracle for sensor kind {kind!r}: add one here"
         for field, want in expected.items():

@@ -1,0 +1,32 @@
+"""``auvsim sweep SCENARIO --runs N --out DIR``: a resumable Monte Carlo sweep."""
+
+from __future__ import annotations
+
+import argparse
+
+from sim.cli.args import non_negative_int, positive_int
+
+
+def _cmd_sweep(args: argparse.Namespace) -> int:
+    from sim.sweep.runner import SweepSpec, parse_overrides, run_sweep
+
+    spec = SweepSpec(scenario=args.scenario, runs=args.runs, seed=args.seed, overrides=parse_overrides(args.overrides))
+    summary = run_sweep(args.out, spec, workers=args.workers, use_ray=args.ray is not None,
+                        ray_address=args.ray or None, progress=not args.no_progress)
+    print(f"sweep: wrote {args.out} ({summary['runs']} runs)")
+    return 0
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("sweep", help="resumable Monte Carlo sweep of a scenario (one JSON line per run)")
+    p.add_argument("scenario", help="scenario with a Monte Carlo runner (mcm_survey)")
+    p.add_argument("--runs", type=positive_int, required=True, help="number of runs (>= 1)")
+    p.add_argument("--out", required=True, help="sweep folder: new, or an earlier sweep to resume")
+    p.add_argument("--seed", type=non_negative_int, default=0, help="run i uses seed + i")
+    p.add_argument("--workers", type=positive_int, default=1, help="local processes (without --ray)")
+    p.add_argument("--ray", nargs="?", const="", default=None, metavar="ADDRESS",
+                   help="run on Ray: a local instance, or the running cluster at ADDRESS")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="scenario override, e.g. --set n_particles=300 (repeatable; values parsed as YAML)")
+    p.add_argument("--no-progress", action="store_true")
+    p.set_defaults(func=_cmd_sweep)

@@ -1,0 +1,1 @@
+"""Monte Carlo sweeps: many seeded runs of a scenario, resumable, in parallel."""

@@ -1,0 +1,81 @@
+"""SPA mapper: motion model, association weights against closed forms, and small surveys."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from autonomy.mapping.auv_motion import nct_predict
+from autonomy.mapping.config import SpaMapperConfig
+from autonomy.mapping.spa_mapper import SpaMapper, beta_pdf
+from sim.mcm.survey import LawnmowerPath, McmSurveyConfig, run_survey
+
+
+def test_nct_closes_a_circle_and_matches_constant_velocity():
+    s0 = np.array([[10.0, -5.0, 1.5, 0.0, 2 * np.pi / 100.0]])
+    s = s0.copy()
+    for _ in range(100):
+        s = nct_predict(s, 1.0, 0.0, 0.0, np.random.default_rng(0))
+    assert s[0, :4] == pytest.approx(s0[0, :4], abs=1e-9)
+    cv = nct_predict(np.array([[0.0, 0.0, 1.0, 2.0, 0.0]]), 3.0, 0.0, 0.0, np.random.default_rng(0))
+    assert cv[0] == pytest.approx([3.0, 6.0, 1.0, 2.0, 0.0])
+
+
+def test_beta_pdf_matches_scipy():
+    from scipy.stats import beta
+
+    x = np.linspace(0.05, 0.95, 7)
+    assert beta_pdf(x, 6.0, 2.0) == pytest.approx(beta.pdf(x, 6.0, 2.0))
+
+
+def test_association_weight_is_the_gaussian_convolution():
+    # one PO with Gaussian particles, a known vehicle state: beta_k(m) = r pd ratio N(ell; mu, P + s^2 I) f(pi|c)
+    cfg = SpaMapperConfig(mode="clairvoyant", n_particles=20000)
+    rng = np.random.default_rng(5)
+    m = SpaMapper(cfg, [0.0, 0.0, 1.5, 0.0, 0.0], rng)
+    mu_ned, sd = np.array([-25.0, 60.0]), 2.0  # 25 m behind, 60 m to starboard (heading north)
+    m.r = np.array([0.6])
+    m.X = (mu_ned + sd * rng.standard_normal((cfg.n_particles, 2)))[None]
+    m.W = np.zeros((1, cfg.n_particles, 2))
+    m.W[0, :, 0] = 1.0 / cfg.n_particles  # class 1 surely
+    ell = np.array([[-24.0, 61.5], [-10.0, 30.0]])
+    f_pi = np.array([[3.0, 0.5], [1.0, 1.0]])
+    veh = np.repeat(np.array([[0.0, 0.0, 1.5, 0.0, 0.0]]), cfg.n_particles, axis=0)
+    beta = m.association_weights(np.array([0]), veh, ell, f_pi)
+    var = sd ** 2 + cfg.sigma_meas_m ** 2
+    local_mu = np.array([-25.0, 60.0])
+    ratio = m.tile_area_m2 / cfg.clutter_mean
+    for j in range(2):
+        g = np.exp(-0.5 * np.sum((ell[j] - local_mu) ** 2) / var) / (2 * np.pi * var)
+        assert beta[0, j + 1] == pytest.approx(0.6 * cfg.pd * ratio * g * f_pi[j, 0], rel=0.05)
+    assert beta[0, 0] == pytest.approx(0.4 + 0.6 * (1 - cfg.pd), rel=1e-3)  # all particles in the tile
+
+
+def test_lawnmower_path_is_continuous_at_constant_speed():
+    cfg = McmSurveyConfig(n_lanes=3)
+    path = LawnmowerPath(cfg)
+    t = np.arange(0.0, path.duration_s, 0.5)
+    st = path.state(t)
+    step = np.linalg.norm(np.diff(st[:, :2], axis=0), axis=1)
+    assert np.all(step <= 0.75 + 1e-9) and np.all(step >= 0.75 * np.cos(0.5 * 0.5 * 1.5 / 10.0) - 1e-6)
+    assert path.duration_s * cfg.speed_mps == pytest.approx(cfg.survey_length_m)
+
+
+def test_clairvoyant_and_spa_map_a_small_survey():
+    cfg = McmSurveyConfig(n_lanes=4, n_other=6, n_particles=200, clutter_mean=0.0,
+                          modes=("clairvoyant", "spa"), seed=3)
+    r = run_survey(cfg, 0)
+    n_true = 5 + 6
+    for mode in ("clairvoyant", "spa"):
+        # the four lanes see every object inside 20..130 m abeam of some lane
+        assert r[mode]["class_accuracy"] == 1.0
+        assert r[mode]["final_gospa"] < 0.5 * 50 * n_true  # most objects mapped, few false
+    assert r["clairvoyant"]["auv_rmse_m"] == 0.0
+    assert r["spa"]["auv_rmse_m"] < 5.0
+
+
+def test_bad_config_is_refused():
+    with pytest.raises(ValueError, match="longer than the survey"):
+        McmSurveyConfig(n_lanes=1, area_side_m=40.0, tile_length_m=50.0)
+    with pytest.raises(ValueError):
+        McmSurveyConfig(pd=-0.1)
