@@ -275,6 +275,24 @@ def _resolve_seabed_file(data: dict[str, Any], folder: Path) -> None:
         f["path"] = str(folder / p)
 
 
+def _sensor_problems(scenario: Scenario) -> list[str]:
+    """Checks a sensor config can only make against its hardware preset (range limits, beam
+    counts): the simulator's own geometry resolution, run at load so ``validate`` catches them."""
+    problems = []
+    for name, cfg in scenario.sensors.root.items():
+        if getattr(cfg, "kind", None) != "fls" or not cfg.enabled:
+            continue
+        from sim.sensors.fls_presets import resolve_geometry
+
+        try:
+            resolve_geometry(cfg)
+        except ValueError as exc:
+            msg = str(exc)
+            problems.append(msg.replace("sensors.fls", f"sensors.{name}", 1) if msg.startswith("sensors.fls")
+                            else f"sensors.{name}: {msg}")
+    return problems
+
+
 def check_scenario(scenario: Scenario, source: str, overrides: list[str] | tuple[str, ...] = ()) -> None:
     """Checks across keys that field validation cannot make: placements and files.
 
@@ -283,7 +301,7 @@ def check_scenario(scenario: Scenario, source: str, overrides: list[str] | tuple
     """
     from scenarios.placement import placement_problems
 
-    problems = placement_problems(scenario)
+    problems = placement_problems(scenario) + _sensor_problems(scenario)
     atr = scenario.autonomy.atr
     if atr.detector == "cnn" and atr.model_path is not None:
         model = Path(atr.model_path).expanduser()

@@ -115,13 +115,20 @@ def _inside_patch(scenario: Scenario, n_m: float, e_m: float) -> bool:
     return abs(n_m - c.center_ne_m[0]) <= half and abs(e_m - c.center_ne_m[1]) <= half
 
 
-def vehicle_half_height_m(model: str) -> float:
-    """Half the vertical envelope of a vehicle preset, m (from its ``params.yaml``)."""
+def vehicle_envelope_m(model: str) -> tuple[float, float, float]:
+    """Envelope (length, width, height) of a vehicle preset, m (from its ``params.yaml``;
+    zeros when unreadable, which only weakens the checks)."""
     try:
         text = (resources.files("sim") / "assets" / model / "params.yaml").read_text()
-        return 0.5 * float(yaml.safe_load(text)["envelope_m"][2])
-    except (OSError, KeyError, TypeError, ValueError, yaml.YAMLError):
-        return 0.0
+        env = yaml.safe_load(text)["envelope_m"]
+        return float(env[0]), float(env[1]), float(env[2])
+    except (OSError, KeyError, TypeError, ValueError, IndexError, yaml.YAMLError):
+        return 0.0, 0.0, 0.0
+
+
+def vehicle_half_height_m(model: str) -> float:
+    """Half the vertical envelope of a vehicle preset, m."""
+    return 0.5 * vehicle_envelope_m(model)[2]
 
 
 def survey_corners_ne(scenario: Scenario) -> np.ndarray:
@@ -208,6 +215,16 @@ def placement_problems(scenario: Scenario) -> list[str]:
         elif top > bed + relief + 1e-6:
             problems.append(f"{key}: buried below the seabed (its top at {top:.2f} m, the seabed at {bed:.2f} m)")
     problems += _survey_problems(scenario, relief)
+    length, width, height = vehicle_envelope_m(scenario.vehicle.model)
+    hull_r = 0.5 * math.hypot(length, width)
+    for i, t in enumerate(targets):
+        tn, te, tz = t.pos_ned
+        inscribed = t.radius_m if t.shape != "box" else 0.5 * min(t.size_m[0], t.size_m[1])
+        apart_m = math.hypot(tn - n, te - e)
+        hull_bottom = d + 0.5 * height
+        if apart_m < inscribed + hull_r and hull_bottom > tz - _target_height_m(t):
+            problems.append(f"world.targets.{i} ({t.name}): overlaps the vehicle at its start "
+                            f"(vehicle.initial_pos_ned, {apart_m:.2f} m apart)")
     polys = [_inscribed_footprint(t) for t in targets]
     for i in range(len(targets)):
         for j in range(i + 1, len(targets)):

@@ -7,7 +7,7 @@ and no traceback. An unexpected internal error prints a short traceback and exit
 ``--debug`` (or ``AUVSIM_DEBUG=1``) prints the full one.
 
 Exit status: 0 success, 1 internal error, 2 bad input, 3 mission aborted (outputs still
-written), 130 interrupted.
+written), 130 interrupted (Ctrl-C), 143 terminated (SIGTERM).
 """
 
 from __future__ import annotations
@@ -15,12 +15,15 @@ from __future__ import annotations
 import argparse
 import errno
 import os
+import signal
+import threading
 import sys
 import traceback
 from collections.abc import Callable, Sequence
 
 from sim.cli import bench_cmd, dataset_cmd, eval_atr_cmd, run_cmd, scenario_cmds, sweep_cmd, train_cmd
-from sim.cli.errors import EXIT_INTERNAL_ERROR, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE, user_error_types
+from sim.cli.errors import (EXIT_INTERNAL_ERROR, EXIT_INTERRUPTED, EXIT_OK, EXIT_TERMINATED, EXIT_USAGE,
+                            user_error_types)
 
 DEBUG_ENV = "AUVSIM_DEBUG"
 
@@ -65,6 +68,14 @@ def _report_internal_error(exc: BaseException, full: bool) -> None:
           file=sys.stderr)
 
 
+class Terminated(BaseException):
+    """SIGTERM, raised in the main thread so outputs in progress are cleaned up."""
+
+
+def _on_sigterm(signum: int, frame: object) -> None:
+    raise Terminated()
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit status."""
     parser = build_parser()
@@ -74,6 +85,17 @@ def main(argv: Sequence[str] | None = None) -> int:
         return int(exc.code or 0)
     func: Callable[[argparse.Namespace], int] = args.func
     debug = bool(args.debug or os.environ.get(DEBUG_ENV, "") not in ("", "0"))
+    in_main_thread = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGTERM, _on_sigterm) if in_main_thread else None
+    try:
+        return _dispatch(func, args, debug)
+    finally:
+        if in_main_thread:
+            signal.signal(signal.SIGTERM, previous)
+
+
+def _dispatch(func: Callable[[argparse.Namespace], int], args: argparse.Namespace, debug: bool) -> int:
+    """Run the subcommand; map what a user can cause to one line and an exit status."""
     try:
         return int(func(args) or 0)
     except user_error_types() as exc:
@@ -93,6 +115,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         _say(f"auvsim {args.command}: interrupted")
         return EXIT_INTERRUPTED
+    except Terminated:
+        _say(f"auvsim {args.command}: terminated")
+        return EXIT_TERMINATED
     except Exception as exc:  # noqa: BLE001 - the last resort that keeps bugs visible
         _report_internal_error(exc, debug)
         return EXIT_INTERNAL_ERROR

@@ -12,6 +12,7 @@ EXIT_INTERNAL_ERROR = 1
 EXIT_USAGE = 2
 EXIT_MISSION_ABORTED = 3
 EXIT_INTERRUPTED = 130
+EXIT_TERMINATED = 143
 
 
 def user_error_types() -> tuple[type[BaseException], ...]:

@@ -26,7 +26,6 @@ class MissionProgress:
         self.line_every_pct = float(line_every_pct)
         self.enabled = enabled
         self._tty = bool(getattr(self.stream, "isatty", lambda: False)())
-        self._bar = None
         self._next_pct = self.line_every_pct
         self._shown_s = 0.0
         self._wall0 = time.perf_counter()
@@ -35,38 +34,40 @@ class MissionProgress:
         if not self.enabled:
             return
         self._wall0 = time.perf_counter()
-        if self._tty:
-            from tqdm import tqdm
+        self._last_draw = -1.0
 
-            self._bar = tqdm(total=round(self.planned_s), unit="sim s", desc=self.label, mininterval=0.5,
-                             file=self.stream,
-                             bar_format="{l_bar}{bar}| {n:.0f}/{total:.0f} sim s [{elapsed}<{remaining}]")
+    def _line(self, t_s: float, mode: str) -> str:
+        pct = 100.0 * t_s / self.planned_s
+        wall = time.perf_counter() - self._wall0
+        rtf = f", {t_s / wall:.1f}x real time" if wall > 0 else ""
+        return (f"{self.label}: {min(pct, 999):3.0f}% of the planned {self.planned_s:.0f} sim s "
+                f"({t_s:.0f} s, {mode}{rtf})")
 
     def update(self, t_s: float, mode: str = "") -> None:
         """Report simulated time ``t_s`` (s) and the mission mode."""
         if not self.enabled:
             return
-        if self._bar is not None:
-            if t_s - self._shown_s >= 1.0:
-                if t_s > self._bar.total:
-                    self._bar.total = round(t_s)
-                self._bar.update(t_s - self._shown_s)
-                self._bar.set_postfix_str(mode, refresh=False)
-                self._shown_s = t_s
+        if self._tty:  # redraw one line in place, at most twice a second
+            now = time.perf_counter()
+            if now - self._last_draw >= 0.5:
+                self._last_draw = now
+                self._write("\r\x1b[K" + self._line(t_s, mode))
+            self._shown_s = t_s
             return
         pct = 100.0 * t_s / self.planned_s
         if pct >= self._next_pct:
-            wall = time.perf_counter() - self._wall0
-            rtf = f", {t_s / wall:.1f}x real time" if wall > 0 else ""
-            print(f"{self.label}: {min(pct, 999):.0f}% of the planned {self.planned_s:.0f} sim s "
-                  f"({t_s:.0f} s, {mode}{rtf})", file=self.stream, flush=True)
+            self._write(self._line(t_s, mode) + "\n")
             while self._next_pct <= pct:
                 self._next_pct += self.line_every_pct
 
-    def close(self, t_s: float) -> None:
-        """End the display at simulated time ``t_s``; the bar ends full when the mission ended."""
-        if self._bar is not None:
-            self._bar.total = round(t_s)
-            self._bar.update(t_s - self._shown_s)
-            self._bar.close()
-            self._bar = None
+    def close(self, t_s: float, mode: str = "end") -> None:
+        """End the display at simulated time ``t_s``."""
+        if self.enabled and self._tty:
+            self._write("\r\x1b[K" + self._line(t_s, mode) + "\n")
+
+    def _write(self, text: str) -> None:
+        try:
+            self.stream.write(text)
+            self.stream.flush()
+        except (BrokenPipeError, ValueError):
+            self.enabled = False
