@@ -79,7 +79,7 @@ class RosConverter:
         return self._Header(stamp=self._Time(sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000), frame_id=frame_id)
 
     def vector3(self, v: ArrayLike) -> Any:
-        x, y, z = (float(c) for c in np.asarray(v, dtype=float))
+        x, y, z = np.asarray(v, dtype=float).reshape(3).tolist()
         return self._Vector3(x=x, y=y, z=z)
 
     def _sonar_beams(self, beam_azimuths_rad: ArrayLike, bin_centres_m: ArrayLike) -> tuple[list, np.ndarray]:
@@ -97,11 +97,11 @@ class RosConverter:
         return hit
 
     def point(self, p: ArrayLike) -> Any:
-        x, y, z = (float(c) for c in np.asarray(p, dtype=float))
+        x, y, z = np.asarray(p, dtype=float).reshape(3).tolist()
         return self._Point(x=x, y=y, z=z)
 
     def quaternion(self, R: ArrayLike) -> Any:
-        x, y, z, w = (float(c) for c in quat_xyzw(quat_from_rot(R)))
+        x, y, z, w = np.asarray(quat_xyzw(quat_from_rot(R)), dtype=float).tolist()
         return self._Quaternion(x=x, y=y, z=z, w=w)
 
     def pose(self, pos: ArrayLike, R: ArrayLike) -> Any:
