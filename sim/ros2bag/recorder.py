@@ -46,7 +46,7 @@ class RosbagRecorder:
 
     Args:
         path: the bag folder to create (``<run>/rosbag``).
-        fls_every: export every n-th frame of each sonar (1 = all; frames are ~1 MB each).
+        fls_every: export every n-th frame of each sonar (1 = all; an M900-130 frame is ~0.8 MB).
 
     Raises:
         ImportError: rosbags is not installed.
