@@ -3,15 +3,17 @@ seeded determinism, and the same trajectory as the gymnasium env for the same ac
 
 from __future__ import annotations
 
-import dm_env
 import numpy as np
 import pytest
-from absl.testing import absltest
-from dm_env import test_utils
 
-from sim.envs import WAYPOINT_ID
-from sim.envs.dm import WaypointDmEnv, load
-from sim.envs.waypoint_env import WaypointEnv
+dm_env = pytest.importorskip("dm_env")  # the `dm` extra
+
+from absl.testing import absltest  # noqa: E402  (absl-py comes with dm-env)
+from dm_env import test_utils  # noqa: E402
+
+from sim.envs import WAYPOINT_ID  # noqa: E402
+from sim.envs.dm import WaypointDmEnv, load  # noqa: E402
+from sim.envs.waypoint_env import WaypointEnv  # noqa: E402
 
 SHORT = {"max_episode_s": 1.0}  # 10 decisions: the mixin's action sequence crosses episode ends
 
