@@ -16,6 +16,7 @@ from autonomy.msis.config import MsisLocalizationConfig
 from autonomy.navigation.config import NavigationConfig
 from autonomy.world_model.config import WorldModelConfig
 from scenarios.config.base import StrictModel
+from scenarios.config.outputs import OutputsConfig
 from scenarios.config.sensor import SensorConfig, fill_sensor_entries, sensor_config_kinds
 from scenarios.config.vehicle import VehicleConfig
 from scenarios.config.world import WorldConfig
@@ -137,3 +138,4 @@ class Scenario(StrictModel):
     vehicle: VehicleConfig = VehicleConfig()
     sensors: SensorsConfig = SensorsConfig()
     autonomy: AutonomyConfig = AutonomyConfig()
+    outputs: OutputsConfig = OutputsConfig()

@@ -53,8 +53,9 @@ class LawnmowerPolicy:
 
 def waypoint_pursuit(env: WaypointEnv) -> np.ndarray:
     wp = env.waypoint_ned()
-    bearing = math.atan2(wp[1] - env._pos[1], wp[0] - env._pos[0])
-    err = float(wrap_angle(bearing - env._heading_sp_rad))
+    pos = env.task.pos_ned
+    bearing = math.atan2(wp[1] - pos[1], wp[0] - pos[0])
+    err = float(wrap_angle(bearing - env.task.heading_setpoint_rad))
     d_lo, d_hi = env.options.depth_range_m
     return np.array([0.2, np.clip(err / (env.max_yaw_rate_radps * env.decision_interval_s), -1, 1),
                      _to_unit(wp[2], d_lo, d_hi)], dtype=np.float32)

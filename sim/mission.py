@@ -128,6 +128,7 @@ class Mission:
             objects=tuple(self.world.objects), waypoints_ne=waypoints,
             vehicle_envelope_m=tuple(float(x) for x in self.physics.params.envelope_m),
             sensors=MappingProxyType({n: s.kind for n, s in self.parts.sensors.items()}),
+            sensor_mounts=MappingProxyType({n: s.mount for n, s in self.parts.sensors.items()}),
         )
 
     # -- stepping API ----------------------------------------------------------------

@@ -76,6 +76,9 @@ class MissionInfo:
         waypoints_ne: (k, 2) survey plan, m.
         vehicle_envelope_m: (3,) hull bounding box (length, width, height), m.
         sensors: entry name -> kind of every sensor built, in firing order.
+        sensor_mounts: entry name -> :class:`sim.sensors.base.Mount` of every sensor built
+            (``pos_body_m`` (3,) FRD offset from the body origin, m; ``rpy_rad`` (3,) sensor
+            axes -> body, rad).
     """
 
     scenario: Any
@@ -86,6 +89,7 @@ class MissionInfo:
     waypoints_ne: NDArray[np.float64]
     vehicle_envelope_m: tuple[float, ...]
     sensors: Mapping[str, str] = field(default_factory=dict)
+    sensor_mounts: Mapping[str, Any] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)

@@ -37,21 +37,24 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from sim.outputs.mission_outputs import run_mission
     from sim.outputs.run_dir import check_output_dir
 
-    if args.rosbag:
-        try:
-            import rosbags  # noqa: F401
-        except ImportError:
-            raise CliError("--rosbag: needs the rosbags package (pip install 'auvsim[rosbag]')") from None
     overrides = list(args.overrides)
     if args.seed is not None:
         overrides.append(f"seed={args.seed}")
     if args.detector is not None:
         overrides.append(f"autonomy.atr.detector={args.detector}")
     scenario = load_scenario(args.scenario, overrides)
+    rosbag = args.rosbag or scenario.outputs.rosbag
+    if rosbag:
+        try:
+            import rosbags  # noqa: F401
+        except ImportError:
+            what = "--rosbag" if args.rosbag else "outputs.rosbag"
+            raise CliError(f"{what}: needs the rosbags package (pip install 'auvsim[rosbag]')") from None
+    fls_every = args.rosbag_fls_every if args.rosbag_fls_every is not None else scenario.outputs.rosbag_fls_every
     check_output_dir(args.out, kind="run", overwrite=args.overwrite)  # before the slow build
     metrics = run_mission(scenario, args.out, nav_source=args.nav, rerun=not args.no_rerun,
-                          overwrite=args.overwrite, progress=not args.quiet, rosbag=args.rosbag,
-                          rosbag_fls_every=args.rosbag_fls_every)
+                          overwrite=args.overwrite, progress=not args.quiet, rosbag=rosbag,
+                          rosbag_fls_every=fls_every)
     print_summary(metrics, args.out)
     mission = metrics["mission"]
     if mission["aborted"]:
@@ -73,8 +76,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--no-rerun", action="store_true", help="skip the rerun recording")
     p.add_argument("--rosbag", action="store_true",
                    help="also write a ROS 2 bag (rosbag2 folder, MCAP storage) into OUT/rosbag")
-    p.add_argument("--rosbag-fls-every", type=positive_int, default=1, metavar="N",
-                   help="export every N-th sonar frame into the bag (default 1: all; frames are ~1 MB)")
+    p.add_argument("--rosbag-fls-every", type=positive_int, default=None, metavar="N",
+                   help="export every N-th sonar frame into the bag (default: the scenario's "
+                        "outputs.rosbag_fls_every, 1: all; frames are ~0.8 MB)")
     p.add_argument("--overwrite", action="store_true",
                    help="replace an earlier run's output folder (only a folder written by auvsim run)")
     p.add_argument("--nav", choices=["estimate", "truth"], default="estimate",

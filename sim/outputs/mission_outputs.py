@@ -128,12 +128,13 @@ class _ProgressObserver:
 
 def run_mission(
     scenario: Scenario, out: str | Path, *, nav_source: str = "estimate", rerun: bool = True,
-    progress: bool = True, overwrite: bool = False, rosbag: bool = False, rosbag_fls_every: int = 1,
+    progress: bool = True, overwrite: bool = False, rosbag: bool | None = None, rosbag_fls_every: int | None = None,
 ) -> dict[str, Any]:
     """Run ``scenario`` and write metrics.json, trajectory.csv, world_model.json, map.png
     (and recording.rrd; with ``rosbag``, a ROS 2 bag folder ``rosbag/`` in MCAP storage,
-    :class:`sim.ros2bag.recorder.RosbagRecorder`, every ``rosbag_fls_every``-th sonar frame)
-    into ``out``. Returns the metrics.
+    :class:`sim.ros2bag.recorder.RosbagRecorder`, every ``rosbag_fls_every``-th sonar frame;
+    None takes the scenario's ``outputs.rosbag`` / ``outputs.rosbag_fls_every``) into ``out``.
+    Returns the metrics.
 
     Raises:
         OutputDirError: ``out`` is protected, a file, not creatable, or holds files that
@@ -149,6 +150,10 @@ def run_mission(
             from sim.outputs.rerun_recording import RerunRecorder
 
             observers.append(RerunRecorder(partial / "recording.rrd"))
+        if rosbag is None:
+            rosbag = scenario.outputs.rosbag
+        if rosbag_fls_every is None:
+            rosbag_fls_every = scenario.outputs.rosbag_fls_every
         if rosbag:
             from sim.ros2bag.recorder import RosbagRecorder
 

@@ -1,8 +1,13 @@
 """Build rosbags message objects with every field not given set to its ROS default
-(zeros, empty strings and sequences), so converters name only the fields they fill."""
+(zeros, empty strings and sequences), so converters name only the fields they fill.
+
+The defaults of a type are built once per type store and shared by every message built
+after: built messages are written and dropped, never modified in place.
+"""
 
 from __future__ import annotations
 
+import weakref
 from typing import Any
 
 import numpy as np
@@ -52,10 +57,18 @@ def build(store: Any, typename: str, **fields: Any) -> Any:
         KeyError: ``typename`` unknown to the store.
         TypeError: a field name the type does not have.
     """
-    _, fdefs = store.fielddefs[typename]
-    names = {n for n, _ in fdefs}
-    unknown = set(fields) - names
+    per_store = _DEFAULTS.get(store)
+    if per_store is None:
+        per_store = _DEFAULTS[store] = {}
+    defaults = per_store.get(typename)
+    if defaults is None:
+        _, fdefs = store.fielddefs[typename]
+        defaults = per_store[typename] = {n: _default(store, spec) for n, spec in fdefs}
+    unknown = fields.keys() - defaults.keys()
     if unknown:
         raise TypeError(f"{typename} has no field(s) {sorted(unknown)}")
-    values = {n: fields[n] if n in fields else _default(store, spec) for n, spec in fdefs}
-    return store.types[typename](**values)
+    return store.types[typename](**{**defaults, **fields})
+
+
+#: type store -> type name -> field name -> default value (shared, read-only)
+_DEFAULTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()

@@ -31,10 +31,10 @@ from typing import Any
 
 import numpy as np
 
-from autonomy.frames import R_FLU_FRD, enu_from_ned, rot_enu_flu, rot_from_euler
+from autonomy.frames import R_FLU_FRD, enu_from_ned, flu_from_frd, rot_enu_flu, rot_from_euler
 from autonomy.navigation.dvl_geometry import janus_beam_dirs_body
 from sim.records import MissionInfo, MissionSummary, PerceptionResult, StepRecord
-from sim.ros2bag.ros_messages import R_FLU_ALTIMETER, RosConverter, sonar_msg_frame_in_flu, stamp_ns
+from sim.ros2bag.ros_messages import RosConverter, altimeter_frame_in_flu, sonar_msg_frame_in_flu, stamp_ns
 from sim.ros2bag.typestore import make_typestore
 
 MAP, ODOM, BASE, BASE_TRUTH, BASE_FRD = "map", "odom", "base_link", "base_link_truth", "base_link_frd"
@@ -46,7 +46,7 @@ class RosbagRecorder:
 
     Args:
         path: the bag folder to create (``<run>/rosbag``).
-        fls_every: export every n-th frame of each sonar (1 = all; frames are ~1 MB each).
+        fls_every: export every n-th frame of each sonar (1 = all; an M900-130 frame is ~0.8 MB).
 
     Raises:
         ImportError: rosbags is not installed.
@@ -99,13 +99,21 @@ class RosbagRecorder:
                     t, "sensor_msgs/msg/FluidPressure", m.t_s, c.fluid_pressure(m, BASE, rho, g))
             elif kind == "altimeter":
                 frame = f"{name}_link"
-                static.append(c.transform(0.0, BASE, frame, np.zeros(3), R_FLU_ALTIMETER))
+                mount = info.sensor_mounts[name]
+                static.append(c.transform(0.0, BASE, frame, flu_from_frd(mount.pos_body_m),
+                                          altimeter_frame_in_flu(mount.R_bs)))
                 self._handlers[name] = lambda m, t=topic, f=frame, cfg=cfg: self._write(
                     t, "sensor_msgs/msg/Range", m.t_s, c.range_altimeter(m, f, cfg.min_range_m, cfg.max_range_m))
             elif kind == "dvl":
+                # the DVL measures its transducer's velocity in body FRD axes: the frame sits at
+                # the mount with the body's FRD axes; its beams are the mount-rotated Janus fan
+                frame = f"{name}_link"
+                mount = info.sensor_mounts[name]
                 dirs = janus_beam_dirs_body(np.deg2rad(cfg.beam_angle_deg), np.deg2rad(cfg.beam_azimuth_offset_deg))
-                self._handlers[name] = lambda m, t=topic, d=dirs: self._write(
-                    t, "marine_acoustic_msgs/msg/Dvl", m.t_s, c.dvl(m, BASE_FRD, d))
+                dirs = dirs @ mount.R_bs.T
+                static.append(c.transform(0.0, BASE, frame, flu_from_frd(mount.pos_body_m), R_FLU_FRD))
+                self._handlers[name] = lambda m, t=topic, d=dirs, f=frame: self._write(
+                    t, "marine_acoustic_msgs/msg/Dvl", m.t_s, c.dvl(m, f, d))
             elif kind == "fls":
                 from sim.sensors.fls_presets import resolve_geometry
 

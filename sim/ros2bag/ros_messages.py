@@ -5,9 +5,12 @@ the vehicle body is FLU (``base_link`` for the navigation estimate, ``base_link_
 for the true pose). The NED/FRD -> ENU/FLU conversion is done in :mod:`autonomy.frames`
 (``enu_from_ned``, ``flu_from_frd``, ``rot_enu_flu``) and nowhere else. Sensor frames:
 
-* ``base_link_frd``: the FRD body axes (``base_link`` turned by pi about x); DVL velocities
-  (DVL convention: z along the pointing direction, down; x forward).
-* ``<altimeter>_link``: x along the echo-sounder beam (straight down), as ``sensor_msgs/Range``.
+* ``base_link_frd``: the FRD body axes (``base_link`` turned by pi about x).
+* ``<dvl>_link``: at the DVL's mount, the FRD body axes: the DVL measures its transducer's
+  velocity over ground in body axes (DVL convention: z along the pointing direction, down;
+  x forward).
+* ``<altimeter>_link``: at the altimeter's mount, x along the echo-sounder beam (straight
+  down for an aligned mount), as ``sensor_msgs/Range``.
 * ``<fls>_link``: the ``ProjectedSonarImage`` frame, z along the sonar boresight, x up in
   the fan's vertical plane, y to starboard.
 
@@ -19,6 +22,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
+import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -37,6 +41,13 @@ R_SONAR_SONARMSG: FloatArray = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0
 #: (3, 3) altimeter_link (x down the beam) -> FLU body: a +90 deg pitch about y (left).
 R_FLU_ALTIMETER: FloatArray = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])
 ATMOSPHERE_PA = 101325.0
+
+
+def altimeter_frame_in_flu(R_bs: ArrayLike) -> FloatArray:
+    """(3, 3) ``<altimeter>_link`` -> FLU body rotation for a mount whose sensor axes turn
+    into the body's FRD axes by ``R_bs`` (the echo sounder looks along its sensor z, down):
+    x of the link is the beam. Equals :data:`R_FLU_ALTIMETER` for an aligned mount."""
+    return R_FLU_FRD @ np.asarray(R_bs, dtype=float) @ R_FLU_FRD @ R_FLU_ALTIMETER
 
 
 def stamp_ns(t_s: float) -> int:
@@ -60,6 +71,7 @@ class RosConverter:
         self._Point = T["geometry_msgs/msg/Point"]
         self._Quaternion = T["geometry_msgs/msg/Quaternion"]
         self._Pose = T["geometry_msgs/msg/Pose"]
+        self._beam_cache: dict[tuple[bytes, bytes], tuple[list, np.ndarray]] = {}
 
     # -- primitives ------------------------------------------------------------------
     def header(self, t_s: float, frame_id: str) -> Any:
@@ -67,15 +79,29 @@ class RosConverter:
         return self._Header(stamp=self._Time(sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000), frame_id=frame_id)
 
     def vector3(self, v: ArrayLike) -> Any:
-        x, y, z = (float(c) for c in np.asarray(v, dtype=float))
+        x, y, z = np.asarray(v, dtype=float).reshape(3).tolist()
         return self._Vector3(x=x, y=y, z=z)
 
+    def _sonar_beams(self, beam_azimuths_rad: ArrayLike, bin_centres_m: ArrayLike) -> tuple[list, np.ndarray]:
+        """The beam direction vectors (message frame) and float32 ranges of one sonar
+        geometry, built once per geometry: they are the same in every frame."""
+        az = np.ascontiguousarray(beam_azimuths_rad, dtype=float)
+        bins = np.ascontiguousarray(bin_centres_m, dtype=float)
+        key = (az.tobytes(), bins.tobytes())
+        hit = self._beam_cache.get(key)
+        if hit is None:
+            dirs = ray_directions_sonar(az, 0.0) @ R_SONAR_SONARMSG  # sonar -> message axes
+            V = self._Vector3
+            hit = self._beam_cache[key] = ([V(x=float(x), y=float(y), z=float(z)) for x, y, z in dirs.tolist()],
+                                           bins.astype(np.float32))
+        return hit
+
     def point(self, p: ArrayLike) -> Any:
-        x, y, z = (float(c) for c in np.asarray(p, dtype=float))
+        x, y, z = np.asarray(p, dtype=float).reshape(3).tolist()
         return self._Point(x=x, y=y, z=z)
 
     def quaternion(self, R: ArrayLike) -> Any:
-        x, y, z, w = (float(c) for c in quat_xyzw(quat_from_rot(R)))
+        x, y, z, w = np.asarray(quat_xyzw(quat_from_rot(R)), dtype=float).tolist()
         return self._Quaternion(x=x, y=y, z=z, w=w)
 
     def pose(self, pos: ArrayLike, R: ArrayLike) -> Any:
@@ -175,15 +201,17 @@ class RosConverter:
         if polar.shape != (az.size, np.size(bin_centres_m)):
             raise ValueError(f"polar image {polar.shape} does not match {az.size} beams x "
                              f"{np.size(bin_centres_m)} bins")
-        dirs = ray_directions_sonar(az, 0.0) @ R_SONAR_SONARMSG  # sonar -> message axes
+        beams, ranges = self._sonar_beams(az, bin_centres_m)
+        # bin-major bytes: one contiguous uint8 buffer handed to the serializer as is
+        # (cv2.transpose: ~4x faster than numpy's strided copy on uint8)
+        data = cv2.transpose(np.ascontiguousarray(polar)).reshape(-1)
         T = self.store.types
         return T["marine_acoustic_msgs/msg/ProjectedSonarImage"](
             header=self.header(frame.t_s, frame_id),
             ping_info=build(self.store, "marine_acoustic_msgs/msg/PingInfo", frequency=float(frequency_hz)),
-            beam_directions=[self.vector3(d) for d in dirs],
-            ranges=np.asarray(bin_centres_m, dtype=np.float32),
+            beam_directions=beams, ranges=ranges,
             image=T["marine_acoustic_msgs/msg/SonarImageData"](
-                is_bigendian=False, dtype=0, beam_count=int(az.size), data=np.ascontiguousarray(polar.T).ravel()))
+                is_bigendian=False, dtype=0, beam_count=int(az.size), data=data))
 
     def detections(self, result: Any, frame_id: str) -> Any:
         """``vision_msgs/Detection2DArray`` of a perception result: boxes in fan-image pixels,

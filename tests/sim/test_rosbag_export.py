@@ -27,6 +27,8 @@ from sim.sensors.fls_presets import resolve_geometry  # noqa: E402
 from sim.outputs.trajectory_log import TrajectoryLog  # noqa: E402
 
 DURATION_S = 8.0
+# mounts off the body origin (and an altimeter tilted forward) to check the sensor frames
+ALT_POS_FRD_M, ALT_PITCH_DEG, DVL_POS_FRD_M = (0.30, -0.10, 0.20), 20.0, (-0.25, 0.05, 0.22)
 
 
 class _Capture:
@@ -45,7 +47,10 @@ class _Capture:
 
 @pytest.fixture(scope="module")
 def bag_run(tmp_path_factory):
-    scn = load_scenario("cssn_lawnmower", [f"duration_s={DURATION_S}", "autonomy.atr.detector=classical"])
+    scn = load_scenario("cssn_lawnmower", [
+        f"duration_s={DURATION_S}", "autonomy.atr.detector=classical",
+        f"sensors.altimeter.mount_pos_body_m={list(ALT_POS_FRD_M)}", f"sensors.altimeter.mount_rpy_deg=[0, {ALT_PITCH_DEG}, 0]",
+        f"sensors.dvl.mount_pos_body_m={list(DVL_POS_FRD_M)}"])
     path = tmp_path_factory.mktemp("bag") / "rosbag"
     log, cap = TrajectoryLog(), _Capture()
     mission = Mission(scn, observers=[log, cap, RosbagRecorder(path)])
@@ -134,7 +139,24 @@ def test_tf_tree(bag_run):
     *_, topics = bag_run
     static = {(t.header.frame_id, t.child_frame_id) for _, m in topics["/tf_static"] for t in m.transforms}
     assert static == {("map", "odom"), ("base_link", "base_link_frd"), ("base_link", "altimeter_link"),
-                      ("base_link", "fls_link")}
+                      ("base_link", "dvl_link"), ("base_link", "fls_link")}
+    by_child = {t.child_frame_id: t.transform for _, m in topics["/tf_static"] for t in m.transforms}
+
+    def flu(v):  # FRD -> FLU by an axis swap
+        return [v[0], -v[1], -v[2]]
+
+    def matrix(tf):
+        q = tf.rotation
+        return Rotation.from_quat([q.x, q.y, q.z, q.w]).as_matrix()
+
+    for child, pos in (("altimeter_link", ALT_POS_FRD_M), ("dvl_link", DVL_POS_FRD_M)):
+        t = by_child[child].translation
+        np.testing.assert_allclose([t.x, t.y, t.z], flu(pos), atol=1e-12)
+    # Range convention: x along the beam; a +20 deg pitch turns the down-looking beam forward
+    th = np.deg2rad(ALT_PITCH_DEG)
+    np.testing.assert_allclose(matrix(by_child["altimeter_link"])[:, 0], flu([np.sin(th), 0.0, np.cos(th)]),
+                               atol=1e-12)
+    np.testing.assert_allclose(matrix(by_child["dvl_link"]), np.diag([1.0, -1.0, -1.0]), atol=1e-12)  # FRD axes
     dynamic = {(t.header.frame_id, t.child_frame_id) for t in topics["/tf"][-1][1].transforms}
     assert dynamic == {("map", "base_link_truth"), ("odom", "base_link")}
     tf = next(t for _, m in topics["/tf_static"] for t in m.transforms if t.child_frame_id == "fls_link")
@@ -156,7 +178,8 @@ def test_sensor_messages_carry_the_values_delivered(bag_run):
     dvl = [m for _, m in topics["/auvsim/dvl"]]
     dsrc: list[DvlMsg] = cap.msgs["DvlMsg"]
     np.testing.assert_allclose([[m.velocity.x, m.velocity.y, m.velocity.z] for m in dvl],
-                               [s.vel_body_mps for s in dsrc])  # base_link_frd: the FRD axes as given
+                               [s.vel_body_mps for s in dsrc])  # dvl_link: the FRD axes as given
+    assert {m.header.frame_id for m in dvl} == {"dvl_link"}
     b = dvl[0].beam_unit_vec
     half = np.deg2rad(scn.sensors["dvl"].beam_angle_deg)
     assert [v.z for v in b] == pytest.approx([np.cos(half)] * 4)  # beams tilted from straight down
@@ -216,3 +239,24 @@ def test_cli_rosbag_flag(tmp_path, capsys):
 
     assert main(["run", "cssn_lawnmower", "--out", str(tmp_path / "r"), "--rosbag-fls-every", "0"]) == 2
     assert "--rosbag-fls-every" in capsys.readouterr().err
+
+
+def test_scenario_outputs_key_writes_a_thinned_bag(tmp_path):
+    from sim.outputs.mission_outputs import run_mission
+
+    scn = load_scenario("cssn_lawnmower", ["duration_s=3", "autonomy.atr.detector=none", "outputs.rosbag=true",
+                                           "outputs.rosbag_fls_every=2"])
+    run_mission(scn, tmp_path / "run", rerun=False, progress=False)
+    with Reader(tmp_path / "run" / "rosbag") as reader:
+        n_images = sum(1 for c, _, _ in reader.messages() if c.topic == "/auvsim/fls/image")
+    n_frames = int(scn.duration_s * scn.sensors["fls"].rate_hz + 1e-9)  # frames at 0, 1/rate, ... < duration
+    assert n_frames >= 6 and n_images == (n_frames + 1) // 2
+    run_mission(scn, tmp_path / "off", rerun=False, progress=False, rosbag=False)  # the argument wins
+    assert not (tmp_path / "off" / "rosbag").exists()
+
+
+def test_scenario_outputs_key_is_validated(tmp_path, capsys):
+    from sim.cli import main
+
+    assert main(["validate", "cssn_lawnmower", "--set", "outputs.rosbag_fls_every=0"]) == 2
+    assert "outputs.rosbag_fls_every" in capsys.readouterr().err

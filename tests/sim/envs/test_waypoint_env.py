@@ -70,7 +70,7 @@ def test_physics_rate_50hz_tracks_200hz():
         for k in range(300):  # 30 s: surge, sway, heave and yaw commands all varying
             t = 0.1 * k
             env.step(np.array([0.6, 0.3 * math.sin(0.2 * t), 0.2 * math.sin(0.1 * t), 0.3 * math.cos(0.15 * t)]))
-        finals.append((env._pos.copy(), env._rpy.copy()))
+        finals.append((env.task.pos_ned, env.task.rpy_rad))
     travelled = np.linalg.norm(finals[1][0] - WaypointEnv().reset(seed=3)[1]["pos_ned"])
     assert travelled > 3.0
     assert np.linalg.norm(finals[0][0] - finals[1][0]) < 0.05
@@ -101,8 +101,8 @@ def test_scripted_pursuit_reaches_waypoints_under_current():
     max_rate = env.max_yaw_rate_radps
     for _ in range(2000):
         wp = env.waypoint_ned()
-        bearing = math.atan2(wp[1] - env._pos[1], wp[0] - env._pos[0])
-        err = (bearing - env._heading_sp_rad + math.pi) % (2 * math.pi) - math.pi
+        bearing = math.atan2(wp[1] - env.task.pos_ned[1], wp[0] - env.task.pos_ned[0])
+        err = (bearing - env.task.heading_setpoint_rad + math.pi) % (2 * math.pi) - math.pi
         rate = np.clip(err / (max_rate * 0.1), -1.0, 1.0)
         depth = np.clip(2.0 * (wp[2] - d_lo) / (d_hi - d_lo) - 1.0, -1.0, 1.0)
         obs, r, term, trunc, info = env.step(np.array([0.2, rate, depth]))

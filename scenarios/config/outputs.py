@@ -1,0 +1,21 @@
+"""What a run writes besides its always-written files (metrics, trajectory, world model, map)."""
+
+from __future__ import annotations
+
+from pydantic import Field
+
+from scenarios.config.base import StrictModel
+
+
+class OutputsConfig(StrictModel):
+    """Optional outputs of ``auvsim run`` (its ``--rosbag`` / ``--rosbag-fls-every`` flags
+    override these).
+
+    Attributes:
+        rosbag: also write a ROS 2 bag (rosbag2 folder, MCAP storage) into ``OUT/rosbag``.
+        rosbag_fls_every: export every n-th frame of each forward-looking sonar into the bag
+            (1: all; a frame is ~0.8 MB).
+    """
+
+    rosbag: bool = False
+    rosbag_fls_every: int = Field(1, ge=1, le=1_000_000)
