@@ -32,7 +32,7 @@ from sim.dataset.randomization import (HELDOUT_RANDOMIZATION, TRAIN_RANDOMIZATIO
 from sim.outputs.run_dir import check_output_dir, write_marker
 from sim.rng import component_rng
 
-GENERATOR_VERSION = "1.2.0"
+GENERATOR_VERSION = "1.3.0"
 MANIFEST_FILE = "manifest.json"
 PARTS_DIR = "parts"
 CLASS_NAMES = ("opi", "rock", "debris")
