@@ -1,10 +1,10 @@
-"""``auvsim dataset``: render a labelled, domain-randomised FLS dataset."""
+"""``auvsim dataset``: render a labelled, domain-randomised FLS (or side-scan) dataset."""
 
 from __future__ import annotations
 
 import argparse
 
-from sim.cli.args import MAX_DATASET_FRAMES, frame_count, non_negative_int, positive_int
+from sim.cli.args import MAX_DATASET_FRAMES, frame_count, non_negative_int, positive_float, positive_int
 from sim.cli.errors import CliError
 
 
@@ -15,10 +15,22 @@ def _cmd_dataset(args: argparse.Namespace) -> int:
         raise CliError(f"--heldout and --randomization {args.randomization} contradict each other; give one "
                        "(--heldout is --randomization heldout)")
     preset = "heldout" if args.heldout else (args.randomization or "train")
+    kw = {}
+    if args.sensor == "sss":
+        from sim.dataset.sss_generate import SssSettings
+
+        defaults = SssSettings()
+        kw["settings"] = SssSettings(
+            tile_length_m=defaults.tile_length_m if args.tile_length is None else args.tile_length,
+            line_length_m=defaults.line_length_m if args.line_length is None else args.line_length)
+    else:
+        for opt, value in (("--tile-length", args.tile_length), ("--line-length", args.line_length)):
+            if value is not None:
+                raise CliError(f"{opt}: only with --sensor sss (side-scan tiles)")
     try:
         path = generate_dataset(args.out, args.n, seed=args.seed, workers=args.workers,
                                 use_ray=args.ray is not None, ray_address=args.ray or None,
-                                randomization=RANDOMIZATION_PRESETS[preset], progress=not args.no_progress)
+                                randomization=RANDOMIZATION_PRESETS[preset], progress=not args.no_progress, **kw)
     except ImportError as exc:
         if str(exc) == RAY_HINT:
             raise CliError(f"--ray: {RAY_HINT}") from None
@@ -30,8 +42,15 @@ def _cmd_dataset(args: argparse.Namespace) -> int:
 def add_parser(sub: argparse._SubParsersAction) -> None:
     from sim.dataset.generate import RANDOMIZATION_PRESETS
 
-    p = sub.add_parser("dataset", help="render a labelled, domain-randomised FLS dataset")
-    p.add_argument("--n", type=frame_count, required=True, help=f"number of frames (1 to {MAX_DATASET_FRAMES})")
+    p = sub.add_parser("dataset", help="render a labelled, domain-randomised FLS or side-scan dataset")
+    p.add_argument("--n", type=frame_count, required=True,
+                   help=f"number of frames, or side-scan tiles (1 to {MAX_DATASET_FRAMES})")
+    p.add_argument("--sensor", choices=("fls", "sss"), default="fls",
+                   help="fls: forward-looking fan images (default); sss: side-scan waterfall tiles")
+    p.add_argument("--tile-length", type=positive_float, default=None, metavar="M",
+                   help="sss: along-track tile length, m (default 50)")
+    p.add_argument("--line-length", type=positive_float, default=None, metavar="M",
+                   help="sss: survey line per scene, m (default 150; line // tile tiles per scene)")
     p.add_argument("--out", required=True,
                    help="output folder: new, or a dataset folder to resume with the same arguments")
     p.add_argument("--seed", type=non_negative_int, default=0)

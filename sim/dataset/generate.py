@@ -1,4 +1,5 @@
-"""``auvsim dataset``: domain-randomised, labelled FLS frames.
+"""``auvsim dataset``: domain-randomised, labelled FLS frames (or side-scan tiles,
+:mod:`sim.dataset.sss_generate`, with the same layout, resume and determinism).
 
 Layout of an output directory::
 
@@ -27,6 +28,7 @@ import numpy as np
 from scenarios.config.fls import FlsConfig
 from sim.dataset.coco_io import ANNOTATIONS_FILE, IMAGES_DIR, LABELS_DIR, write_atomic, write_coco, yolo_lines
 from sim.dataset.errors import DatasetError
+from sim.dataset.sss_generate import SssSettings
 from sim.dataset.randomization import (HELDOUT_RANDOMIZATION, TRAIN_RANDOMIZATION, WIDE_RANDOMIZATION,
                                       Randomization, SceneSpec, sample_scene)
 from sim.outputs.run_dir import check_output_dir, write_marker
@@ -118,16 +120,27 @@ def render_scene(spec: SceneSpec, seed: int, settings: RenderSettings, frame_ids
 def _scene_job(job: tuple) -> int:
     seed, index, rz_json, settings, frame_ids, out_dir = job
     out_dir = Path(out_dir)
-    spec = scene_spec(seed, index, Randomization.model_validate_json(rz_json))
-    part = render_scene(spec, seed, settings, frame_ids, out_dir)
+    rz = Randomization.model_validate_json(rz_json)
+    if isinstance(settings, SssSettings):
+        from sim.dataset.sss_generate import render_sss_scene, sss_scene_spec
+
+        part = render_sss_scene(sss_scene_spec(seed, index, rz, settings), seed, settings, frame_ids, out_dir)
+    else:
+        part = render_scene(scene_spec(seed, index, rz), seed, settings, frame_ids, out_dir)
     write_atomic(out_dir / PARTS_DIR / f"scene_{index:05d}.json", json.dumps(part))
     return len(frame_ids)
 
 
-def _manifest(n_frames: int, seed: int, rz: Randomization, settings: RenderSettings) -> dict:
+def _manifest(n_frames: int, seed: int, rz: Randomization, settings: RenderSettings | SssSettings) -> dict:
     rz_json = rz.model_dump(mode="json")
     if rz_json.get("basin") is None:
         rz_json.pop("basin", None)  # datasets without basin walls keep their earlier manifests
+    if isinstance(settings, SssSettings):
+        from scenarios.config.sss import SssConfig
+
+        return {"generator_version": GENERATOR_VERSION, "sensor": "sss", "seed": seed, "n_frames": n_frames,
+                "classes": list(CLASS_NAMES), "randomization": rz_json, "render": settings.__dict__.copy(),
+                "sss_defaults": SssConfig().model_dump(mode="json")}
     return {"generator_version": GENERATOR_VERSION, "seed": seed, "n_frames": n_frames,
             "classes": list(CLASS_NAMES), "randomization": rz_json,
             "render": settings.__dict__.copy(), "fls_defaults": FlsConfig().model_dump(mode="json")}
@@ -160,25 +173,31 @@ def merge_parts(out_dir: Path, manifest: dict) -> None:
     write_atomic(out_dir / "classes.txt", "\n".join(CLASS_NAMES) + "\n")
     info = {"description": "auvsim synthetic FLS ATR dataset", "version": GENERATOR_VERSION,
             "seed": manifest["seed"]}
+    if manifest.get("sensor") == "sss":
+        info = {**info, "description": "auvsim synthetic side-scan (SSS) tile dataset", "sensor": "sss"}
     write_coco(out_dir / ANNOTATIONS_FILE, images, annotations, categories, info)
 
 
 def generate_dataset(out_dir: str | Path, n_frames: int, seed: int = 0, workers: int | None = None,
                      ray_address: str | None = None, use_ray: bool = False,
                      randomization: Randomization = TRAIN_RANDOMIZATION,
-                     settings: RenderSettings = RenderSettings(), progress: bool = True) -> Path:
+                     settings: RenderSettings | SssSettings = RenderSettings(), progress: bool = True) -> Path:
     """Write (or finish) a dataset of ``n_frames`` frames in ``out_dir``; returns the COCO file.
 
+    ``settings``: :class:`RenderSettings` for FLS fan images, :class:`SssSettings` for
+    side-scan tiles (``n_frames`` tiles, ``settings.tiles_per_scene()`` per scene).
     ``workers``: local processes (default: all cores; 1 = in this process). ``use_ray``:
     distribute scenes with Ray (``ray_address`` None starts a local instance).
     Raises:
-        DatasetError: ``n_frames`` < 1, or ``out_dir`` holds a dataset made with other
-            parameters.
+        DatasetError: ``n_frames`` < 1, side-scan settings out of range (a tile longer than
+            the line), or ``out_dir`` holds a dataset made with other parameters.
         OutputDirError: ``out_dir`` is protected, a file, not creatable, or holds files
             that are not an auvsim dataset.
     """
     if n_frames < 1:
         raise DatasetError(f"--n: must be >= 1, got {n_frames}")
+    if isinstance(settings, SssSettings):
+        settings.check()
     out_dir = check_output_dir(out_dir, kind="dataset", resume=True)
     (out_dir / IMAGES_DIR).mkdir(parents=True, exist_ok=True)
     (out_dir / PARTS_DIR).mkdir(exist_ok=True)
@@ -198,7 +217,7 @@ def generate_dataset(out_dir: str | Path, n_frames: int, seed: int = 0, workers:
                                f"(differs in {', '.join(diff)}); use a new --out folder")
     write_atomic(man_path, json.dumps({**manifest, "complete": False}, indent=1))
     write_marker(out_dir, "dataset")
-    fps = randomization.frames_per_scene
+    fps = settings.tiles_per_scene() if isinstance(settings, SssSettings) else randomization.frames_per_scene
     n_scenes = math.ceil(n_frames / fps)
     rz_json = randomization.model_dump_json()
     jobs = []
