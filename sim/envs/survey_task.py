@@ -1,11 +1,15 @@
-"""``auvsim/Survey-v1``: find and localise the targets of an area with high-level setpoints.
+"""The Survey task: find and localise the targets of an area with high-level setpoints.
+
+One implementation behind both interfaces: the gymnasium env ``auvsim/Survey-v1``
+(:mod:`sim.envs.survey_env`) and the dm_env one (:mod:`sim.envs.dm`).
 
 Each episode (:mod:`sim.envs.survey_layout`) surveys a square area larger than the sonar's
 reach (``area_size_ne_m``, 80 m x 80 m by default, centred on the scenario's survey plan),
 starting at its south-west corner heading north, with the scenario's objects placed at
-random in the area from the episode's seed, none within the sonar's reach of the start.
-(``Survey-v0`` surveyed the scenario's own small area with its fixed targets: the start
-already saw every target, so every sonar episode ended on its first step.)
+random in the area from the generator given to :meth:`SurveyTask.reset`, none within the
+sonar's reach of the start. (``Survey-v0`` surveyed the scenario's own small area with its
+fixed targets: the start already saw every target, so every sonar episode ended on its
+first step.)
 
 Wraps the closed-loop :class:`sim.mission.Mission` (physics, navigation sensors, EKF,
 autopilots and, with ``sonar=True``, the FLS, ATR, geolocalisation and PMHA world model).
@@ -26,12 +30,12 @@ from pathlib import Path
 from typing import Any
 
 import cv2
-import gymnasium as gym
 import numpy as np
-from gymnasium import spaces
+from numpy.typing import NDArray
 
 from autonomy.control.setpoint import Setpoint
 from autonomy.frames import wrap_angle
+from autonomy.messages import NavEstimate
 from scenarios.schema import Scenario
 from sim.envs.area import OperatingArea, survey_area
 from sim.envs.coverage import CoverageGrid
@@ -40,9 +44,11 @@ from sim.envs.survey_layout import SurveyLayout, episode_scenario, episode_seabe
 from sim.envs.world_model_obs import anchor_bounds, anchor_table, match_new_targets
 from sim.mission import Mission
 from sim.records import MissionInfo, MissionSummary
+from sim.seabed import Seabed
 from sim.sensors.base import Mount
 from sim.sensors.fls import FlsRender
 from sim.sensors.fls_presets import resolve_geometry
+
 
 NAV_FEATURES = ("n_m", "e_m", "depth_m", "altitude_m", "altitude_valid", "roll_rad", "pitch_rad", "sin_yaw",
                 "cos_yaw", "u_mps", "v_mps", "w_mps", "r_radps", "pos_sigma_m", "time_fraction",
@@ -69,7 +75,7 @@ class SurveyRewardWeights:
 
 @dataclass(frozen=True)
 class SurveyEnvOptions:
-    """Typed options of :class:`SurveyEnv`.
+    """Typed options of the Survey task (:class:`SurveyTask`, ``SurveyEnv``).
 
     Attributes:
         sonar: simulate the FLS and run ATR + PMHA, and add the downsampled fan image
@@ -176,20 +182,53 @@ class _LatestFls:
         pass
 
 
-class SurveyEnv(gym.Env):
-    """Survey an area for targets. See the module docstring.
+@dataclass(frozen=True)
+class ObsField:
+    """One entry of the Survey observation dict: shape, dtype and elementwise bounds
+    (scalars or arrays broadcastable to ``shape``)."""
 
-    Action: Box([-1, 1]^3): surge speed (mapped to ``speed_range_mps``), yaw rate (mapped
-    to +- the autopilot's max yaw rate; the heading setpoint integrates it) and altitude
-    (mapped to ``altitude_range_m``).
+    shape: tuple[int, ...]
+    dtype: type
+    low: float | NDArray
+    high: float | NDArray
 
-    Observation (Dict): ``nav`` (:data:`NAV_FEATURES`, north/east relative to the area
-    centre), ``anchors`` (top-K world objects, features
-    :data:`sim.envs.world_model_obs.ANCHOR_FEATURES`), ``anchor_mask``, ``coverage``
-    ((rows, cols) in {0, 1}) and, with sonar, ``sonar`` (uint8 fan image).
+
+class SurveyTask:
+    """Survey an area for targets (see the module docstring): the task logic, free of any RL
+    interface. The gymnasium and dm_env wrappers hold one instance and only translate its
+    results, so both give the same trajectory for the same seed and actions, bit for bit.
+
+    Action (shape ``(3,)``, in [-1, 1], clipped): surge speed (mapped to
+    ``speed_range_mps``, m/s), yaw rate (mapped to +- the autopilot's max yaw rate; the
+    heading setpoint integrates it) and altitude above the seabed (mapped to
+    ``altitude_range_m``, m).
+
+    Observation (dict, fields in :attr:`obs_fields`): ``nav`` float32 ``(16,)``
+    (:data:`NAV_FEATURES`: north/east of the navigation estimate relative to the area centre
+    (m, NED), depth (m), altitude (m) and whether it is valid, roll, pitch (rad), sin/cos
+    yaw, body velocity [u, v, w] (m/s, FRD), yaw rate r (rad/s), horizontal position sigma
+    (m), elapsed fraction of the time limit, covered fraction of the area); ``anchors``
+    float32 ``(top_k_anchors, len(ANCHOR_FEATURES))`` (top-K world objects, features
+    :data:`sim.envs.world_model_obs.ANCHOR_FEATURES`, positions relative to the area centre,
+    NED m); ``anchor_mask`` int8 ``(top_k_anchors,)`` in {0, 1} (rows in use); ``coverage``
+    float32 ``coverage_shape`` in {0, 1} (row 0 = south, column 0 = west); and, with sonar,
+    ``sonar`` uint8 ``sonar_shape`` (the latest FLS fan image, area-downsampled; zeros
+    before the first frame).
+
+    Args:
+        scenario: shipped scenario name, YAML path or :class:`Scenario`.
+        options: typed options, or a dict of them (``reward`` may be a dict too).
+        overrides: ``key.path=value`` scenario overrides.
+
+    Attributes (per episode, rebuilt by :meth:`reset`): ``scenario`` (the episode's
+    scenario), ``mission``, ``coverage`` (:class:`CoverageGrid`), ``targets_ned`` ((T, 3)
+    true target positions, NED m).
+
+    Raises:
+        ValueError: inconsistent options (decision interval not a multiple of the autonomy
+            period, area not larger than the sonar's reach).
+        scenarios.load.ScenarioError: a bad scenario or override.
     """
-
-    metadata = {"render_modes": []}
 
     def __init__(self, scenario: str | Path | Scenario = "cssn_lawnmower",
                  options: SurveyEnvOptions | dict | None = None, overrides: tuple[str, ...] = ()) -> None:
@@ -220,16 +259,38 @@ class SurveyEnv(gym.Env):
 
         k = opts.top_k_anchors
         a_lo, a_hi = anchor_bounds(k)
-        obs_spaces: dict[str, spaces.Space] = {
-            "nav": spaces.Box(_NAV_LO, _NAV_HI, dtype=np.float32),
-            "anchors": spaces.Box(a_lo, a_hi, dtype=np.float32),
-            "anchor_mask": spaces.MultiBinary(k),
-            "coverage": spaces.Box(0.0, 1.0, tuple(opts.coverage_shape), dtype=np.float32),
+        self.obs_fields: dict[str, ObsField] = {
+            "nav": ObsField((len(NAV_FEATURES),), np.float32, _NAV_LO, _NAV_HI),
+            "anchors": ObsField(a_lo.shape, np.float32, a_lo, a_hi),
+            "anchor_mask": ObsField((k,), np.int8, 0, 1),
+            "coverage": ObsField(tuple(opts.coverage_shape), np.float32, 0.0, 1.0),
         }
         if opts.sonar:
-            obs_spaces["sonar"] = spaces.Box(0, 255, tuple(opts.sonar_shape), dtype=np.uint8)
-        self.observation_space = spaces.Dict(obs_spaces)
-        self.action_space = spaces.Box(-1.0, 1.0, (3,), dtype=np.float32)
+            self.obs_fields["sonar"] = ObsField(tuple(opts.sonar_shape), np.uint8, 0, 255)
+        self.n_act = 3
+        self._n_steps = 0
+        self._heading_sp_rad = 0.0
+
+    # ------------------------------------------------------------------ state views
+    @property
+    def t_s(self) -> float:
+        """Time since the episode's start, s."""
+        return self._n_steps * self.decision_interval_s
+
+    @property
+    def seabed(self) -> Seabed:
+        """The episodes' seabed (enlarged to the area plus the sonar's range; same every episode)."""
+        return self._seabed
+
+    @property
+    def nav(self) -> NavEstimate:
+        """The latest navigation estimate (what the observation is built from)."""
+        return self._nav
+
+    @property
+    def heading_setpoint_rad(self) -> float:
+        """Heading the autopilot tracks, rad (NED yaw; the yaw-rate action integrates it)."""
+        return self._heading_sp_rad
 
     # ------------------------------------------------------------------ episode
     def _build(self, scn: Scenario) -> None:
@@ -247,10 +308,14 @@ class SurveyEnv(gym.Env):
         self.targets_ned = np.array([t.pos_ned for t in scn.world.targets if t.is_target], dtype=float).reshape(-1, 3)
         self._found = np.zeros(len(self.targets_ned), dtype=bool)
 
-    def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[dict, dict[str, Any]]:
-        super().reset(seed=seed)
-        self._build(episode_scenario(self.base_scenario, self.layout, self._seabed, self.np_random))
-        mission_seed = int(self.np_random.integers(0, 2**63 - 1))
+    def reset(self, rng: np.random.Generator) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        """Start an episode drawn from ``rng`` (object layout, then the mission's seed).
+
+        Returns:
+            ``(observation, info)``; info as :meth:`step`'s, without ``energy`` and ``complete``.
+        """
+        self._build(episode_scenario(self.base_scenario, self.layout, self._seabed, rng))
+        mission_seed = int(rng.integers(0, 2**63 - 1))
         rec = self.mission.reset(mission_seed)
         self._nav = rec.nav
         self._heading_sp_rad = float(rec.nav.rpy_rad[2])
@@ -260,10 +325,24 @@ class SurveyEnv(gym.Env):
         self._found[:] = False
         return self._observation(), self._info(False, False, 0)
 
-    def step(self, action: np.ndarray) -> tuple[dict, float, bool, bool, dict[str, Any]]:
+    def step(self, action: np.ndarray) -> tuple[dict[str, np.ndarray], float, bool, bool, dict[str, Any]]:
+        """Hold ``action`` (shape ``(3,)``, clipped to [-1, 1]) for one decision interval.
+
+        Returns:
+            ``(observation, reward, terminated, truncated, info)``: terminated when the
+            mission completes (coverage reaches ``complete_coverage_fraction``, or every
+            target is found with sonar), on a collision, or on leaving the area or the
+            water; truncated at ``max_episode_s``. info: ``t_s``, ``coverage_fraction``,
+            ``targets_found``, ``new_targets``, ``collision``, ``left_area``,
+            ``nav_pos_ned`` (3,) NED m, ``energy`` (integral of the mean squared normalised
+            thruster command, s), ``complete``.
+
+        Raises:
+            ValueError: a non-finite action.
+        """
         a = np.clip(np.asarray(action, dtype=float).reshape(3), -1.0, 1.0)
         if not np.all(np.isfinite(a)):
-            raise ValueError(f"SurveyEnv.step: action must be finite, got {action!r}")
+            raise ValueError(f"SurveyTask.step: action must be finite, got {action!r}")
         opts, w, m = self.options, self.options.reward, self.mission
         s_lo, s_hi = opts.speed_range_mps
         h_lo, h_hi = opts.altitude_range_m
