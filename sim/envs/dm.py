@@ -9,8 +9,9 @@ trajectory, bit for bit: ``gymnasium``'s ``reset(seed=s)`` and this env's ``seed
 
 Episode ends: a terminal step (Waypoint: every waypoint reached; Survey: the mission
 complete; both: collision, leaving the area or the water) is a ``LAST`` step with discount
-0; the time limit (``max_episode_s``) is a ``LAST`` step with discount 1 (a truncation). ``step`` after a ``LAST`` step (or on a fresh env)
-starts a new episode, as dm_env specifies.
+0; the time limit (``max_episode_s``) is a ``LAST`` step with discount 1 (a truncation).
+``step`` after a ``LAST`` step (or on a fresh env) starts a new episode, as dm_env
+specifies.
 """
 
 from __future__ import annotations
@@ -165,8 +166,8 @@ DM_ENV_IDS = {SURVEY_ID: SurveyDmEnv, WAYPOINT_ID: WaypointDmEnv}
 
 
 def load(env_id: str, **kwargs: Any) -> dm_env.Environment:
-    """Build the dm_env version of ``env_id`` (``auvsim/Survey-v1`` or ``auvsim/Waypoint-v1``) with the env class's
-    keyword arguments (``scenario``, ``options``, ``overrides``, ``seed``).
+    """Build the dm_env version of ``env_id`` (``auvsim/Survey-v1`` or ``auvsim/Waypoint-v1``)
+    with the env class's keyword arguments (``scenario``, ``options``, ``overrides``, ``seed``).
 
     Raises:
         ValueError: an id without a dm_env version (the message lists those there are).

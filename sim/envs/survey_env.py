@@ -45,7 +45,8 @@ class SurveyEnv(gym.Env):
     def __init__(self, scenario: str | Path | Scenario = "cssn_lawnmower",
                  options: SurveyEnvOptions | dict | None = None, overrides: tuple[str, ...] = ()) -> None:
         self.task = task = SurveyTask(scenario, options, overrides)
-        self.options, self.base_scenario, self.layout, self.area = task.options, task.base_scenario, task.layout, task.area
+        self.options, self.base_scenario = task.options, task.base_scenario
+        self.layout, self.area = task.layout, task.area
         self.decision_interval_s, self.ticks_per_step = task.decision_interval_s, task.ticks_per_step
         self.max_episode_s, self.max_yaw_rate_radps = task.max_episode_s, task.max_yaw_rate_radps
         self.origin_ned = task.origin_ned
