@@ -38,13 +38,13 @@ class LawnmowerPolicy:
                                                        scn.autonomy.guidance.survey.altitude_m))
 
     def reset(self) -> None:
-        nav = self.env._nav
+        nav = self.env.nav
         self.guidance.start(nav.pos_ned[:2], float(nav.rpy_rad[2]))
 
     def __call__(self) -> np.ndarray:
         env, opts = self.env, self.env.options
-        sp = self.guidance.update(env._nav)
-        err = float(wrap_angle(sp.heading_rad - env._heading_sp_rad))
+        sp = self.guidance.update(env.nav)
+        err = float(wrap_angle(sp.heading_rad - env.heading_setpoint_rad))
         rate = np.clip(err / (env.max_yaw_rate_radps * env.decision_interval_s), -1.0, 1.0)
         alt = sp.altitude_m if sp.altitude_m is not None else float(np.mean(opts.altitude_range_m))
         return np.array([_to_unit(sp.speed_mps, *opts.speed_range_mps), rate,

@@ -93,7 +93,9 @@ def _profile(env: gym.Env, n_steps: int, top: int = 8) -> list[dict[str, Any]]:
     rows = sorted(stats.stats.items(), key=lambda kv: kv[1][3], reverse=True)
     out = []
     for (path, line, name), (_, _, tt, ct, _) in rows:
-        if name == "<module>" or path.endswith(("survey_env.py", "waypoint_env.py", "waypoint_task.py")) and name == "step":
+        own_step = name == "step" and path.endswith(("survey_env.py", "survey_task.py", "waypoint_env.py",
+                                                     "waypoint_task.py"))
+        if name == "<module>" or own_step:
             continue  # the env's own step is 100 %
         out.append({"function": f"{os.path.relpath(path) if os.path.isabs(path) else path}:{line}({name})",
                     "cumulative_fraction": round(ct / total, 3), "self_fraction": round(tt / total, 3)})

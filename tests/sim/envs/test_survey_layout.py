@@ -29,7 +29,7 @@ def test_area_exceeds_the_sonar_reach_and_targets_are_placed_per_seed(env):
         assert np.all(t[:, :2] >= env.area.lo_ne_m) and np.all(t[:, :2] <= env.area.hi_ne_m)
         start = env.scenario.vehicle.initial_pos_ned
         assert np.min(np.hypot(*(t[:, :2] - start[:2]).T)) >= reach  # beyond the sonar's reach
-        np.testing.assert_allclose(t[:, 2], env._seabed.depth_at(t[:, 0], t[:, 1]))  # resting on the seabed
+        np.testing.assert_allclose(t[:, 2], env.seabed.depth_at(t[:, 0], t[:, 1]))  # resting on the seabed
         pairs = np.hypot(*(t[:, None, :2] - t[None, :, :2]).transpose(2, 0, 1))
         assert np.min(pairs[np.triu_indices(len(t), 1)]) >= env.options.min_target_spacing_m
     np.testing.assert_array_equal(layouts[0][0], layouts[0][1])  # same seed, same layout
