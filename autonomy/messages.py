@@ -151,12 +151,21 @@ class MsisPing:
 @dataclass(frozen=True, slots=True)
 class PositionFixMsg:
     """A horizontal position fix of the body origin with its covariance (feature-based
-    localisation, e.g. a pool's circle or a tank's walls)."""
+    localisation, e.g. a pool's circle or a tank's walls).
+
+    The optional feature fields say what the fix was made from, in the navigation frame of
+    the estimate it corrects (before the fix): the echo points, the fitted circle or the
+    fitted wall segments with their 95 % rho half-widths.
+    """
 
     t_s: float
     pos_ne_m: FloatArray  # (2,) north, east of the body origin, mission NED frame
     cov_ne_m2: FloatArray  # (2, 2)
     source: str = ""
+    points_ne_m: FloatArray | None = None  # (N, 2) echo points of the fix, north, east m
+    circle_ne_m: FloatArray | None = None  # (3,) fitted circle: centre north, east, radius, m
+    segments_ne_m: FloatArray | None = None  # (k, 2, 2) segment end points (north, east), m
+    segments_rho95_m: FloatArray | None = None  # (k,) 95 % rho half-width of each segment, m
 
 
 @dataclass(frozen=True, slots=True)

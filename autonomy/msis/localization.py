@@ -96,7 +96,15 @@ class MsisLocalizer:
             return None
         pos, cov = fix
         cov = cov + self.cfg.fix_sigma_floor_m ** 2 * np.eye(2)
-        return PositionFixMsg(t_s=float(ping.t_s), pos_ne_m=pos, cov_ne_m2=cov, source=self.cfg.method)
+        feats: dict[str, FloatArray] = {}
+        if self.cfg.method == "circle" and self.last_circle is not None:
+            c = self.last_circle
+            feats["circle_ne_m"] = np.array([c.centre[0], c.centre[1], c.radius_m], dtype=float)
+        elif self.last_segments:
+            feats["segments_ne_m"] = np.array([[s.end_a, s.end_b] for s in self.last_segments], dtype=float)
+            feats["segments_rho95_m"] = np.array([s.rho0_m for s in self.last_segments], dtype=float)
+        return PositionFixMsg(t_s=float(ping.t_s), pos_ne_m=pos, cov_ne_m2=cov, source=self.cfg.method,
+                              points_ne_m=pts, **feats)
 
     def _circle_fix(self, pts: FloatArray, nav: NavEstimate) -> tuple[FloatArray, FloatArray] | None:
         cfg = self.cfg

@@ -1,5 +1,18 @@
 """Rerun recording of a mission: 3-D scene, vehicle pose, true and estimated paths,
-FLS fan frames with ground-truth boxes and detections, navigation errors, world model.
+FLS fan frames with ground-truth boxes and detections, navigation errors, world model, and
+the scanning sonar's scan building up ping by ping with the features of each position fix.
+
+Scanning-sonar entities (``<name>`` the sensor entry's name):
+
+* ``world/msis/<name>/ping``: each ping's samples at or above ``msis_point_threshold`` as
+  NED points along the beam from the head's true pose at the ping (max-pooled to at most
+  ``msis_max_points`` bins), coloured by intensity; ``world/msis/<name>/beam`` the beam axis;
+* ``sonar/msis/<name>/scan``: the Cartesian scan image in the head frame
+  (:class:`sim.sensors.msis_scan.ScanImage`, each ping overwriting its head angle's rows),
+  re-logged every ``msis_image_every`` pings;
+* ``world/msis/<name>/fix/{points,circle,segments,segments_95,position}``: at each position
+  fix, the echo points it used, the fitted circle or the wall segments with their 95 % rho
+  bands (navigation frame of the estimate before the fix) and the fixed position.
 
 An observer of the mission loop; it streams to an ``.rrd`` file as the mission runs.
 """
@@ -14,8 +27,11 @@ import numpy as np
 from autonomy.frames import quat_from_rot, rot_from_euler
 from typing import Any
 
+from autonomy.messages import PositionFixMsg
 from sim.records import MissionInfo, MissionSummary, PerceptionResult, StepRecord
 from sim.sensors.fls import FlsRender
+from sim.sensors.msis import MsisRender
+from sim.sensors.msis_scan import ScanImage
 from sim.target_meshes import target_mesh
 
 
@@ -27,9 +43,16 @@ class RerunRecorder:
         fls_every: log every n-th FLS frame (1 = all).
         fls_scale: resize factor for logged fan images (JPEG-encoded).
         path_every_s: how often the path line strips are re-logged.
+        msis_point_threshold: raw intensity (uint8) from which a scanning-sonar sample is
+            logged as a point.
+        msis_max_points: at most this many (max-pooled) bins per ping.
+        msis_image_every: re-log the scan image every n-th ping.
+        msis_image_px: side of the logged scan image, px.
     """
 
-    def __init__(self, path: Path, *, fls_every: int = 1, fls_scale: float = 0.5, path_every_s: float = 2.0) -> None:
+    def __init__(self, path: Path, *, fls_every: int = 1, fls_scale: float = 0.5, path_every_s: float = 2.0,
+                 msis_point_threshold: int = 80, msis_max_points: int = 200, msis_image_every: int = 10,
+                 msis_image_px: int = 256) -> None:
         import rerun as rr
 
         self._rr = rr
@@ -43,6 +66,13 @@ class RerunRecorder:
         self._last_path_t = -np.inf
         self._n_fls = 0
         self._frame_logged = False
+        self.msis_point_threshold = int(msis_point_threshold)
+        self.msis_max_points = max(int(msis_max_points), 1)
+        self.msis_image_every = max(int(msis_image_every), 1)
+        self.msis_image_px = int(msis_image_px)
+        self._scans: dict[str, ScanImage] = {}
+        self._n_msis: dict[str, int] = {}
+        self._msis_depth: dict[str, float] = {}
 
     # -- observer protocol -----------------------------------------------------------
     def on_start(self, info: MissionInfo) -> None:
@@ -96,6 +126,71 @@ class RerunRecorder:
             self._on_sonar_frame(msg)
         elif isinstance(msg, PerceptionResult):
             self._on_perception(msg)
+        elif isinstance(msg, MsisRender):
+            self._on_msis_ping(name, msg)
+        elif isinstance(msg, PositionFixMsg):
+            self._on_position_fix(name, msg)
+
+    def _on_msis_ping(self, name: str, render: MsisRender) -> None:
+        rr, rec = self._rr, self._rec
+        ping, truth = render.ping, render.truth
+        rec.set_time("sim_time", duration=ping.t_s)
+        x = np.asarray(ping.intensity)
+        n = len(x)
+        f = -(-n // self.msis_max_points)  # bins pooled per logged point
+        m = n // f
+        pooled = x[:m * f].reshape(m, f).max(axis=1)
+        r = (np.arange(m) * f + 0.5 * f) * ping.sample_spacing_m
+        u = np.asarray(truth.R_ns, dtype=float)[:, 0]  # beam axis, NED
+        head = np.asarray(truth.pos_ned, dtype=float)
+        self._msis_depth[name] = float(head[2])
+        keep = pooled >= self.msis_point_threshold
+        base = f"world/msis/{name}"
+        if keep.any():
+            v = pooled[keep]
+            colors = cv2.applyColorMap(v.reshape(-1, 1), cv2.COLORMAP_INFERNO)[:, 0, ::-1]
+            rec.log(f"{base}/ping", rr.Points3D(head[None, :] + r[keep, None] * u[None, :], colors=colors, radii=0.03))
+        else:
+            rec.log(f"{base}/ping", rr.Clear(recursive=False))
+        rec.log(f"{base}/beam", rr.LineStrips3D([np.array([head, head + n * ping.sample_spacing_m * u])],
+                                                colors=[[80, 200, 255]]))
+        scan = self._scans.get(name)
+        if scan is None or scan.n_samples != n or scan.sample_spacing_m != ping.sample_spacing_m:
+            scan = self._scans[name] = ScanImage(n, ping.sample_spacing_m, self.msis_image_px)
+        scan.add(render)
+        scan.poses.clear()  # the recording keeps no per-ping poses
+        k = self._n_msis[name] = self._n_msis.get(name, 0) + 1
+        if not (k - 1) % self.msis_image_every:
+            ok, jpg = cv2.imencode(".jpg", scan.cartesian(), [cv2.IMWRITE_JPEG_QUALITY, 85])
+            if ok:
+                rec.log(f"sonar/msis/{name}/scan", rr.EncodedImage(contents=jpg.tobytes(), media_type="image/jpeg"))
+
+    def _on_position_fix(self, name: str, fix: PositionFixMsg) -> None:
+        rr, rec = self._rr, self._rec
+        rec.set_time("sim_time", duration=fix.t_s)
+        z = self._msis_depth.get(name, 0.0)
+        base = f"world/msis/{name}/fix"
+        rec.log(f"{base}/position", rr.Points3D([[*np.asarray(fix.pos_ne_m, float), z]], colors=[[40, 220, 40]],
+                                                radii=0.08, labels=[fix.source]))
+        rec.log(f"nav/{name}_fix_sigma_m", rr.Scalars(float(np.sqrt(np.trace(fix.cov_ne_m2)))))
+        if fix.points_ne_m is not None and len(fix.points_ne_m):
+            p = np.asarray(fix.points_ne_m, float)
+            rec.log(f"{base}/points", rr.Points3D(np.c_[p, np.full(len(p), z)], colors=[[255, 230, 90]], radii=0.04))
+        if fix.circle_ne_m is not None:
+            cn, ce, rad = np.asarray(fix.circle_ne_m, float)
+            a = np.linspace(0.0, 2.0 * np.pi, 121)
+            rec.log(f"{base}/circle", rr.LineStrips3D([np.c_[cn + rad * np.cos(a), ce + rad * np.sin(a),
+                                                             np.full(len(a), z)]], colors=[[230, 40, 40]]))
+        if fix.segments_ne_m is not None and len(fix.segments_ne_m):
+            seg = np.asarray(fix.segments_ne_m, float)  # (k, 2, 2)
+            d = seg[:, 1] - seg[:, 0]
+            nrm = np.c_[-d[:, 1], d[:, 0]] / np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-9)[:, None]
+            lift = lambda q: np.concatenate([q, np.full((*q.shape[:-1], 1), z)], axis=-1)  # noqa: E731
+            rec.log(f"{base}/segments", rr.LineStrips3D(lift(seg), colors=[[230, 40, 40]]))
+            if fix.segments_rho95_m is not None:
+                off = (np.asarray(fix.segments_rho95_m, float)[:, None] * nrm)[:, None, :]
+                bands = np.concatenate([seg + off, seg - off])
+                rec.log(f"{base}/segments_95", rr.LineStrips3D(lift(bands), colors=[[230, 120, 120]]))
 
     def _on_sonar_frame(self, render: FlsRender) -> None:
         rr, rec = self._rr, self._rec
