@@ -13,6 +13,7 @@ from autonomy.control.config import ControlConfig
 from autonomy.guidance.config import GuidanceConfig
 from autonomy.localization.config import LocalizationConfig
 from autonomy.navigation.config import NavigationConfig
+from autonomy.tracking.config import TrackingConfig
 from autonomy.world_model.config import WorldModelConfig
 from scenarios.config.base import StrictModel
 from scenarios.config.sensor import SensorConfig, fill_sensor_entries, sensor_config_kinds
@@ -121,6 +122,7 @@ class AutonomyConfig(StrictModel):
     atr: AtrConfig = AtrConfig()
     localization: LocalizationConfig = LocalizationConfig()
     world_model: WorldModelConfig = WorldModelConfig()
+    tracking: TrackingConfig = TrackingConfig()
 
 
 class Scenario(StrictModel):

@@ -45,6 +45,7 @@ class TrackingConfig(StrictModel):
     sonar_azimuth_sigma_deg: float = Field(0.5, gt=0.0, le=20.0)
     sonar_vertical_beam_deg: float = Field(14.0, gt=0.0, le=90.0, description="elevation within the beam")
     gate_probability: float = Field(0.999, gt=0.0, lt=1.0, description="chi-square gate on each update")
+    usbl_rejections_to_restart: int = Field(3, ge=1, le=100, description="USBL fixes gated out in a row: restart")
     roi_sigma: float = Field(2.45, gt=0.0, le=10.0, description="ROI half-width in sigmas (2.45: 95 % in 2-D)")
     target_size_m: float = Field(1.0, ge=0.0, le=10.0, description="target extent added to the ROI")
     history_s: float = Field(10.0, gt=0.0, le=120.0, description="how late a fix may be re-processed")

@@ -22,7 +22,9 @@ and makes a few runs diverge; a hovering target never hands over and stays well 
 The sonar measurement is (range, azimuth) and, since a target echoes only inside the
 vertical beam, an elevation of 0 with the variance of a uniform over the beam
 (``beam^2 / 12``). Each update passes a chi-square gate; rejected measurements stay in the
-history (re-processing re-decides them).
+history (re-processing re-decides them). ``usbl_rejections_to_restart`` USBL fixes rejected
+in a row mean the track is lost (a manoeuvre beyond the process noise): the filter restarts
+from the last of them, as at initiation (the USBL always answers, so it is the reference).
 """
 
 from __future__ import annotations
@@ -330,11 +332,26 @@ class TargetTracker:
         d2 = float(r @ np.linalg.solve(S, r))
         ev.accepted = d2 <= self._gate[3]
         if not ev.accepted:
+            if ev.kind == USBL and self._usbl_rejections_before(ev) + 1 >= self.cfg.usbl_rejections_to_restart:
+                ev.accepted = True  # the track is lost: restart from this fix
+                return ev.t_s, *self._initial(ev)
             return ev.t_s, x, P
         x, P = ExtendedKalmanUpdater(ev.model).update(x, P, ev.z, ev.R)
         if x.size == CV_STATES and self._course_defined(x, P):
             x, P = self._as_course_state(x, P)
         return ev.t_s, x, P
+
+    def _usbl_rejections_before(self, ev: _Event) -> int:
+        """USBL fixes rejected in a row just before ``ev`` in the history (sonar events,
+        clutter included, do not break the run)."""
+        n = 0
+        for e in reversed(self._events[: self._events.index(ev)]):
+            if e.kind != USBL:
+                continue
+            if e.accepted:
+                break
+            n += 1
+        return n
 
     def _predict(self, x: FloatArray, P: FloatArray, dt_s: float) -> tuple[FloatArray, FloatArray]:
         if x.size == N_STATES:
