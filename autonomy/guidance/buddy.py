@@ -41,7 +41,7 @@ class BuddyObserver:
             ValueError: a non-finite target position.
         """
         cfg = self.cfg
-        if target_pos_ned is None:
+        if target_pos_ned is None or cfg.behaviour == "hover":
             return Setpoint(0.0, self._heading, depth_m=self._depth)
         tgt = np.asarray(target_pos_ned, dtype=float).reshape(3)
         if not np.all(np.isfinite(tgt)):

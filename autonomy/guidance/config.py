@@ -81,15 +81,16 @@ class BuddyConfig(StrictModel):
     """Buddy observer (paper 004's diver-following use): keep the tracked target ahead, in the
     sonar's field of view, at ``distance_m``.
 
-    ``behaviour``: ``hold`` (hover: no surge, only turn to face the target; the paper's static
-    vehicle case) or ``follow`` (also close or open the range to ``distance_m``). Surge
+    ``behaviour``: ``hover`` (station at the start heading and depth whatever the target does:
+    the paper's static vehicle, which sees the target only when it swims through the view),
+    ``hold`` (no surge, only turn to face the target) or ``follow`` (also close or open the range to ``distance_m``). Surge
     ``gain_per_s * (range - distance_m)`` clipped to ``max_speed_mps``, never closer than
     ``min_distance_m`` (backs off); the vehicle holds ``depth_m`` or, when None, the target's
     estimated depth minus ``depth_offset_m`` (above it, so a tilted sonar looks down at it).
     """
 
     enabled: bool = False
-    behaviour: Literal["hold", "follow"] = "follow"
+    behaviour: Literal["hover", "hold", "follow"] = "follow"
     distance_m: PositiveFloat = Field(4.0, le=50.0)
     min_distance_m: PositiveFloat = Field(1.5, le=50.0)
     gain_per_s: PositiveFloat = Field(0.3, le=5.0)

@@ -19,9 +19,11 @@ is then carried to the paper's (course, surge) parameterisation through the Jaco
 ``(atan2(v_e, v_n), |v_ne|)``. Starting directly with a course of sigma pi is not Gaussian
 and makes a few runs diverge; a hovering target never hands over and stays well tracked.
 
-The sonar measurement is (range, azimuth) and, since a target echoes only inside the
-vertical beam, an elevation of 0 with the variance of a uniform over the beam
-(``beam^2 / 12``). Each update passes a chi-square gate; rejected measurements stay in the
+The sonar measurement is (range, azimuth): the imaging sonar does not resolve elevation, so
+the target's depth comes from the USBL. With no other depth cue the sonar-only filter keeps
+the beam centre as a pseudo-measurement of elevation (0, variance of a uniform over the
+vertical beam, ``beam^2 / 12``), and a track a sonar detection starts takes an elevation of 0 with the variance of a uniform over
+the vertical beam (``beam^2 / 12``) to place its first position. Each update passes a chi-square gate; rejected measurements stay in the
 history (re-processing re-decides them). ``usbl_rejections_to_restart`` USBL fixes rejected
 in a row mean the track is lost (a manoeuvre beyond the process noise): the filter restarts
 from the last of them, as at initiation (the USBL always answers, so it is the reference).
@@ -136,7 +138,7 @@ class TargetTracker:
         self._R_b_usbl = rot_from_euler(*np.asarray(usbl_mount_rpy_rad, dtype=float))
         self._sonar_mount = np.asarray(sonar_mount_body_m, dtype=float).reshape(3)
         self._R_b_sonar = rot_from_euler(*np.asarray(sonar_mount_rpy_rad, dtype=float))
-        self._gate = {3: float(chi2.ppf(cfg.gate_probability, 3))}
+        self._gate = {m: float(chi2.ppf(cfg.gate_probability, m)) for m in (2, 3)}
         self._cv = ConstantVelocity(1.0)  # unit intensity, scaled per axis below
         self._cv_q_axes = np.diag([cfg.initiation_accel_noise_m2_per_s3] * 2 + [cfg.heave_noise_m2_per_s3])
         self._cv_pos_q = np.diag([cfg.pos_noise_m2_per_s] * 3 + [0.0] * 3)
@@ -208,8 +210,11 @@ class TargetTracker:
         return True
 
     def on_sonar(self, t_s: float, range_m: float, azimuth_rad: float, elevation_rad: float = 0.0) -> bool:
-        """Add a sonar detection (sonar frame range m, azimuth rad, starboard > 0) at ``t_s``;
-        ``elevation_rad`` (down > 0) when the sonar resolves it, else 0 within the beam."""
+        """Add a sonar detection (sonar frame range m, azimuth rad, starboard > 0) at ``t_s``.
+        An imaging sonar does not measure elevation: the update uses range and azimuth only;
+        ``elevation_rad`` (down > 0, default the beam centre) with the variance of a uniform
+        over the vertical beam places a track that a sonar detection starts and, in sonar-only
+        mode (no other depth cue), is kept as a pseudo-measurement."""
         if self.cfg.mode == "usbl":
             return False
         if not (math.isfinite(range_m) and math.isfinite(azimuth_rad) and range_m > 0.0):
@@ -221,7 +226,8 @@ class TargetTracker:
         cfg = self.cfg
         sig_e2 = math.radians(cfg.sonar_vertical_beam_deg) ** 2 / 12.0
         R = np.diag([cfg.sonar_range_sigma_m**2, math.radians(cfg.sonar_azimuth_sigma_deg) ** 2, sig_e2])
-        model = RelativeSpherical(pos + R_nb @ self._sonar_mount, R_nb @ self._R_b_sonar)
+        ndim = 3 if cfg.mode == "sonar" else 2  # sonar only: the beam centre is its only depth cue
+        model = RelativeSpherical(pos + R_nb @ self._sonar_mount, R_nb @ self._R_b_sonar, ndim=ndim)
         self._insert(_Event(float(t_s), self._next_seq(), SONAR, np.array([range_m, azimuth_rad, elevation_rad]), R,
                             model))
         return True
@@ -326,17 +332,19 @@ class TargetTracker:
             return ev.t_s, *self._initial(ev)
         t0, x, P = state
         x, P = self._predict(x, P, ev.t_s - t0)
+        m = ev.model.ndim_meas
+        z, R = ev.z[:m], ev.R[:m, :m]
         H = ev.model.jacobian(x)
-        S = H @ P @ H.T + ev.R
-        r = ev.model.residual(ev.z, ev.model.function(x))
+        S = H @ P @ H.T + R
+        r = ev.model.residual(z, ev.model.function(x))
         d2 = float(r @ np.linalg.solve(S, r))
-        ev.accepted = d2 <= self._gate[3]
+        ev.accepted = d2 <= self._gate[m]
         if not ev.accepted:
             if ev.kind == USBL and self._usbl_rejections_before(ev) + 1 >= self.cfg.usbl_rejections_to_restart:
                 ev.accepted = True  # the track is lost: restart from this fix
                 return ev.t_s, *self._initial(ev)
             return ev.t_s, x, P
-        x, P = ExtendedKalmanUpdater(ev.model).update(x, P, ev.z, ev.R)
+        x, P = ExtendedKalmanUpdater(ev.model).update(x, P, z, R)
         if x.size == CV_STATES and self._course_defined(x, P):
             x, P = self._as_course_state(x, P)
         return ev.t_s, x, P

@@ -131,7 +131,8 @@ def run_mission(
     progress: bool = True, overwrite: bool = False, rosbag: bool = False, rosbag_fls_every: int = 1,
 ) -> dict[str, Any]:
     """Run ``scenario`` and write metrics.json, trajectory.csv, world_model.json, map.png
-    (and recording.rrd; with ``rosbag``, a ROS 2 bag folder ``rosbag/`` in MCAP storage,
+    (with target tracking also tracking_error.png and tracking_boxplot.png, and the
+    trackers' figures under ``tracking`` in metrics.json; and recording.rrd; with ``rosbag``, a ROS 2 bag folder ``rosbag/`` in MCAP storage,
     :class:`sim.ros2bag.recorder.RosbagRecorder`, every ``rosbag_fls_every``-th sonar frame)
     into ``out``. Returns the metrics.
 
@@ -156,6 +157,12 @@ def run_mission(
         mission = Mission(scenario, nav_source=nav_source, observers=observers)
         mission.observers.append(_ProgressObserver(MissionProgress(scenario.name, planned_length_s(mission),
                                                                    enabled=progress)))
+        tracking = None
+        if mission.parts.tracking is not None:
+            from sim.evaluation.tracking_eval import evaluation_for
+
+            tracking = evaluation_for(mission)
+            mission.observers.append(tracking)
         mission.reset()
         mission.run(progress=False)
 
@@ -175,6 +182,10 @@ def run_mission(
             estimates=estimates, rejected_ned=rejected,
             title=f"{scenario.name} seed {mission.seed} (nav: {nav_source})" + _outcome_suffix(metrics),
         )
+        if tracking is not None:
+            metrics["tracking"] = tracking.metrics()
+            tracking.plot(partial / "tracking_error.png", partial / "tracking_boxplot.png",
+                          title=f"{scenario.name} seed {mission.seed}")
         write_json(partial / "metrics.json", metrics, decimals=METRICS_DECIMALS)
         staged.commit()
     return metrics
