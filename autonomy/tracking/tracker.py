@@ -41,7 +41,6 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.stats import chi2
 
 from autonomy.estimation.measurement import RangeBearingElevation
-from autonomy.estimation.transition import ConstantVelocity
 from autonomy.estimation.updater import ExtendedKalmanUpdater
 from autonomy.frames import rot_from_euler
 from autonomy.messages import UsblMsg
@@ -139,7 +138,6 @@ class TargetTracker:
         self._sonar_mount = np.asarray(sonar_mount_body_m, dtype=float).reshape(3)
         self._R_b_sonar = rot_from_euler(*np.asarray(sonar_mount_rpy_rad, dtype=float))
         self._gate = {m: float(chi2.ppf(cfg.gate_probability, m)) for m in (2, 3)}
-        self._cv = ConstantVelocity(1.0)  # unit intensity, scaled per axis below
         self._cv_q_axes = np.diag([cfg.initiation_accel_noise_m2_per_s3] * 2 + [cfg.heave_noise_m2_per_s3])
         self._cv_pos_q = np.diag([cfg.pos_noise_m2_per_s] * 3 + [0.0] * 3)
         self.reset()
@@ -364,9 +362,14 @@ class TargetTracker:
     def _predict(self, x: FloatArray, P: FloatArray, dt_s: float) -> tuple[FloatArray, FloatArray]:
         if x.size == N_STATES:
             return self.kinematics.predict(x, P, dt_s)
-        F = self._cv.matrix(dt_s)
-        block = np.array([[dt_s**3 / 3.0, dt_s**2 / 2.0], [dt_s**2 / 2.0, dt_s]])  # white acceleration, per axis
-        Q = np.kron(block, self._cv_q_axes) + self._cv_pos_q * dt_s
+        F = np.eye(CV_STATES)
+        F[0:3, 3:6] = dt_s * np.eye(3)
+        q = np.diag(self._cv_q_axes)  # white acceleration per axis (ConstantVelocity's Q, per-axis q)
+        Q = np.zeros((CV_STATES, CV_STATES))
+        i = np.arange(3)
+        Q[i, i] = q * dt_s**3 / 3.0 + np.diag(self._cv_pos_q)[:3] * dt_s
+        Q[i, i + 3] = Q[i + 3, i] = q * dt_s**2 / 2.0
+        Q[i + 3, i + 3] = q * dt_s
         return F @ x, F @ P @ F.T + Q
 
     def _course_defined(self, x: FloatArray, P: FloatArray) -> bool:
