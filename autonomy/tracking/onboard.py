@@ -117,7 +117,7 @@ class TrackingStack:
         for the next one."""
         if msg.transponder == "beacon":
             return
-        if msg.t_s > self.now_s and self.now_s > -np.inf and msg.t_s - self.now_s < 1.0:
+        if self.now_s == -np.inf or 0.0 < msg.t_s - self.now_s < 1.0:  # (further ahead: refused as from the future)
             self._pending.append(msg)
             return
         for m in ("usbl", "fused"):
@@ -128,8 +128,7 @@ class TrackingStack:
         result is also appended to :attr:`results`. A frame pinged after the last vehicle pose
         waits for the next pose (returns None then)."""
         if frame.t_s > self.now_s:
-            if self.now_s > -np.inf:
-                self._pending.append(frame)
+            self._pending.append(frame)
             return None
         boxes, scores = self.detector.candidates(frame.fan, frame.geometry.m_per_px)
         cands = tuple(self._centre_detections(frame, boxes, scores))
