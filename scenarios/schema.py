@@ -14,6 +14,7 @@ from autonomy.guidance.config import GuidanceConfig
 from autonomy.localization.config import LocalizationConfig
 from autonomy.msis.config import MsisLocalizationConfig
 from autonomy.navigation.config import NavigationConfig
+from autonomy.tracking.config import TrackingConfig
 from autonomy.world_model.config import WorldModelConfig
 from scenarios.config.base import StrictModel
 from scenarios.config.outputs import OutputsConfig
@@ -124,6 +125,7 @@ class AutonomyConfig(StrictModel):
     localization: LocalizationConfig = LocalizationConfig()
     world_model: WorldModelConfig = WorldModelConfig()
     msis_localization: MsisLocalizationConfig = MsisLocalizationConfig()
+    tracking: TrackingConfig = TrackingConfig()
 
 
 class Scenario(StrictModel):

@@ -8,7 +8,8 @@ environments reuse this stepping API and may override guidance with their own se
 
 Delivery dispatches on the message's type (the navigation filter's handlers, the state
 machine's bottom-lock flag) and on its source (perception runs on the frames of its sonar:
-ATR -> geolocalisation -> world model). Observers receive every delivered message and the
+ATR -> geolocalisation -> world model; or, when the scenario tracks a target, the tracking
+stack takes the USBL fixes and that sonar's frames, and the buddy observer may guide). Observers receive every delivered message and the
 perception results by sensor name, and immutable start and end summaries.
 """
 
@@ -24,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from autonomy.control.setpoint import Setpoint
-from autonomy.messages import DvlMsg, NavEstimate
+from autonomy.messages import DvlMsg, NavEstimate, UsblMsg
 from scenarios.schema import Scenario
 from sim.mission_build import NAV_SOURCES, MissionParts, build_mission_parts
 from sim.physics import Physics
@@ -154,6 +155,10 @@ class Mission:
         for name, process in parts.processors.items():
             getattr(process, "reset", lambda: None)()
             self._by_source[name] = process
+        if parts.tracking is not None:  # target tracking: USBL fixes by type, frames of its sonar
+            parts.tracking.reset()
+            self._by_type.setdefault(UsblMsg, []).append(parts.tracking.on_usbl)
+            self._by_source[parts.sonar.name] = lambda render, _nav: parts.tracking.on_frame(render.frame)
         parts.guidance.start(init_pos[:2], float(init_rpy[2]))
         parts.fsm.reset()
         parts.autopilot.reset()
@@ -200,8 +205,17 @@ class Mission:
         with timer.stage("nav_filter"):
             self.nav_filter.predict(physics.t_s)
             nav = self.nav_filter.estimate()
+        if parts.tracking is not None:
+            with timer.stage("tracking"):
+                parts.tracking.on_nav(nav)
         with timer.stage("guidance"):
-            sp = setpoint if setpoint is not None else parts.fsm.update(physics.t_s, nav, self.last_dvl_lock)
+            if setpoint is not None:
+                sp = setpoint
+            elif parts.buddy is not None:
+                est = parts.tracking.primary.estimate(physics.t_s)
+                sp = parts.buddy.update(nav, None if est is None else est[0][:3])
+            else:
+                sp = parts.fsm.update(physics.t_s, nav, self.last_dvl_lock)
         self._setpoint = sp
         with timer.stage("control"):
             self.wrench_body = np.zeros(6) if sp is None else parts.autopilot.update(nav, sp, self.autonomy_dt_s)

@@ -18,10 +18,12 @@ from numpy.typing import NDArray
 
 from autonomy.control.allocation import ThrustAllocator
 from autonomy.control.autopilot import Autopilot
+from autonomy.guidance.buddy import BuddyObserver
 from autonomy.guidance.mission import MissionFsm
 from autonomy.guidance.survey import SurveyGuidance
 from autonomy.msis.localization import MsisLocalizer
 from autonomy.navigation import NavigationFilter, NavNoiseModel
+from autonomy.tracking.onboard import TrackingStack
 from scenarios.schema import Scenario
 from sim.perception import Perception
 from sim.physics import Physics
@@ -53,6 +55,10 @@ class MissionParts:
         perception: ATR -> geolocalisation -> world model on ``sonar``'s frames (or None).
         processors: sensor name -> onboard processing of its messages ``(msg, nav) -> result``;
             a result the navigation filter handles (a position fix) is fused.
+        usbl_beacon_pos_ned: (3,) known beacon of the first USBL aimed at ``beacon`` (or None).
+        tracking: the target trackers on the USBL fixes and ``sonar``'s frames (or None;
+            with tracking the survey perception is not built).
+        buddy: the buddy-observer guidance following the tracked target (or None: the survey).
     """
 
     seed: int
@@ -68,12 +74,15 @@ class MissionParts:
     sonar: Sensor | None
     perception: Perception | None
     processors: dict[str, Callable[[Any, Any], Any]] = field(default_factory=dict)
+    usbl_beacon_pos_ned: NDArray[np.float64] | None = None
+    tracking: TrackingStack | None = None
+    buddy: BuddyObserver | None = None
 
     def make_nav_filter(self, scenario: Scenario) -> NavigationFilter:
         """A fresh navigation filter at the scenario's start pose."""
         return NavigationFilter(scenario.autonomy.navigation, np.asarray(scenario.vehicle.initial_pos_ned, dtype=float),
                                 float(np.deg2rad(scenario.vehicle.initial_rpy_deg[2])), self.nav_noise,
-                                mounts=self.nav_mounts)
+                                mounts=self.nav_mounts, usbl_beacon_pos_ned=self.usbl_beacon_pos_ned)
 
 
 class MsisPingProcessor:
@@ -126,8 +135,27 @@ def build_mission_parts(scenario: Scenario, physics: Physics, seed: int, *, nav_
     guidance = SurveyGuidance.from_config(survey, auto.guidance.los, swath_width_m=swath)
     waypoints_ne = np.asarray(guidance.plan.waypoints_ne_m)
     fsm = MissionFsm(auto.guidance.mission, guidance)
+    tracking = None
+    if auto.tracking.enabled:
+        usbl = sensors.get(auto.tracking.usbl_sensor)
+        fls = sensors.get(auto.tracking.sonar_sensor)
+        if fls is None or fls.kind != PERCEPTION_SONAR_KIND or usbl is None or usbl.kind != "usbl":
+            raise ValueError(f"autonomy.tracking needs sensors {auto.tracking.sonar_sensor!r} (fls) and "
+                             f"{auto.tracking.usbl_sensor!r} (usbl)")
+        sonar = fls
+        tracking = TrackingStack(auto.tracking, auto.atr.classical, usbl_mount_body_m=usbl.mount.pos_body_m,
+                                 usbl_mount_rpy_rad=usbl.mount.rpy_rad, sonar_mount_body_m=fls.mount.pos_body_m,
+                                 sonar_mount_rpy_rad=fls.mount.rpy_rad)
+    buddy = None
+    if auto.guidance.buddy.enabled:
+        if tracking is None:
+            raise ValueError("autonomy.guidance.buddy needs autonomy.tracking.enabled")
+        buddy = BuddyObserver(auto.guidance.buddy, float(np.deg2rad(scenario.vehicle.initial_rpy_deg[2])),
+                              float(scenario.vehicle.initial_pos_ned[2]))
+    beacon = next((np.asarray(s.cfg.beacon_pos_ned, dtype=float) for s in sensors.values()
+                   if s.kind == "usbl" and s.cfg.transponder == "beacon"), None)
     perceive = (Perception(scenario, sonar, physics.world.seabed, waypoints_ne, nav_source=nav_source)
-                if sonar is not None and perception else None)
+                if sonar is not None and perception and tracking is None else None)
     processors: dict[str, Callable[[Any, Any], Any]] = {}
     msis = first.get("msis")
     if msis is not None and auto.msis_localization.method != "none":
@@ -138,5 +166,5 @@ def build_mission_parts(scenario: Scenario, physics: Physics, seed: int, *, nav_
         seed=int(seed), sensors=sensors, scheduler=scheduler, nav_noise=nav_noise, nav_mounts=nav_mounts,
         guidance=guidance, fsm=fsm, autopilot=Autopilot(auto.control),
         allocator=ThrustAllocator.from_layout(physics.params.layout), waypoints_ne=waypoints_ne, sonar=sonar,
-        perception=perceive,
+        perception=perceive, usbl_beacon_pos_ned=beacon, tracking=tracking, buddy=buddy,
     )

@@ -77,7 +77,30 @@ class MissionConfig(StrictModel):
         return self
 
 
+class BuddyConfig(StrictModel):
+    """Buddy observer (paper 004's diver-following use): keep the tracked target ahead, in the
+    sonar's field of view, at ``distance_m``.
+
+    ``behaviour``: ``hover`` (station at the start heading and depth whatever the target does:
+    the paper's static vehicle, which sees the target only when it swims through the view),
+    ``hold`` (no surge, only turn to face the target) or ``follow`` (also close or open the range to ``distance_m``). Surge
+    ``gain_per_s * (range - distance_m)`` clipped to ``max_speed_mps``, never closer than
+    ``min_distance_m`` (backs off); the vehicle holds ``depth_m`` or, when None, the target's
+    estimated depth minus ``depth_offset_m`` (above it, so a tilted sonar looks down at it).
+    """
+
+    enabled: bool = False
+    behaviour: Literal["hover", "hold", "follow"] = "follow"
+    distance_m: PositiveFloat = Field(4.0, le=50.0)
+    min_distance_m: PositiveFloat = Field(1.5, le=50.0)
+    gain_per_s: PositiveFloat = Field(0.3, le=5.0)
+    max_speed_mps: PositiveFloat = Field(0.6, le=3.0)
+    depth_m: NonNegFloat | None = None
+    depth_offset_m: float = Field(0.5, ge=-20.0, le=20.0)
+
+
 class GuidanceConfig(StrictModel):
     survey: SurveyConfig = SurveyConfig()
+    buddy: BuddyConfig = BuddyConfig()
     los: LosConfig = LosConfig()
     mission: MissionConfig = MissionConfig()

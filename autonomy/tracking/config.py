@@ -13,7 +13,10 @@ class TrackingConfig(StrictModel):
     """``mode``: ``sonar`` (sonar detections only), ``usbl`` (USBL fixes only) or ``fused``
     (both), the three configurations of paper 004 section 5. Noise terms are 1 sigma; the
     process noise is a white-noise intensity per second on course rate, surge and heave
-    (paper 004 eq. 6); ``roi_sigma`` scales the polar ROI half-widths (paper 004 eq. 16)."""
+    (paper 004 eq. 6); until the course is known (its 1 sigma below
+    ``initiation_course_sigma_deg``) the filter runs a Cartesian constant-velocity model
+    (``initiation_accel_noise_m2_per_s3``), whose Gaussian velocity prior is consistent where a
+    course drawn uniformly on the circle is not; ``roi_sigma`` scales the polar ROI half-widths (paper 004 eq. 16)."""
 
     enabled: bool = False
     mode: Literal["sonar", "usbl", "fused"] = "fused"
@@ -28,6 +31,12 @@ class TrackingConfig(StrictModel):
     initial_surge_mps: float = Field(0.2, ge=0.0, le=5.0)
     initial_surge_sigma_mps: float = Field(0.3, gt=0.0, le=5.0)
     initial_course_rate_sigma_dps: float = Field(5.0, gt=0.0, le=180.0)
+    initiation_accel_noise_m2_per_s3: float = Field(
+        0.006, ge=0.0, le=10.0,
+        description="white-noise acceleration of the constant-velocity start: about the surge noise plus the "
+                    "cross-track u^2 q_r t of a 0.2 m/s course-rate walk over 10 s")
+    initiation_course_sigma_deg: float = Field(
+        20.0, gt=0.0, le=90.0, description="course 1-sigma below which the start hands over to eq. 6")
     usbl_range_sigma_m: float = Field(0.1, gt=0.0, le=50.0)
     usbl_range_sigma_frac: float = Field(0.01, ge=0.0, le=0.5)
     usbl_angle_sigma_deg: float = Field(1.0, gt=0.0, le=45.0)
@@ -36,6 +45,7 @@ class TrackingConfig(StrictModel):
     sonar_azimuth_sigma_deg: float = Field(0.5, gt=0.0, le=20.0)
     sonar_vertical_beam_deg: float = Field(14.0, gt=0.0, le=90.0, description="elevation within the beam")
     gate_probability: float = Field(0.999, gt=0.0, lt=1.0, description="chi-square gate on each update")
+    usbl_rejections_to_restart: int = Field(3, ge=1, le=100, description="USBL fixes gated out in a row: restart")
     roi_sigma: float = Field(2.45, gt=0.0, le=10.0, description="ROI half-width in sigmas (2.45: 95 % in 2-D)")
     target_size_m: float = Field(1.0, ge=0.0, le=10.0, description="target extent added to the ROI")
     history_s: float = Field(10.0, gt=0.0, le=120.0, description="how late a fix may be re-processed")

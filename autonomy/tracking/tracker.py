@@ -9,10 +9,24 @@ kept with its measurement time and the vehicle pose then, and a measurement olde
 newest one applied re-runs the filter from the checkpoint before it (re-processing from a
 stored history), so a late fix is applied at the time it was measured, never as new.
 
-The sonar measurement is (range, azimuth) and, since a target echoes only inside the
-vertical beam, an elevation of 0 with the variance of a uniform over the beam
-(``beam^2 / 12``). Each update passes a chi-square gate; rejected measurements stay in the
-history (re-processing re-decides them).
+Initiation (two-stage, as Bar-Shalom, Li and Kirubarajan 2001 section 3.2 start a track by
+differencing before the manoeuvring model): the first measurement gives the position and a
+zero-mean Gaussian velocity prior, and a Cartesian nearly-constant-velocity EKF (state (6,):
+NED position, NED velocity; horizontal white acceleration ``initiation_accel_noise_m2_per_s3``,
+vertical the heave noise) runs until the velocity is known well enough to define a course
+(its 1 sigma below ``initiation_course_sigma_deg`` and the speed at least 3 sigma); the state
+is then carried to the paper's (course, surge) parameterisation through the Jacobian of
+``(atan2(v_e, v_n), |v_ne|)``. Starting directly with a course of sigma pi is not Gaussian
+and makes a few runs diverge; a hovering target never hands over and stays well tracked.
+
+The sonar measurement is (range, azimuth): the imaging sonar does not resolve elevation, so
+the target's depth comes from the USBL. With no other depth cue the sonar-only filter keeps
+the beam centre as a pseudo-measurement of elevation (0, variance of a uniform over the
+vertical beam, ``beam^2 / 12``), and a track a sonar detection starts takes an elevation of 0 with the variance of a uniform over
+the vertical beam (``beam^2 / 12``) to place its first position. Each update passes a chi-square gate; rejected measurements stay in the
+history (re-processing re-decides them). ``usbl_rejections_to_restart`` USBL fixes rejected
+in a row mean the track is lost (a manoeuvre beyond the process noise): the filter restarts
+from the last of them, as at initiation (the USBL always answers, so it is the reference).
 """
 
 from __future__ import annotations
@@ -37,6 +51,7 @@ from autonomy.tracking.roi import PolarRoi, polar_roi
 FloatArray = NDArray[np.float64]
 log = logging.getLogger(__name__)
 USBL, SONAR = "usbl", "sonar"
+CV_STATES = 6  # initiation state: NED position (m), NED velocity (m/s)
 
 
 class RelativeSpherical:
@@ -63,8 +78,11 @@ class RelativeSpherical:
         return self._rbe.function(self._rel(np.asarray(x, dtype=float)))[: self.ndim_meas]
 
     def jacobian(self, x: ArrayLike) -> FloatArray:
-        H = np.zeros((self.ndim_meas, N_STATES))
-        H[:, POS] = (self._rbe.jacobian(self._rel(np.asarray(x, dtype=float))) @ self.R_hn)[: self.ndim_meas]
+        """(ndim_meas, n): the state's first three entries are its NED position, the rest
+        (course model (7,) or constant velocity (6,)) do not enter."""
+        x = np.asarray(x, dtype=float)
+        H = np.zeros((self.ndim_meas, x.size))
+        H[:, POS] = (self._rbe.jacobian(self._rel(x)) @ self.R_hn)[: self.ndim_meas]
         return H
 
     def residual(self, z: ArrayLike, z_pred: ArrayLike) -> FloatArray:
@@ -119,7 +137,9 @@ class TargetTracker:
         self._R_b_usbl = rot_from_euler(*np.asarray(usbl_mount_rpy_rad, dtype=float))
         self._sonar_mount = np.asarray(sonar_mount_body_m, dtype=float).reshape(3)
         self._R_b_sonar = rot_from_euler(*np.asarray(sonar_mount_rpy_rad, dtype=float))
-        self._gate = {3: float(chi2.ppf(cfg.gate_probability, 3))}
+        self._gate = {m: float(chi2.ppf(cfg.gate_probability, m)) for m in (2, 3)}
+        self._cv_q_axes = np.diag([cfg.initiation_accel_noise_m2_per_s3] * 2 + [cfg.heave_noise_m2_per_s3])
+        self._cv_pos_q = np.diag([cfg.pos_noise_m2_per_s] * 3 + [0.0] * 3)
         self.reset()
 
     # ------------------------------------------------------------------ inputs
@@ -188,8 +208,11 @@ class TargetTracker:
         return True
 
     def on_sonar(self, t_s: float, range_m: float, azimuth_rad: float, elevation_rad: float = 0.0) -> bool:
-        """Add a sonar detection (sonar frame range m, azimuth rad, starboard > 0) at ``t_s``;
-        ``elevation_rad`` (down > 0) when the sonar resolves it, else 0 within the beam."""
+        """Add a sonar detection (sonar frame range m, azimuth rad, starboard > 0) at ``t_s``.
+        An imaging sonar does not measure elevation: the update uses range and azimuth only;
+        ``elevation_rad`` (down > 0, default the beam centre) with the variance of a uniform
+        over the vertical beam places a track that a sonar detection starts and, in sonar-only
+        mode (no other depth cue), is kept as a pseudo-measurement."""
         if self.cfg.mode == "usbl":
             return False
         if not (math.isfinite(range_m) and math.isfinite(azimuth_rad) and range_m > 0.0):
@@ -201,7 +224,8 @@ class TargetTracker:
         cfg = self.cfg
         sig_e2 = math.radians(cfg.sonar_vertical_beam_deg) ** 2 / 12.0
         R = np.diag([cfg.sonar_range_sigma_m**2, math.radians(cfg.sonar_azimuth_sigma_deg) ** 2, sig_e2])
-        model = RelativeSpherical(pos + R_nb @ self._sonar_mount, R_nb @ self._R_b_sonar)
+        ndim = 3 if cfg.mode == "sonar" else 2  # sonar only: the beam centre is its only depth cue
+        model = RelativeSpherical(pos + R_nb @ self._sonar_mount, R_nb @ self._R_b_sonar, ndim=ndim)
         self._insert(_Event(float(t_s), self._next_seq(), SONAR, np.array([range_m, azimuth_rad, elevation_rad]), R,
                             model))
         return True
@@ -219,7 +243,14 @@ class TargetTracker:
             return None
         t = self.now_s if t_s is None else float(t_s)
         t0, x, P = last
-        return self.kinematics.predict(x, P, max(t - t0, 0.0))
+        x, P = self._predict(x, P, max(t - t0, 0.0))
+        return self._as_course_state(x, P) if x.size == CV_STATES else (x, P)
+
+    @property
+    def course_known(self) -> bool:
+        """Whether the filter runs the paper's course model (False: still initiating)."""
+        last = self._last_state()
+        return last is not None and last[1].size == N_STATES
 
     def roi(self, t_s: float | None = None) -> PolarRoi | None:
         """Polar ROI in the sonar frame at ``t_s`` (default: now), or None before the first
@@ -298,31 +329,98 @@ class TargetTracker:
             ev.accepted = True
             return ev.t_s, *self._initial(ev)
         t0, x, P = state
-        x, P = self.kinematics.predict(x, P, ev.t_s - t0)
+        x, P = self._predict(x, P, ev.t_s - t0)
+        m = ev.model.ndim_meas
+        z, R = ev.z[:m], ev.R[:m, :m]
         H = ev.model.jacobian(x)
-        S = H @ P @ H.T + ev.R
-        r = ev.model.residual(ev.z, ev.model.function(x))
+        S = H @ P @ H.T + R
+        r = ev.model.residual(z, ev.model.function(x))
         d2 = float(r @ np.linalg.solve(S, r))
-        ev.accepted = d2 <= self._gate[3]
+        ev.accepted = d2 <= self._gate[m]
         if not ev.accepted:
+            if ev.kind == USBL and self._usbl_rejections_before(ev) + 1 >= self.cfg.usbl_rejections_to_restart:
+                ev.accepted = True  # the track is lost: restart from this fix
+                return ev.t_s, *self._initial(ev)
             return ev.t_s, x, P
-        x, P = ExtendedKalmanUpdater(ev.model).update(x, P, ev.z, ev.R)
+        x, P = ExtendedKalmanUpdater(ev.model).update(x, P, z, R)
+        if x.size == CV_STATES and self._course_defined(x, P):
+            x, P = self._as_course_state(x, P)
         return ev.t_s, x, P
 
+    def _usbl_rejections_before(self, ev: _Event) -> int:
+        """USBL fixes rejected in a row just before ``ev`` in the history (sonar events,
+        clutter included, do not break the run)."""
+        n = 0
+        for e in reversed(self._events[: self._events.index(ev)]):
+            if e.kind != USBL:
+                continue
+            if e.accepted:
+                break
+            n += 1
+        return n
+
+    def _predict(self, x: FloatArray, P: FloatArray, dt_s: float) -> tuple[FloatArray, FloatArray]:
+        if x.size == N_STATES:
+            return self.kinematics.predict(x, P, dt_s)
+        F = np.eye(CV_STATES)
+        F[0:3, 3:6] = dt_s * np.eye(3)
+        q = np.diag(self._cv_q_axes)  # white acceleration per axis (ConstantVelocity's Q, per-axis q)
+        Q = np.zeros((CV_STATES, CV_STATES))
+        i = np.arange(3)
+        Q[i, i] = q * dt_s**3 / 3.0 + np.diag(self._cv_pos_q)[:3] * dt_s
+        Q[i, i + 3] = Q[i + 3, i] = q * dt_s**2 / 2.0
+        Q[i + 3, i + 3] = q * dt_s
+        return F @ x, F @ P @ F.T + Q
+
+    def _course_defined(self, x: FloatArray, P: FloatArray) -> bool:
+        """Whether the constant-velocity state fixes the course: speed >= 3 sigma along it and
+        course sigma (cross-track velocity sigma / speed) below the configured bound."""
+        v = x[3:5]
+        speed = float(np.hypot(*v))
+        if speed <= 0.0:
+            return False
+        along, across = v / speed, np.array([-v[1], v[0]]) / speed
+        Pv = P[3:5, 3:5]
+        sig_along = math.sqrt(max(float(along @ Pv @ along), 0.0))
+        sig_course = math.sqrt(max(float(across @ Pv @ across), 0.0)) / speed
+        return speed >= 3.0 * sig_along and sig_course <= math.radians(self.cfg.initiation_course_sigma_deg)
+
+    def _as_course_state(self, x: FloatArray, P: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Constant-velocity state (6,) -> the paper's state (7,) through the Jacobian of
+        ``course = atan2(v_e, v_n)``, ``surge = |v_ne|``; the course rate starts at 0 with
+        its configured sigma, uncorrelated. At zero speed the course is 0 with sigma pi."""
+        vn, ve = x[3], x[4]
+        s2 = vn * vn + ve * ve
+        J = np.zeros((N_STATES, CV_STATES))
+        J[POS, 0:3] = np.eye(3)
+        J[HEAVE, 5] = 1.0
+        x7 = np.zeros(N_STATES)
+        x7[POS], x7[HEAVE] = x[0:3], x[5]
+        if s2 > 1e-12:
+            s = math.sqrt(s2)
+            x7[COURSE], x7[SURGE] = math.atan2(ve, vn), s
+            J[COURSE, 3:5] = [-ve / s2, vn / s2]
+            J[SURGE, 3:5] = [vn / s, ve / s]
+        P7 = J @ P @ J.T
+        if s2 <= 1e-12:
+            P7[COURSE, COURSE] = math.pi**2
+            P7[SURGE, SURGE] = float(np.trace(P[3:5, 3:5]))
+        P7[COURSE_RATE, COURSE_RATE] = math.radians(self.cfg.initial_course_rate_sigma_dps) ** 2
+        return x7, 0.5 * (P7 + P7.T)
+
     def _initial(self, ev: _Event) -> tuple[FloatArray, FloatArray]:
-        """State from one measurement: its inverse for the position (covariance through the
-        inverse Jacobian), course towards the vehicle's bearing unknown (sigma pi)."""
+        """Constant-velocity state (6,) from one measurement: its inverse for the position
+        (covariance through the inverse Jacobian) and a zero-mean velocity whose per-axis
+        variance is that of the configured speed prior with its course uniform on the circle
+        (``(u0^2 + sigma_u^2) / 2`` per horizontal axis, the second moment of that ring)."""
         rbe = RangeBearingElevation()
         J = ev.model.R_hn.T @ rbe.inverse_jacobian(ev.z)
-        x = np.zeros(N_STATES)
+        x = np.zeros(CV_STATES)
         x[POS] = ev.model.head_ned + ev.model.R_hn.T @ rbe.inverse(ev.z)
-        x[SURGE] = self.cfg.initial_surge_mps
-        P = np.zeros((N_STATES, N_STATES))
+        P = np.zeros((CV_STATES, CV_STATES))
         P[POS, POS] = J @ ev.R @ J.T + 0.01 * np.eye(3)
-        P[COURSE, COURSE] = math.pi**2
-        P[COURSE_RATE, COURSE_RATE] = math.radians(self.cfg.initial_course_rate_sigma_dps) ** 2
-        P[SURGE, SURGE] = self.cfg.initial_surge_sigma_mps**2
-        P[HEAVE, HEAVE] = 0.05**2
+        var_h = 0.5 * (self.cfg.initial_surge_mps**2 + self.cfg.initial_surge_sigma_mps**2)
+        P[3:6, 3:6] = np.diag([var_h, var_h, 0.05**2])
         return x, P
 
     def _prune(self, t_keep_s: float) -> None:

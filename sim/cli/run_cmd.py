@@ -30,6 +30,12 @@ def print_summary(metrics: dict, out: str) -> None:
         print(f"world model: {wm['objects']} targets ({wm.get('objects_not_target', 0)} more objects classified "
               f"not target), {wm['matched']} matched, {wm['missed']} missed, {wm['false']} false, "
               f"mean error {_fmt(wm.get('mean_position_error_m'), '.2f', ' m')}, GOSPA {_fmt(wm.get('gospa'), '.2f')}")
+    if "tracking" in metrics:
+        tr = metrics["tracking"]
+        errs = ", ".join(f"{k} {_fmt(v.get('mean_m'), '.2f')} +- {_fmt(v.get('std_m'), '.2f')} m"
+                         for k, v in tr["errors"].items())
+        print(f"tracking ({tr['mode']}): {errs}; sonar used in {_fmt(100 * tr['fused_sonar_step_fraction'], '.0f')} % "
+              f"of steps; target in view {_fmt(100 * tr['target_in_fov_fraction'], '.0f')} %")
     print(f"results in {out}")
 
 
@@ -60,7 +66,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if mission["aborted"]:
         print(f"ABORTED: {mission['abort_reason']}", file=sys.stderr)
         return EXIT_MISSION_ABORTED
-    if not mission["finished"]:
+    if not mission["finished"] and "tracking" not in metrics:  # a tracking mission ends at duration_s
         print(f"NOT FINISHED: the run reached duration_s = {metrics['sim_time_s']:g} s in mode "
               f"{mission['final_mode']} before the survey ended (raise duration_s to fly it all)", file=sys.stderr)
     return EXIT_OK

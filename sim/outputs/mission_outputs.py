@@ -131,10 +131,11 @@ def run_mission(
     progress: bool = True, overwrite: bool = False, rosbag: bool | None = None, rosbag_fls_every: int | None = None,
 ) -> dict[str, Any]:
     """Run ``scenario`` and write metrics.json, trajectory.csv, world_model.json, map.png
-    (and recording.rrd; with ``rosbag``, a ROS 2 bag folder ``rosbag/`` in MCAP storage,
-    :class:`sim.ros2bag.recorder.RosbagRecorder`, every ``rosbag_fls_every``-th sonar frame;
-    None takes the scenario's ``outputs.rosbag`` / ``outputs.rosbag_fls_every``) into ``out``.
-    Returns the metrics.
+    (with target tracking also tracking_error.png and tracking_boxplot.png, and the
+    trackers' figures under ``tracking`` in metrics.json; and recording.rrd; with ``rosbag``, a
+    ROS 2 bag folder ``rosbag/`` in MCAP storage, :class:`sim.ros2bag.recorder.RosbagRecorder`,
+    every ``rosbag_fls_every``-th sonar frame; None takes the scenario's ``outputs.rosbag`` /
+    ``outputs.rosbag_fls_every``) into ``out``. Returns the metrics.
 
     Raises:
         OutputDirError: ``out`` is protected, a file, not creatable, or holds files that
@@ -167,6 +168,12 @@ def run_mission(
             mission.observers.append(msis_obs)
         mission.observers.append(_ProgressObserver(MissionProgress(scenario.name, planned_length_s(mission),
                                                                    enabled=progress)))
+        tracking = None
+        if mission.parts.tracking is not None:
+            from sim.evaluation.tracking_eval import evaluation_for
+
+            tracking = evaluation_for(mission)
+            mission.observers.append(tracking)
         mission.reset()
         mission.run(progress=False)
 
@@ -194,6 +201,10 @@ def run_mission(
             title=f"{scenario.name} seed {mission.seed} (nav: {nav_source})" + _outcome_suffix(metrics),
             overlay=overlay, extent_points_ne=extent,
         )
+        if tracking is not None:
+            metrics["tracking"] = tracking.metrics()
+            tracking.plot(partial / "tracking_error.png", partial / "tracking_boxplot.png",
+                          title=f"{scenario.name} seed {mission.seed}")
         write_json(partial / "metrics.json", metrics, decimals=METRICS_DECIMALS)
         staged.commit()
     return metrics

@@ -235,7 +235,9 @@ def test_sigint_leaves_no_partial_folder(sandbox):
     env = dict(os.environ, PYTHONUNBUFFERED="1")
     proc = subprocess.Popen([sys.executable, "-m", "sim.cli", "run", "--out", "runs/i", "--set", "duration_s=600",
                              "--no-rerun", "--detector", "none"], cwd=sandbox / "work", env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            # a background job may inherit SIGINT ignored; the user's shell would not
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     partial = sandbox / "work/runs/.i.partial"
     deadline = time.monotonic() + 60
     while not partial.exists() and time.monotonic() < deadline:

@@ -21,9 +21,11 @@ def test_shipped_files_load_unchanged_with_the_default_suite(name):
         # a dump lists the entries kept; the removed default needs its null again
         assert Scenario.model_validate({**dump, "sensors": {**dump["sensors"], "fls": None}}) == scn
         return
-    assert list(scn.sensors) == DEFAULTS
+    tracking = scn.autonomy.tracking.enabled  # the diver-tracking scenarios add a USBL, an ARIS window
+    assert list(scn.sensors) == DEFAULTS + (["usbl"] if tracking else [])
     assert all(cfg.kind == entry for entry, cfg in scn.sensors.items())
-    assert scn.sensors.fls.range_window_m == (1.0, 30.0) and scn.sensors.imu.rate_hz == 50.0
+    if not tracking:
+        assert scn.sensors.fls.range_window_m == (1.0, 30.0) and scn.sensors.imu.rate_hz == 50.0
     assert Scenario.model_validate(scn.model_dump()) == scn  # a dump reloads as the same scenario
 
 

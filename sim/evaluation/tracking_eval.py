@@ -1,0 +1,227 @@
+"""Scoring the target trackers of a run against the movers' true trajectories (paper 004).
+
+:class:`TrackingEvaluation` is a mission observer built with the run's tracking stack, the
+true trajectory of the tracked mover (and its bubble plume) and the sonar's geometry. At each
+autonomy tick it records the 3-D position error of the three filters (sonar only, USBL
+only, fused), whether the sonar-only filter had a detection that tick ("sonar when
+available", the paper's fourth error set) and whether the fused filter took a sonar
+detection (the fraction of filter steps with sonar, paper: ~30 %), and whether the target
+truly lies in the sonar's field of view and how far it is from the vehicle.
+
+Each sonar frame's clusters are labelled against truth: a cluster within ``match_m`` of the
+target's true (range, azimuth) in the sonar frame (distance ``hypot(dr, r da)``) is the
+target, else one within ``match_m`` of a live bubble is a bubble, else clutter; the ROI
+gating figures are the fraction of bubble clusters outside the fused filter's ROI
+(rejected by the window alone) and of target clusters inside it (kept), and, with the
+in-ROI scoring, the fraction of bubble clusters not chosen as the target and of frames
+showing the target whose target cluster was chosen. The sonar pose at ping time is the
+truth at the nearest tick (the vehicle moves < 0.1 m between ticks).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from autonomy.tracking.onboard import MODES, TrackingStack
+
+FloatArray = NDArray[np.float64]
+ERROR_SETS = ("sonar", "sonar_when_available", "usbl", "fused")
+
+
+class TrackingEvaluation:
+    """Mission observer scoring the tracking stack.
+
+    Args:
+        stack: the run's tracking stack (read only).
+        target_pos_at: t_s -> (3,) true NED position of the tracked mover, m.
+        bubbles_at: t_s -> (k, 3) NED positions of its live bubbles (or None: no plume).
+        sonar_mount_body_m, R_bs: (3,) FRD sonar position, m, and (3, 3) sonar->body rotation.
+        fov_rad, window_m, vertical_beam_rad: the sonar's field of view (azimuth, range window
+            (near, far) m, vertical beam).
+        warmup_s: ticks before this time are not scored (the filters start), s.
+        match_m: cluster-to-truth labelling distance, m.
+    """
+
+    def __init__(self, stack: TrackingStack, target_pos_at, bubbles_at, sonar_mount_body_m: FloatArray,
+                 R_bs: FloatArray, fov_rad: float, window_m: tuple[float, float], vertical_beam_rad: float,
+                 warmup_s: float = 10.0, match_m: float = 0.6) -> None:
+        self.stack = stack
+        self.target_pos_at = target_pos_at
+        self.bubbles_at = bubbles_at
+        self.mount = np.asarray(sonar_mount_body_m, dtype=float)
+        self.R_bs = np.asarray(R_bs, dtype=float)
+        self.fov_rad, self.window_m, self.vbeam_rad = float(fov_rad), tuple(window_m), float(vertical_beam_rad)
+        self.warmup_s, self.match_m = float(warmup_s), float(match_m)
+        self.rows: list[tuple[float, ...]] = []  # t, err x3 modes, sonar_avail, fused_sonar, in_fov, distance
+        self._poses: dict[int, tuple[FloatArray, FloatArray]] = {}
+        self._n_results = 0
+        self.n_bubble = self.n_bubble_rejected = self.n_target = self.n_target_kept = 0
+        self.n_bubble_not_chosen = self.n_frames_with_target = self.n_target_chosen = 0
+
+    # observer interface
+    def on_start(self, info: Any) -> None:
+        pass
+
+    def on_message(self, name: str, msg: Any) -> None:
+        pass
+
+    def on_end(self, summary: Any) -> None:
+        pass
+
+    def _sonar_polar(self, p_ned: FloatArray, pos: FloatArray, R_nb: FloatArray) -> FloatArray:
+        """(k, 3) range, azimuth, elevation of NED points (k, 3) in the sonar frame."""
+        rel = (np.atleast_2d(p_ned) - (pos + R_nb @ self.mount)) @ (R_nb @ self.R_bs)
+        rng = np.linalg.norm(rel, axis=1)
+        return np.stack([rng, np.arctan2(rel[:, 1], rel[:, 0]), np.arctan2(rel[:, 2], np.hypot(rel[:, 0], rel[:, 1]))],
+                        axis=1)
+
+    def on_step(self, rec: Any) -> None:
+        t = float(rec.t_s)
+        truth = rec.truth
+        self._poses[int(round(t * 1000))] = (truth.pos_ned.copy(), truth.R_nb.copy())
+        results = self.stack.results[self._n_results:]
+        self._n_results = len(self.stack.results)
+        for res in results:
+            self._label(res)
+        tgt = np.asarray(self.target_pos_at(t), dtype=float)
+        errs = []
+        for m in MODES:
+            est = self.stack.trackers[m].estimate(t)
+            errs.append(float(np.linalg.norm(est[0][:3] - tgt)) if est is not None else math.nan)
+        sonar_avail = any(r.chosen["sonar"] is not None for r in results)
+        fused_sonar = any(r.chosen["fused"] is not None for r in results)
+        r, a, e = self._sonar_polar(tgt, truth.pos_ned, truth.R_nb)[0]
+        in_fov = (abs(a) <= 0.5 * self.fov_rad and self.window_m[0] <= r <= self.window_m[1]
+                  and abs(e) <= 0.5 * self.vbeam_rad)
+        self.rows.append((t, *errs, float(sonar_avail), float(fused_sonar), float(in_fov),
+                          float(np.linalg.norm(tgt - truth.pos_ned))))
+
+    def _label(self, res: Any) -> None:
+        if not res.candidates or res.roi["fused"] is None:
+            return
+        pose = self._poses.get(int(round(res.t_s * 1000)))
+        if pose is None:  # nearest recorded tick
+            keys = np.array(list(self._poses))
+            pose = self._poses[int(keys[np.argmin(np.abs(keys - res.t_s * 1000))])]
+        pos, R_nb = pose
+        cr = np.array([c.range_m for c in res.candidates])
+        ca = np.array([c.azimuth_rad for c in res.candidates])
+
+        def dist(points: FloatArray) -> FloatArray:  # (n_cand, k) polar distance, m
+            sp = self._sonar_polar(points, pos, R_nb)
+            return np.hypot(cr[:, None] - sp[None, :, 0], cr[:, None] * np.angle(np.exp(1j * (ca[:, None] - sp[None, :, 1]))))
+
+        d_tgt = dist(np.asarray(self.target_pos_at(res.t_s), dtype=float))[:, 0]
+        bub = self.bubbles_at(res.t_s) if self.bubbles_at is not None else None
+        d_bub = dist(bub).min(axis=1) if bub is not None and len(bub) else np.full(len(cr), np.inf)
+        is_tgt = d_tgt <= self.match_m
+        is_bub = ~is_tgt & (d_bub <= self.match_m)
+        inside = res.inside["fused"]
+        chosen = np.array([c is res.chosen["fused"] for c in res.candidates])
+        self.n_target += int(is_tgt.sum())
+        self.n_target_kept += int((is_tgt & inside).sum())
+        self.n_bubble += int(is_bub.sum())
+        self.n_bubble_rejected += int((is_bub & ~inside).sum())
+        self.n_bubble_not_chosen += int((is_bub & ~chosen).sum())
+        self.n_frames_with_target += int(is_tgt.any())
+        self.n_target_chosen += int((is_tgt & chosen).any())
+
+    # results
+    def error_sets(self) -> dict[str, FloatArray]:
+        """The four error sets (m) after the warm-up: each filter's error at every tick, and
+        the sonar-only filter's at the ticks it had a detection."""
+        a = np.array(self.rows, dtype=float).reshape(-1, 8)
+        a = a[a[:, 0] >= self.warmup_s]
+        out = {"sonar": a[:, 1], "usbl": a[:, 2], "fused": a[:, 3], "sonar_when_available": a[a[:, 4] > 0, 1]}
+        return {k: v[np.isfinite(v)] for k, v in out.items()}
+
+    def metrics(self) -> dict[str, Any]:
+        """Statistics of the error sets (m), sonar-step fraction, ROI gating, field of view."""
+        a = np.array(self.rows, dtype=float).reshape(-1, 8)
+        scored = a[a[:, 0] >= self.warmup_s]
+        stats = {}
+        for k, v in self.error_sets().items():
+            stats[k] = ({"n": int(v.size), "mean_m": float(v.mean()), "std_m": float(v.std()),
+                         "median_m": float(np.median(v)), "p95_m": float(np.percentile(v, 95))} if v.size else
+                        {"n": 0})
+        return {
+            "mode": self.stack.cfg.mode,
+            "errors": stats,
+            "fused_sonar_step_fraction": float(scored[:, 5].mean()) if len(scored) else math.nan,
+            "roi": {"bubble_clusters": self.n_bubble, "bubble_rejected_fraction":
+                    self.n_bubble_rejected / self.n_bubble if self.n_bubble else math.nan,
+                    "target_clusters": self.n_target, "target_kept_fraction":
+                    self.n_target_kept / self.n_target if self.n_target else math.nan,
+                    "bubble_not_chosen_fraction": self.n_bubble_not_chosen / self.n_bubble if self.n_bubble else math.nan,
+                    "target_chosen_fraction": self.n_target_chosen / self.n_frames_with_target
+                    if self.n_frames_with_target else math.nan},
+            "target_in_fov_fraction": float(a[:, 6].mean()) if len(a) else math.nan,
+            "min_distance_m": float(a[:, 7].min()) if len(a) else math.nan,
+        }
+
+    def plot(self, error_png: Path, box_png: Path, title: str = "") -> None:
+        """Error over time (PNG) and the box plot of the four error sets (PNG)."""
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+
+        a = np.array(self.rows, dtype=float).reshape(-1, 8)
+        fig = Figure(figsize=(9, 4))
+        FigureCanvasAgg(fig)
+        ax = fig.add_subplot()
+        for col, m, colour in ((1, "sonar only", "tab:orange"), (2, "USBL only", "tab:blue"),
+                               (3, "fused", "tab:green")):
+            ax.plot(a[:, 0], a[:, col], lw=1.0, label=m, color=colour)
+        avail = a[:, 4] > 0
+        ax.plot(a[avail, 0], a[avail, 1], ".", ms=2, color="tab:red", label="sonar when available")
+        ax.axvline(self.warmup_s, color="0.6", ls=":", lw=0.8)
+        ax.set_xlabel("time (s)")
+        ax.set_ylabel("position error (m)")
+        ax.set_title(title or "target position error")
+        ax.legend(loc="upper right", fontsize=8)
+        ax.grid(alpha=0.3)
+        fig.tight_layout()
+        fig.savefig(error_png, dpi=110)
+        sets = self.error_sets()
+        fig = Figure(figsize=(6, 4))
+        FigureCanvasAgg(fig)
+        ax = fig.add_subplot()
+        ax.boxplot([sets[k] if sets[k].size else [np.nan] for k in ERROR_SETS], showfliers=False)
+        ax.set_xticks(range(1, 5), ["sonar", "sonar when\navailable", "USBL", "fused"])
+        ax.set_ylabel("position error (m)")
+        ax.set_title(title or "error sets")
+        ax.grid(alpha=0.3, axis="y")
+        fig.tight_layout()
+        fig.savefig(box_png, dpi=110)
+
+
+def evaluation_for(mission: Any, warmup_s: float = 10.0) -> TrackingEvaluation:
+    """The evaluation of a built :class:`sim.mission.Mission` with tracking: the mover named
+    by the tracker's transponder is the truth, its plume the bubbles.
+
+    Raises:
+        ValueError: the mission has no tracking, or no mover carries the transponder.
+    """
+    stack = mission.parts.tracking
+    if stack is None:
+        raise ValueError("evaluation_for: the mission has no tracking (autonomy.tracking.enabled)")
+    movers = mission.physics.movers
+    name = stack.cfg.transponder
+    if name not in movers.trajectories:
+        raise ValueError(f"evaluation_for: no mover named {name!r} carries the transponder")
+    traj = movers.trajectories[name]
+    plume = movers.plumes.get(name)
+
+    def bubbles_at(t_s: float) -> FloatArray:
+        pos, alive = plume.positions_at(t_s)
+        return pos[alive]
+
+    sonar = mission.parts.sonar
+    g = sonar.geometry
+    return TrackingEvaluation(stack, lambda t: traj.pose_at(t)[0], bubbles_at if plume is not None else None,
+                              sonar.mount.pos_body_m, sonar.mount.R_bs, g.fov_rad, (g.window_near_m, g.window_far_m),
+                              g.vertical_beamwidth_rad, warmup_s=warmup_s)

@@ -1,0 +1,118 @@
+"""Tracking stack pieces: ROI scoring of detector clusters, the buddy observer's setpoints,
+the constant-velocity -> course-model hand-over (against Stone Soup's Kalman filter)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from autonomy.guidance.buddy import BuddyObserver
+from autonomy.guidance.config import BuddyConfig
+from autonomy.messages import Detection, NavEstimate, UsblMsg
+from autonomy.tracking import TargetTracker, TrackingConfig
+from autonomy.tracking.onboard import roi_score
+from autonomy.tracking.roi import PolarRoi
+
+
+def _det(r, a, score):
+    return Detection(0.0, "diver", score, np.zeros(4), r, a)
+
+
+def test_roi_score_keeps_inside_and_prefers_the_centre():
+    roi = PolarRoi(8.0, 0.0, 1.0, math.radians(5.0), np.eye(2))
+    dets = [_det(8.0, 0.0, 0.5), _det(8.9, math.radians(4.0), 0.9), _det(10.0, 0.0, 1.0), _det(8.0, -0.2, 1.0)]
+    inside, s = roi_score(dets, roi)
+    assert inside.tolist() == [True, True, False, False]
+    d1 = math.hypot(0.9, 0.8) / math.sqrt(2.0)  # normalised distance of the second cluster
+    np.testing.assert_allclose(s, [0.5, 0.9 * math.exp(-2.0 * d1**2), 0.0, 0.0], rtol=1e-12)
+    assert np.argmax(s) == 0  # the weaker echo at the centre beats the stronger one at the edge
+    inside, s = roi_score(dets, None)  # no estimate yet: every cluster, its own score
+    assert inside.all() and s.tolist() == [0.5, 0.9, 1.0, 1.0]
+
+
+def _nav(pos, yaw=0.0):
+    return NavEstimate(0.0, np.asarray(pos, float), np.array([0.0, 0.0, yaw]), np.zeros(3), np.zeros(3), np.eye(3))
+
+
+def test_buddy_observer_faces_closes_and_backs_off():
+    cfg = BuddyConfig(enabled=True, behaviour="follow", distance_m=4.0, min_distance_m=1.5, gain_per_s=0.3,
+                      max_speed_mps=0.6, depth_offset_m=0.5)
+    b = BuddyObserver(cfg, initial_heading_rad=0.3, initial_depth_m=3.0)
+    sp = b.update(_nav([0.0, 0.0, 3.0]), None)
+    assert sp.speed_mps == 0.0 and sp.heading_rad == 0.3 and sp.depth_m == 3.0
+    sp = b.update(_nav([1.0, 1.0, 3.0]), [4.0, 5.0, 6.0])  # 5 m away, bearing atan2(4, 3)
+    assert sp.heading_rad == pytest.approx(math.atan2(4.0, 3.0))
+    assert sp.speed_mps == pytest.approx(0.3 * (5.0 - 4.0)) and sp.depth_m == pytest.approx(5.5)
+    assert b.update(_nav([0.0, 0.0, 3.0]), [30.0, 0.0, 5.0]).speed_mps == 0.6  # clipped
+    assert b.update(_nav([0.0, 0.0, 3.0]), [1.0, 0.0, 5.0]).speed_mps == -0.6  # too close
+    hold = BuddyObserver(cfg.model_copy(update={"behaviour": "hold"}), 0.0, 3.0)
+    sp = hold.update(_nav([0.0, 0.0, 3.0]), [0.0, 10.0, 5.0])
+    assert sp.speed_mps == 0.0 and sp.heading_rad == pytest.approx(math.pi / 2)
+    hover = BuddyObserver(cfg.model_copy(update={"behaviour": "hover", "depth_m": 4.0}), 0.2, 3.0)
+    sp = hover.update(_nav([0.0, 0.0, 3.0]), [0.0, 10.0, 5.0])
+    assert (sp.speed_mps, sp.heading_rad, sp.depth_m) == (0.0, 0.2, 4.0)
+    with pytest.raises(ValueError):
+        b.update(_nav([0.0, 0.0, 3.0]), [np.nan, 0.0, 0.0])
+
+
+def test_initiation_matches_stone_soup_kalman_filter():
+    """Before the hand-over the tracker is a nearly-constant-velocity EKF: with USBL fixes from
+    a head at the origin aligned with NED, its posterior equals Stone Soup's EKF (constant
+    velocity per axis, same white-noise accelerations, elevation-bearing-range model)."""
+    from datetime import datetime, timedelta
+
+    from stonesoup.models.measurement.nonlinear import CartesianToElevationBearingRange
+    from stonesoup.models.transition.linear import (CombinedLinearGaussianTransitionModel,
+                                                    ConstantVelocity)
+    from stonesoup.predictor.kalman import ExtendedKalmanPredictor
+    from stonesoup.types.detection import Detection as SsDetection
+    from stonesoup.types.hypothesis import SingleHypothesis
+    from stonesoup.types.state import GaussianState
+    from stonesoup.updater.kalman import ExtendedKalmanUpdater
+
+    q_h, q_v = 0.006, 0.001
+    cfg = TrackingConfig(enabled=True, mode="usbl", transponder="diver", initiation_accel_noise_m2_per_s3=q_h,
+                         heave_noise_m2_per_s3=q_v, pos_noise_m2_per_s=0.0, initiation_course_sigma_deg=0.01,
+                         usbl_range_sigma_frac=0.0, usbl_angle_sigma_deg_per_100m=0.0)
+    tr = TargetTracker(cfg)
+    rng = np.random.default_rng(1)
+    fixes = []
+    for k in range(4):
+        t = 2.0 * k
+        p = np.array([10.0 + 0.1 * t, 3.0 - 0.05 * t, 4.0])
+        rng_m = np.linalg.norm(p)
+        z = np.array([rng_m, math.atan2(p[1], p[0]), math.atan2(p[2], math.hypot(p[0], p[1]))])
+        fixes.append((t, z + rng.normal(0, [0.1, 0.01, 0.01])))
+    for k in range(61):
+        tr.record_pose(0.1 * k, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
+    for t, z in fixes:
+        assert tr.on_usbl(UsblMsg(t, *z, transponder="diver"))
+    assert not tr.course_known
+    x_ours = tr._last_state()[1]  # (6,) CV state at the last fix
+    P_ours = tr._last_state()[2]
+
+    # Stone Soup: state [n, vn, e, ve, d, vd]; measurement (elevation up > 0, bearing, range)
+    order = [0, 3, 1, 4, 2, 5]
+    sig_a = math.radians(cfg.usbl_angle_sigma_deg)
+    R = np.diag([sig_a**2, sig_a**2, cfg.usbl_range_sigma_m**2])
+    meas = CartesianToElevationBearingRange(ndim_state=6, mapping=(0, 2, 4), noise_covar=R)
+    trans = CombinedLinearGaussianTransitionModel([ConstantVelocity(q_h), ConstantVelocity(q_h), ConstantVelocity(q_v)])
+    t0 = datetime(2020, 1, 1)
+    # the first fix initialises both: take our initial state as Stone Soup's prior
+    first = TargetTracker(cfg)
+    first.record_pose(0.0, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
+    first.on_usbl(UsblMsg(0.0, *fixes[0][1], transponder="diver"))
+    _, x0, P0 = first._last_state()
+    state = GaussianState(x0[order].reshape(-1, 1), P0[np.ix_(order, order)], timestamp=t0)
+    predictor, updater = ExtendedKalmanPredictor(trans), ExtendedKalmanUpdater(meas)
+    for t, z in fixes[1:]:
+        ts = t0 + timedelta(seconds=t)
+        pred = predictor.predict(state, timestamp=ts)
+        # on the NED state Stone Soup's atan2(z, rho) is our elevation (down > 0)
+        det = SsDetection(np.array([[z[2]], [z[1]], [z[0]]]), timestamp=ts, measurement_model=meas)
+        state = updater.update(SingleHypothesis(pred, det))
+    inv = np.argsort(order)
+    np.testing.assert_allclose(np.asarray(state.state_vector).ravel()[inv], x_ours, atol=1e-6)
+    np.testing.assert_allclose(np.asarray(state.covar)[np.ix_(inv, inv)], P_ours, atol=1e-8)
