@@ -63,23 +63,19 @@ class LocalizationErrorObserver:
         pass
 
     def _note_walls(self, name: str) -> None:
-        """Angle error (deg) of each fuzzy segment of the latest wall fix against the true wall
-        it lies along (normal within 10 deg, offset within 1 m), per wall index."""
+        """Angle error (deg) of the latest wall fix's fused estimate of each wall (one per wall
+        and fix) against the true wall, per wall index."""
         proc = self.mission.parts.processors.get(name)
         loc = getattr(proc, "localizer", None)
         if loc is None or loc.cfg.method != "walls":
             return
         basin = self.mission.scenario.world.basin
         walls = tank_walls(np.asarray(basin.center_ne_m, float), np.asarray(basin.size_ne_m, float))
-        for s in loc.last_segments:
-            for i, (n_w, c_w) in enumerate(walls):
-                n_s, rho = s.normal, s.rho_m
-                if n_s @ n_w < 0.0:
-                    n_s, rho = -n_s, -rho
-                if n_s @ n_w > np.cos(np.radians(10.0)) and abs(rho - c_w) < 1.0:
-                    ang = np.degrees(np.arctan2(n_s[0] * n_w[1] - n_s[1] * n_w[0], n_s @ n_w))
-                    self.wall_angle_err_deg.setdefault(i, []).append(float(abs(ang)))
-                    break
+        for i, s in loc.last_walls.items():
+            n_w = walls[i][0]
+            n_s = s.normal if s.normal @ n_w >= 0.0 else -s.normal
+            ang = np.degrees(np.arctan2(n_s[0] * n_w[1] - n_s[1] * n_w[0], n_s @ n_w))
+            self.wall_angle_err_deg.setdefault(i, []).append(float(abs(ang)))
 
     def rms(self) -> dict[str, float]:
         """RMS and final horizontal errors (m) of the fused estimate and of dead reckoning."""

@@ -36,6 +36,8 @@ class MsisLocalizationConfig(StrictModel):
     iepf_k_min: int = Field(8, ge=3, le=10000)
     iepf_rho_max_m: float = Field(0.2, gt=0.0, le=10.0)
     min_segment_length_m: float = Field(1.0, ge=0.0, le=1000.0)
+    min_wall_support_m: float = Field(2.0, ge=0.0, le=1000.0, description="least extent of a fused wall estimate")
+    heading_sigma_deg: float = Field(1.0, ge=0.0, le=45.0, description="heading sigma floor for the segments' uncertainty")
     wall_match_angle_deg: float = Field(10.0, gt=0.0, le=45.0)
     wall_match_distance_m: float = Field(1.5, gt=0.0, le=100.0)
     fix_sigma_floor_m: float = Field(0.05, ge=0.0, le=10.0, description="added to each fix's sigma")

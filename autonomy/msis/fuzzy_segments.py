@@ -9,9 +9,20 @@ set on its ``rho``.
 * Matching degree of two trapezoids (eq. 17) as we read it: ``A_xy / min(A_x, A_y)``, the
   area of their intersection over the smaller area (1 when one lies inside the other).
 * Collinear segments (eq. 16: normals within ``max_angle`` and matching degree at least
-  ``min_match``) fuse (eqs. 18-19): theta and rho by inverse-variance weights, cuts combined as
-  independent estimates ``(c_a^-2 + c_b^-2)^-1/2``, end points the extreme projections of the
-  four ends onto the fused line.
+  ``min_match``) fuse (eqs. 18-19): theta by inverse-variance weights of the fits' sigma_theta,
+  rho by inverse-variance weights of the 95 % cuts, each segment's rho first carried to the
+  fused normal through its mid point (``rho_i + (n_r - n_i) . m_i``, so pieces of one wall at
+  slightly different angles agree where they were seen), cuts combined as independent
+  estimates ``(c_a^-2 + c_b^-2)^-1/2``, end points the extreme projections of the four ends onto
+  the fused line.
+* Heading uncertainty (:meth:`FuzzySegment.with_heading_uncertainty`): the points of a sweep
+  are placed with the estimated heading, so a heading error ``d_psi`` rotates the segment about
+  the vehicle position ``p``: its normal turns by ``d_psi`` and its points move along the
+  normal by ``d_psi`` times their distance from ``p`` along the segment. ``sigma_psi`` is kept
+  apart from the fit's ``sigma_theta`` (it is common to every segment of one sweep, so it does
+  not average out in a fusion; :attr:`FuzzySegment.sigma_theta_total_rad` adds both) and widens
+  the rho cuts by ``z sigma_psi L`` (``L`` the farthest end's distance from ``p`` along the
+  segment, ``z`` = 1 and 1.96 for the 68 % and 95 % cuts), bounded sum (eq. 12).
 * A segment whose trapezoid area ``rho0 + rho1`` exceeds a threshold is dropped.
 """
 
@@ -65,6 +76,8 @@ class FuzzySegment:
         rho1_m, rho0_m: half widths of the membership-1 and -0 cuts, m.
         end_a, end_b: (2,) end points, m.
         t_s: time of the latest observation fused in.
+        sigma_heading_rad: heading standard deviation of the estimate the points were placed
+            with (common to the segments of one sweep; module docstring).
     """
 
     theta_rad: float
@@ -75,6 +88,7 @@ class FuzzySegment:
     end_a: FloatArray
     end_b: FloatArray
     t_s: float
+    sigma_heading_rad: float = 0.0
 
     @classmethod
     def from_fit(cls, fit: LineFit, t_s: float) -> "FuzzySegment":
@@ -91,13 +105,33 @@ class FuzzySegment:
         return self.rho0_m + self.rho1_m
 
     @property
+    def length_m(self) -> float:
+        return float(np.linalg.norm(self.end_b - self.end_a))
+
+    @property
+    def sigma_theta_total_rad(self) -> float:
+        """Angle standard deviation with the heading's: ``sqrt(sigma_theta^2 + sigma_psi^2)``."""
+        return math.hypot(self.sigma_theta_rad, self.sigma_heading_rad)
+
+    def with_heading_uncertainty(self, pivot: FloatArray, sigma_psi_rad: float) -> "FuzzySegment":
+        """This segment seen from a vehicle at ``pivot`` (2,) whose heading has standard deviation
+        ``sigma_psi_rad``: rho cuts widened by ``(1, 1.96) sigma_psi L`` (module docstring)."""
+        tangent = np.array([-math.sin(self.theta_rad), math.cos(self.theta_rad)])
+        pv = np.asarray(pivot, dtype=float)
+        lever = max(abs(float((self.end_a - pv) @ tangent)), abs(float((self.end_b - pv) @ tangent)))
+        g = sigma_psi_rad * lever
+        out = self.grown(g, 1.96 * g)
+        return FuzzySegment(out.theta_rad, out.rho_m, out.sigma_theta_rad, out.rho1_m, out.rho0_m, out.end_a,
+                            out.end_b, out.t_s, max(self.sigma_heading_rad, float(sigma_psi_rad)))
+
+    @property
     def normal(self) -> FloatArray:
         return np.array([math.cos(self.theta_rad), math.sin(self.theta_rad)])
 
     def grown(self, extra_rho1_m: float, extra_rho0_m: float) -> "FuzzySegment":
         """Bounded sum with a centred trapezoid ``(-extra0, -extra1, extra1, extra0)`` (eq. 12)."""
         return FuzzySegment(self.theta_rad, self.rho_m, self.sigma_theta_rad, self.rho1_m + extra_rho1_m,
-                            self.rho0_m + extra_rho0_m, self.end_a, self.end_b, self.t_s)
+                            self.rho0_m + extra_rho0_m, self.end_a, self.end_b, self.t_s, self.sigma_heading_rad)
 
     def matches(self, other: "FuzzySegment", max_angle_rad: float, min_match: float) -> bool:
         """Collinearity test (eq. 16)."""
@@ -113,8 +147,10 @@ class FuzzySegment:
         dth = float(wrap_angle(other.theta_rad - self.theta_rad))
         sa, sb = max(self.sigma_theta_rad, 1e-9) ** 2, max(other.sigma_theta_rad, 1e-9) ** 2
         theta = float(wrap_angle(self.theta_rad + dth * sa / (sa + sb)))
-        rho = (wa * self.rho_m + wb * other.rho_m) / (wa + wb)
         n = np.array([math.cos(theta), math.sin(theta)])
+        rho_a = self.rho_m + float((n - self.normal) @ (0.5 * (self.end_a + self.end_b)))
+        rho_b = other.rho_m + float((n - other.normal) @ (0.5 * (other.end_a + other.end_b)))
+        rho = (wa * rho_a + wb * rho_b) / (wa + wb)
         tangent = np.array([-n[1], n[0]])
         ends = np.array([self.end_a, self.end_b, other.end_a, other.end_b])
         t = ends @ tangent
@@ -122,7 +158,7 @@ class FuzzySegment:
         comb = lambda a, b: 1.0 / math.sqrt(1.0 / max(a, 1e-12) ** 2 + 1.0 / max(b, 1e-12) ** 2)  # noqa: E731
         return FuzzySegment(theta, float(rho), math.sqrt(sa * sb / (sa + sb)), comb(self.rho1_m, other.rho1_m),
                             comb(self.rho0_m, other.rho0_m), foot + t.min() * tangent, foot + t.max() * tangent,
-                            max(self.t_s, other.t_s))
+                            max(self.t_s, other.t_s), max(self.sigma_heading_rad, other.sigma_heading_rad))
 
 
 class FuzzySegmentMap:

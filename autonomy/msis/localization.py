@@ -11,22 +11,30 @@ in the navigation frame. Then:
   ``u_i`` the unit vector from the centre to point i, sigma the inliers' rms residual), plus
   a floor;
 * rectangular tank (``walls``): IEPF runs on the ordered points, each run's eigenvector fit
-  becomes a fuzzy segment, collinear segments fuse
-  (:class:`autonomy.msis.fuzzy_segments.FuzzySegmentMap`); each segment that matches a known
-  wall (normal within ``wall_match_angle_deg``, rho within ``wall_match_distance_m``) gives
-  the offset of the estimate along that wall's normal, ``n . d = rho_true - rho_hat``. With
-  walls of both directions, the weighted least-squares offset ``d`` (weights ``1 / sigma^2``,
-  sigma from the segment's 68 % cut) makes the fix ``p_hat + d`` with covariance
-  ``(H^T W H)^-1``.
+  of at least ``min_segment_length_m`` becomes a fuzzy segment, its rho cuts widened by the
+  heading uncertainty about the vehicle (``max(sqrt(cov_yaw), heading_sigma_deg)``,
+  :meth:`~autonomy.msis.fuzzy_segments.FuzzySegment.with_heading_uncertainty`), and collinear
+  segments fuse (:class:`autonomy.msis.fuzzy_segments.FuzzySegmentMap`). Each segment that
+  matches a known wall (normal within ``wall_match_angle_deg``, rho within
+  ``wall_match_distance_m``) is assigned to it; the segments of one wall then fuse into one
+  estimate per wall and sweep (eqs. 18-19, :func:`fuse_wall_segments`), kept when its
+  extent reaches ``min_wall_support_m``. Each wall estimate gives the offset of the estimate
+  along that wall's normal from the vehicle's distance to the wall, which a heading error
+  (a rotation of the sweep about the vehicle) leaves unchanged: with ``r = rho - n_s . p``,
+  ``n_w . d = c_w - r - n_w . p``. With walls of both directions, the weighted least-squares
+  offset ``d`` (weights ``1 / sigma^2``, sigma from the estimate's 68 % cut) makes the fix
+  ``p_hat + d`` with covariance ``(H^T W H)^-1``.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 from numpy.typing import NDArray
 
+from autonomy.frames import wrap_angle
 from autonomy.messages import MsisPing, NavEstimate, PositionFixMsg
 from autonomy.msis.circle_fit import mlesac_circle
 from autonomy.msis.config import MsisLocalizationConfig
@@ -57,6 +65,25 @@ def tank_walls(centre_ne: FloatArray, size_ne: FloatArray) -> list[tuple[FloatAr
             (np.array([0.0, 1.0]), ce + he), (np.array([0.0, -1.0]), -(ce - he))]
 
 
+def fuse_wall_segments(segments: list[FuzzySegment], normal: FloatArray) -> FuzzySegment:
+    """One estimate of a wall from its segments of one sweep: each turned to the wall's normal
+    side (``theta + pi``, ``-rho`` when its normal points away), then fused (eqs. 18-19), the
+    longest first.
+
+    Raises:
+        ValueError: no segments.
+    """
+    if not segments:
+        raise ValueError("no segments to fuse")
+    n_w = np.asarray(normal, dtype=float)
+    out: FuzzySegment | None = None
+    for s in sorted(segments, key=lambda s: -s.length_m):
+        if s.normal @ n_w < 0.0:
+            s = replace(s, theta_rad=float(wrap_angle(s.theta_rad + math.pi)), rho_m=-s.rho_m)
+        out = s if out is None else out.fused(s)
+    return out
+
+
 class MsisLocalizer:
     """Sonar buffer + feature extraction + position fix for one sonar.
 
@@ -77,6 +104,7 @@ class MsisLocalizer:
         self._t_first = math.nan
         self.last_circle = None
         self.last_segments: list[FuzzySegment] = []
+        self.last_walls: dict[int, FuzzySegment] = {}
 
     def process(self, ping: MsisPing, nav: NavEstimate) -> PositionFixMsg | None:
         """Add a ping; return a fix when one is due and found."""
@@ -119,9 +147,12 @@ class MsisLocalizer:
         pos = np.asarray(nav.pos_ned[:2], dtype=float) + (np.asarray(cfg.centre_ne_m) - circle.centre)
         return pos, cov
 
-    def segments(self, pts: FloatArray, t_s: float) -> list[FuzzySegment]:
-        """Fuzzy segments of ordered points (IEPF, eigenvector fits, collinear fusion)."""
+    def segments(self, pts: FloatArray, t_s: float, pivot_ne: FloatArray | None = None,
+                 sigma_heading_rad: float = 0.0) -> list[FuzzySegment]:
+        """Fuzzy segments of ordered points (IEPF, eigenvector fits, heading uncertainty about the
+        vehicle at ``pivot_ne``, collinear fusion)."""
         cfg = self.cfg
+        pivot = np.zeros(2) if pivot_ne is None else np.asarray(pivot_ne, dtype=float)
         fmap = FuzzySegmentMap(max_angle_rad=math.radians(3.0), min_match=0.2)
         for a, b in iepf_split(pts, cfg.iepf_k_min, cfg.iepf_rho_max_m):
             try:
@@ -129,26 +160,38 @@ class MsisLocalizer:
             except ValueError:
                 continue
             if fit.length_m >= cfg.min_segment_length_m:
-                fmap.add(FuzzySegment.from_fit(fit, t_s))
+                fmap.add(FuzzySegment.from_fit(fit, t_s).with_heading_uncertainty(pivot, sigma_heading_rad))
         return fmap.segments
 
     def _walls_fix(self, pts: FloatArray, nav: NavEstimate) -> tuple[FloatArray, FloatArray] | None:
         cfg = self.cfg
-        segs = self.segments(pts, nav.t_s)
+        p = np.asarray(nav.pos_ned[:2], dtype=float)
+        sigma_psi = max(math.sqrt(max(float(nav.cov_yaw_rad2), 0.0)), math.radians(cfg.heading_sigma_deg))
+        segs = self.segments(pts, nav.t_s, p, sigma_psi)
         self.last_segments = segs
         walls = tank_walls(np.asarray(cfg.centre_ne_m, float), np.asarray(cfg.tank_size_ne_m, float))
-        H, z, w = [], [], []
         cos_max = math.cos(math.radians(cfg.wall_match_angle_deg))
+        assigned: dict[int, list[FuzzySegment]] = {}
         for s in segs:
-            for n_w, c_w in walls:
+            for i, (n_w, c_w) in enumerate(walls):
                 n_s, rho = s.normal, s.rho_m
                 if n_s @ n_w < 0.0:  # the same line with the opposite normal
                     n_s, rho = -n_s, -rho
                 if n_s @ n_w >= cos_max and abs(rho - c_w) <= cfg.wall_match_distance_m:
-                    H.append(n_w)
-                    z.append(c_w - rho)
-                    w.append(1.0 / max(s.rho1_m, 1e-3) ** 2)
+                    assigned.setdefault(i, []).append(s)
                     break
+        self.last_walls = {}
+        H, z, w = [], [], []
+        for i, group in sorted(assigned.items()):
+            n_w, c_w = walls[i]
+            est = fuse_wall_segments(group, n_w)
+            if est.length_m < cfg.min_wall_support_m:
+                continue
+            self.last_walls[i] = est
+            r = est.rho_m - float(est.normal @ p)  # the vehicle's distance to the wall seen
+            H.append(n_w)
+            z.append(c_w - r - float(n_w @ p))
+            w.append(1.0 / max(est.rho1_m, 1e-3) ** 2)
         if len(H) < 2:
             return None
         H, z, W = np.array(H), np.array(z), np.diag(w)
@@ -157,4 +200,4 @@ class MsisLocalizer:
             return None  # walls of one direction only
         cov = np.linalg.inv(info)
         d = cov @ H.T @ W @ z
-        return np.asarray(nav.pos_ned[:2], dtype=float) + d, cov
+        return p + d, cov

@@ -11,6 +11,7 @@ import pytest
 from autonomy.msis.circle_fit import circle_residuals, fit_circle_algebraic, mlesac_circle, mlesac_iterations
 from autonomy.msis.fuzzy_segments import FuzzySegment, FuzzySegmentMap, matching_degree
 from autonomy.msis.line_segments import fit_line, iepf_split, t_quantile
+from autonomy.msis.localization import fuse_wall_segments
 
 
 def _circle_points(rng, centre, radius, n, sigma, arc=(0.0, 2 * np.pi)):
@@ -118,11 +119,11 @@ def test_matching_degree_closed_forms():
 
 def test_fuzzy_segments_fuse_grow_and_age_out():
     a = FuzzySegment(0.0, 5.0, 0.01, 0.02, 0.04, np.array([5.0, -2.0]), np.array([5.0, 1.0]), 0.0)
-    b = FuzzySegment(0.002, 5.01, 0.01, 0.02, 0.04, np.array([5.0, 0.5]), np.array([5.0, 3.0]), 1.0)
+    b = FuzzySegment(0.002, 5.01, 0.01, 0.02, 0.04, np.array([5.01, 0.5]), np.array([5.01, 3.0]), 1.0)
     far = FuzzySegment(0.0, 7.0, 0.01, 0.02, 0.04, np.array([7.0, 0.0]), np.array([7.0, 1.0]), 1.0)
     assert a.matches(b, math.radians(2), 0.3) and not a.matches(far, math.radians(2), 0.3)
     f = a.fused(b)
-    assert f.rho_m == pytest.approx(5.005) and f.rho0_m == pytest.approx(0.04 / math.sqrt(2))
+    assert f.rho_m == pytest.approx(5.005, abs=2e-3) and f.rho0_m == pytest.approx(0.04 / math.sqrt(2))
     assert f.end_a[1] == pytest.approx(-2.0, abs=0.02) and f.end_b[1] == pytest.approx(3.0, abs=0.02)
     m = FuzzySegmentMap(max_angle_rad=math.radians(2), motion_growth=0.1, age_growth_mps=0.0, max_area_m=0.5)
     m.add(a), m.add(b), m.add(far)
@@ -131,3 +132,63 @@ def test_fuzzy_segments_fuse_grow_and_age_out():
     assert m.segments[1].rho0_m == pytest.approx(0.04 + 0.1)
     m.grow(travelled_m=3.0, dt_s=1.0)
     assert m.segments == []
+
+
+def _split_wall_pieces(rng):
+    """A wall ``x = 5`` seen as four IEPF pieces of one sweep: three long, one short and noisy
+    (its own fit is off by degrees)."""
+    pieces = []
+    for (y0, y1, k, sigma) in [(-4.0, -1.5, 40, 0.02), (-1.4, 0.4, 30, 0.02), (0.5, 1.3, 8, 0.06), (1.4, 4.0, 40, 0.02)]:
+        y = np.linspace(y0, y1, k)
+        pieces.append(fit_line(np.column_stack([5.0 + rng.normal(0, sigma, k), y])))
+    return [FuzzySegment.from_fit(f, 0.0) for f in pieces]
+
+
+def test_a_wall_split_into_pieces_fuses_into_one_segment_within_1_deg():
+    worst, fused_err = [], []
+    for seed in range(50):
+        segs = _split_wall_pieces(np.random.default_rng(seed))
+        f = fuse_wall_segments(segs, np.array([1.0, 0.0]))
+        fused_err.append(abs(math.degrees(math.remainder(f.theta_rad, 2 * np.pi))))
+        worst.append(max(abs(math.degrees(math.remainder(s.theta_rad, 2 * np.pi))) for s in segs))
+        assert f.rho_m == pytest.approx(5.0, abs=0.02)
+        assert min(f.end_a[1], f.end_b[1]) < -3.9 and max(f.end_a[1], f.end_b[1]) > 3.9  # spans the wall
+        assert f.sigma_theta_rad < min(s.sigma_theta_rad for s in segs)
+    assert max(fused_err) <= 1.0
+    assert max(worst) > 2.0  # the short piece alone would not meet the goal
+
+
+def test_fusion_turns_pieces_to_the_wall_normal_side():
+    a = FuzzySegment(0.0, 5.0, 0.01, 0.02, 0.04, np.array([5.0, -2.0]), np.array([5.0, 0.0]), 0.0)
+    b = FuzzySegment(math.pi, -5.0, 0.01, 0.02, 0.04, np.array([5.0, 0.0]), np.array([5.0, 2.0]), 0.0)
+    f = fuse_wall_segments([a, b], np.array([1.0, 0.0]))
+    assert f.theta_rad == pytest.approx(0.0, abs=1e-9) and f.rho_m == pytest.approx(5.0)
+
+
+def test_heading_uncertainty_widens_rho_cuts_with_the_lever_arm_and_adds_to_the_angle():
+    s = FuzzySegment(0.0, 5.0, 0.01, 0.02, 0.04, np.array([5.0, -1.0]), np.array([5.0, 4.0]), 0.0)
+    sp = math.radians(1.0)
+    h = s.with_heading_uncertainty(np.array([0.0, 1.0]), sp)
+    assert h.rho1_m == pytest.approx(0.02 + 3.0 * sp) and h.rho0_m == pytest.approx(0.04 + 1.96 * 3.0 * sp)
+    assert h.sigma_theta_total_rad == pytest.approx(math.hypot(0.01, sp)) and h.sigma_theta_rad == 0.01
+
+
+def test_wall_fix_is_unaffected_by_a_heading_error_rotating_the_sweep():
+    from autonomy.messages import NavEstimate
+    from autonomy.msis.config import MsisLocalizationConfig
+    from autonomy.msis.localization import MsisLocalizer
+
+    rng = np.random.default_rng(11)
+    true_p = np.array([3.0, -1.5])
+    pts = _rectangle_scan(rng, 10.0, 5.0, true_p, 600, 0.02)
+    psi = math.radians(1.5)  # heading error: the sweep is placed rotated about the estimate
+    est_p = true_p + np.array([0.4, -0.3])
+    R = np.array([[math.cos(psi), -math.sin(psi)], [math.sin(psi), math.cos(psi)]])
+    placed = est_p + (pts - true_p) @ R.T
+    loc = MsisLocalizer(MsisLocalizationConfig(method="walls", tank_size_ne_m=(20.0, 10.0)), rng)
+    nav = NavEstimate(0.0, np.array([*est_p, 2.0]), np.zeros(3), np.zeros(3), np.zeros(3), np.eye(3))
+    pos, cov = loc._walls_fix(placed, nav)
+    assert np.linalg.norm(pos - true_p) < 0.05
+    assert sorted(loc.last_walls) == [0, 1, 2, 3]
+    for i, s in loc.last_walls.items():  # one fused estimate per wall, turned by the heading error
+        assert abs(abs(math.degrees(math.remainder(s.theta_rad - [0, np.pi, np.pi / 2, -np.pi / 2][i], 2 * np.pi))) - 1.5) < 0.5
