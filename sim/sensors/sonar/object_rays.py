@@ -24,7 +24,7 @@ Pairs = tuple[NDArray[np.intp], NDArray[np.intp]]
 
 def add_object_rays(fan: RayFan, base: RayTable, caster: RayCaster, origin_ned: FloatArray, R_ns: FloatArray,
                     objects: Sequence[SceneObjectLike], window_near_m: float, window_far_m: float,
-                    max_range_m: float, rays_across: int) -> tuple[RayTable, NDArray[np.int64], Pairs | None]:
+                    max_range_m: float, rays_across: int, span_limit: float | None = None) -> tuple[RayTable, NDArray[np.int64], Pairs | None]:
     """Append sub-column rays over the objects the base rays sample coarsely.
 
     Args:
@@ -51,7 +51,7 @@ def add_object_rays(fan: RayFan, base: RayTable, caster: RayCaster, origin_ned: 
         dist = float(np.linalg.norm(v))
         if dist - radius <= window_far_m and dist + radius >= window_near_m:
             spheres.append((int(o.id), R_ns.T @ v, float(radius)))
-    strips = fan.strip_rays(spheres, rays_across)
+    strips = fan.strip_rays(spheres, rays_across, span_limit=span_limit)
     if strips.empty:
         return base, np.full(n0, -1, dtype=np.int64), None
     extra = _cast_strips(fan, base, caster, origin_ned, R_ns, strips, max_range_m)
