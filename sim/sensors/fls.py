@@ -49,6 +49,7 @@ from sim.truth import VehicleTruth
 
 FloatArray = NDArray[np.float64]
 OBJECT_RAYS_ACROSS = 8  # rays across an object (each way) where the base rays are sparser
+OBJECT_RAYS_SPAN_LIMIT = 3.0  # objects spanning this many base ray spacings or more keep the base rays
 
 
 @dataclass(frozen=True, slots=True)
@@ -198,7 +199,7 @@ class FlsSensor(Sensor[FlsRender]):
         (:func:`sim.sensors.sonar.object_rays.add_object_rays` over the range window)."""
         g = self.geometry
         return add_object_rays(self.rays, base, caster, origin, R_ns, objects, g.window_near_m, g.window_far_m,
-                               g.range_max_m, OBJECT_RAYS_ACROSS)
+                               g.range_max_m, OBJECT_RAYS_ACROSS, OBJECT_RAYS_SPAN_LIMIT)
 
     def _object_truth(self, obj: SceneObjectLike, origin: FloatArray, R_ns: FloatArray, sampled: RayTable,
                       owner: NDArray[np.int64], in_win: NDArray[np.bool_],

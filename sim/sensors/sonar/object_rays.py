@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 
 from sim.sensors.raycast import RayCaster
 from sim.sensors.sonar.ground_truth import SceneObjectLike
-from sim.sensors.sonar.ray_fan import RayFan, RayTable, column_neighbours
+from sim.sensors.sonar.ray_fan import RayFan, RayTable, StripRays, column_neighbours
 
 FloatArray = NDArray[np.float64]
 Pairs = tuple[NDArray[np.intp], NDArray[np.intp]]
@@ -24,7 +24,7 @@ Pairs = tuple[NDArray[np.intp], NDArray[np.intp]]
 
 def add_object_rays(fan: RayFan, base: RayTable, caster: RayCaster, origin_ned: FloatArray, R_ns: FloatArray,
                     objects: Sequence[SceneObjectLike], window_near_m: float, window_far_m: float,
-                    max_range_m: float, rays_across: int) -> tuple[RayTable, NDArray[np.int64], Pairs | None]:
+                    max_range_m: float, rays_across: int, span_limit: float | None = None) -> tuple[RayTable, NDArray[np.int64], Pairs | None]:
     """Append sub-column rays over the objects the base rays sample coarsely.
 
     Args:
@@ -51,10 +51,10 @@ def add_object_rays(fan: RayFan, base: RayTable, caster: RayCaster, origin_ned: 
         dist = float(np.linalg.norm(v))
         if dist - radius <= window_far_m and dist + radius >= window_near_m:
             spheres.append((int(o.id), R_ns.T @ v, float(radius)))
-    strips = fan.strip_rays(spheres, rays_across)
+    strips = fan.strip_rays(spheres, rays_across, span_limit=span_limit)
     if strips.empty:
         return base, np.full(n0, -1, dtype=np.int64), None
-    extra = fan.cast_rays(caster, origin_ned, R_ns, strips.col, strips.az, strips.phi, strips.weight, max_range_m)
+    extra = _cast_strips(fan, base, caster, origin_ned, R_ns, strips, max_range_m)
     sampled = base.concat(extra)
     owner = np.concatenate([np.full(n0, -1, dtype=np.int64), np.where(strips.owner < 0, -2, strips.owner)])
     # the replaced columns' base rays leave the echo chains
@@ -63,3 +63,23 @@ def add_object_rays(fan: RayFan, base: RayTable, caster: RayCaster, origin_ned: 
     rows = np.flatnonzero(chain)
     a, b = column_neighbours(sampled.col[rows], sampled.az[rows], sampled.phi[rows])
     return sampled, owner, (rows[a], rows[b])
+
+
+def _cast_strips(fan: RayFan, base: RayTable, caster: RayCaster, origin_ned: FloatArray, R_ns: FloatArray,
+                 strips: StripRays, max_range_m: float) -> RayTable:
+    """The strip rays, in order; a ray that repeats a base ray (a column left as one sub-column
+    keeps its azimuth and the base elevations) is copied from the base table, not cast again."""
+    n_el = fan.n_el
+    phi_idx = np.minimum(np.searchsorted(fan.elevations_rad, strips.phi), n_el - 1)
+    twin = ((strips.owner < 0) & (strips.az == fan.column_azimuths_rad[strips.col])
+            & (strips.phi == fan.elevations_rad[phi_idx]) & (strips.weight == 1.0))
+    if not twin.any():
+        return fan.cast_rays(caster, origin_ned, R_ns, strips.col, strips.az, strips.phi, strips.weight,
+                             max_range_m)
+    out = base.take(np.where(twin, strips.col * n_el + phi_idx, 0))
+    cast = np.flatnonzero(~twin)
+    if cast.size:
+        new = fan.cast_rays(caster, origin_ned, R_ns, strips.col[cast], strips.az[cast], strips.phi[cast],
+                            strips.weight[cast], max_range_m)
+        out = out.put(cast, new)
+    return out

@@ -217,7 +217,7 @@ class RayFan:
         return RayTable.from_hits(hits, dirs, self.ray_col, self.ray_az, self.ray_phi, self._ray_weight), hits
 
     def strip_rays(self, spheres: list[tuple[int, FloatArray, float]], rays_across: int,
-                   max_sub_columns: int = 8) -> StripRays:
+                   max_sub_columns: int = 8, span_limit: float | None = None) -> StripRays:
         """Finer rays over spheres that the base rays sample coarsely (small objects between them).
 
         A sphere (object id, centre (3,) in the sonar frame, radius m) subtending ``2 beta``
@@ -240,6 +240,7 @@ class RayFan:
         el0, el1 = float(self.elevations_rad[0]), float(self.elevations_rad[-1])
         width = self.column_width_rad
         coarse = max(self.elevation_step_rad, width)
+        limit = rays_across if span_limit is None else span_limit
         needs: list[tuple[int, FloatArray, float, float]] = []  # (id, u, cos beta, spacing)
         n_sub: dict[int, int] = {}
         for oid, centre, radius in spheres:
@@ -250,7 +251,7 @@ class RayFan:
             u = c / dist
             beta = float(np.arcsin(radius / dist))
             el_c = float(np.arcsin(np.clip(u[2], -1.0, 1.0)))
-            if 2.0 * beta >= rays_across * coarse or el_c - beta > el1 or el_c + beta < el0:
+            if 2.0 * beta >= limit * coarse or el_c - beta > el1 or el_c + beta < el0:
                 continue
             spacing = 2.0 * beta / rays_across
             cos_el = np.cos(el_c)
