@@ -21,6 +21,8 @@ from autonomy.atr.detector import check_frame, to_detections
 from autonomy.atr.union_find import UnionFind
 from autonomy.messages import Detection, FlsFrame
 
+_FEATURES = ("extent_m", "minor_m", "area_m2", "fill", "n_contours")
+
 
 def _box_gaps_px(boxes: NDArray) -> NDArray[np.float64]:
     """Pairwise gap (N, N) between xyxy boxes in px (0 where they overlap)."""
@@ -43,7 +45,19 @@ class ClassicalDetector:
                    roi_centre_px: tuple[float, float] | None = None
                    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """All scored clusters: boxes (N, 4) fan px xyxy, scores (N,) in [0, 1]."""
+        boxes, scores, _ = self.clusters(fan, m_per_px, roi_centre_px)
+        return boxes, scores
+
+    def clusters(self, fan: NDArray[np.uint8], m_per_px: float,
+                 roi_centre_px: tuple[float, float] | None = None
+                 ) -> tuple[NDArray[np.float64], NDArray[np.float64], dict[str, NDArray[np.float64]]]:
+        """All scored clusters with their shape cues (paper 004: a cluster is compared with the
+        target's known size and shape): boxes (N, 4) fan px xyxy, scores (N,) in [0, 1], and
+        (N,) arrays ``extent_m`` (longer box side), ``minor_m`` (shorter box side),
+        ``area_m2`` (foreground area of its contours), ``fill`` (foreground fraction of the box)
+        and ``n_contours`` (contours merged into it)."""
         cfg = self.cfg
+        empty = (np.zeros((0, 4)), np.zeros(0), {k: np.zeros(0) for k in _FEATURES})
         sigma_px = max(cfg.blur_sigma_m / m_per_px, 0.3)
         blurred = cv2.GaussianBlur(fan, (0, 0), sigmaX=sigma_px)
         win = int(round(cfg.threshold_window_m / m_per_px)) | 1
@@ -52,7 +66,7 @@ class ClassicalDetector:
                                        win, -float(cfg.threshold_offset))
         contours, _ = cv2.findContours(binary, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
         if not contours:
-            return np.zeros((0, 4)), np.zeros(0)
+            return empty
         rects = np.array([cv2.boundingRect(c) for c in contours], dtype=np.float64)  # x, y, w, h
         boxes = np.stack([rects[:, 0], rects[:, 1], rects[:, 0] + rects[:, 2] - 1,
                           rects[:, 1] + rects[:, 3] - 1], axis=1)
@@ -60,8 +74,10 @@ class ClassicalDetector:
         min_px = cfg.min_size_m / m_per_px
         big = np.maximum(rects[:, 2], rects[:, 3]) >= 0.25 * min_px
         boxes = boxes[big]
+        areas = np.array([float(np.count_nonzero(binary[int(y0):int(y1) + 1, int(x0):int(x1) + 1]))
+                          for x0, y0, x1, y1 in boxes]) if boxes.shape[0] else np.zeros(0)
         if boxes.shape[0] == 0:
-            return np.zeros((0, 4)), np.zeros(0)
+            return empty
         uf = UnionFind(boxes.shape[0])
         gaps = _box_gaps_px(boxes)
         ii, jj = np.nonzero(np.triu(gaps <= cfg.cluster_distance_m / m_per_px, k=1))
@@ -73,13 +89,19 @@ class ClassicalDetector:
         for k in range(n):
             sel = boxes[lab == k]
             cboxes[k] = [sel[:, 0].min(), sel[:, 1].min(), sel[:, 2].max(), sel[:, 3].max()]
-        extent_m = np.maximum(cboxes[:, 2] - cboxes[:, 0] + 1, cboxes[:, 3] - cboxes[:, 1] + 1) * m_per_px
+        n_contours = np.bincount(lab, minlength=n).astype(float)
+        area_px = np.bincount(lab, weights=areas, minlength=n)  # (overlapping boxes may count twice)
+        w_px, h_px = cboxes[:, 2] - cboxes[:, 0] + 1, cboxes[:, 3] - cboxes[:, 1] + 1
+        extent_m = np.maximum(w_px, h_px) * m_per_px
         ok = (extent_m >= cfg.min_size_m) & (extent_m <= cfg.max_size_m)
+        if not ok.any():
+            return empty
+        feats = {"extent_m": extent_m[ok], "minor_m": np.minimum(w_px, h_px)[ok] * m_per_px,
+                 "area_m2": area_px[ok] * m_per_px**2,
+                 "fill": np.minimum(area_px[ok] / (w_px[ok] * h_px[ok]), 1.0), "n_contours": n_contours[ok]}
         cboxes, extent_m = cboxes[ok], extent_m[ok]
-        if cboxes.shape[0] == 0:
-            return np.zeros((0, 4)), np.zeros(0)
         scores = self._score(blurred, binary, cboxes, extent_m, m_per_px, roi_centre_px)
-        return cboxes, scores
+        return cboxes, scores, feats
 
     def _score(self, blurred: NDArray, binary: NDArray, boxes: NDArray, extent_m: NDArray,
                m_per_px: float, roi_centre_px: tuple[float, float] | None) -> NDArray[np.float64]:

@@ -50,3 +50,8 @@ class TrackingConfig(StrictModel):
     target_size_m: float = Field(1.0, ge=0.0, le=10.0, description="target extent added to the ROI")
     history_s: float = Field(10.0, gt=0.0, le=120.0, description="how late a fix may be re-processed")
     detector_score_threshold: float = Field(0.2, ge=0.0, le=1.0)
+    min_extent_frac: float = Field(
+        0.8, ge=0.0, le=2.0, description="smallest cluster extent taken for the target, x target_size_m "
+        "(a diver seen end-on still smears over ~0.8 m; a breath's bubble cluster rarely does)")
+    min_area_frac: float = Field(
+        0.25, ge=0.0, le=4.0, description="smallest foreground area taken for the target, x target_size_m^2")

@@ -4,7 +4,9 @@ configurations (sonar only, USBL only, fused) run side by side on the same input
 Each frame the paper's contour detector (:class:`autonomy.atr.classical.ClassicalDetector`:
 blur, adaptive threshold, contours clustered by union-find) gives scored clusters once (each placed at its box centre); each
 sonar-using filter then keeps the clusters inside its own polar ROI (paper 004 section 4,
-:func:`autonomy.tracking.roi.polar_roi`), scores them by the detector's contrast-and-size
+:func:`autonomy.tracking.roi.polar_roi`) whose size could be the target's (:func:`shape_gate`:
+extent and foreground area against the configured target size, which rejects the diver's
+bubble clusters that trail inside the ROI), scores them by the detector's contrast-and-size
 score times ``exp(-2 d^2)`` of their normalised distance ``d`` to the ROI centre, and feeds
 the best one above ``detector_score_threshold`` to the filter. Before a filter has an
 estimate (no ROI) it takes the best cluster of the whole frame. The configured ``mode`` is
@@ -41,6 +43,10 @@ class TrackingFrameResult:
         inside: mode -> (len(candidates),) bool, candidate inside that mode's ROI (all True
             without a ROI).
         chosen: mode -> the detection fed to that mode's filter, or None.
+        features: the candidates' shape cues, (N,) arrays (see
+            :meth:`autonomy.atr.classical.ClassicalDetector.clusters`).
+        accepted: mode -> (N,) bool, inside that mode's ROI and of the target's size
+            (:func:`shape_gate`): the clusters that mode could take.
     """
 
     t_s: float
@@ -48,14 +54,30 @@ class TrackingFrameResult:
     roi: dict[str, PolarRoi | None]
     inside: dict[str, NDArray[np.bool_]]
     chosen: dict[str, Detection | None]
+    features: dict[str, FloatArray]
+    accepted: dict[str, NDArray[np.bool_]]
 
 
-def roi_score(detections: list[Detection] | tuple[Detection, ...], roi: PolarRoi | None
-              ) -> tuple[NDArray[np.bool_], FloatArray]:
+def shape_gate(features: dict[str, FloatArray], target_size_m: float, min_extent_frac: float,
+               min_area_frac: float) -> NDArray[np.bool_]:
+    """Clusters (N,) whose size could be the target's (paper 004: candidates compared with the
+    target's known size and shape): extent (longer box side) at least ``min_extent_frac x
+    target_size_m`` and foreground area at least ``min_area_frac x target_size_m^2``. A breath's
+    bubbles (small, dispersing scatterers) make small, sparse clusters and fail it."""
+    ext = np.asarray(features["extent_m"], dtype=float)
+    area = np.asarray(features["area_m2"], dtype=float)
+    return (ext >= min_extent_frac * target_size_m) & (area >= min_area_frac * target_size_m**2)
+
+
+def roi_score(detections: list[Detection] | tuple[Detection, ...], roi: PolarRoi | None,
+              gate: NDArray[np.bool_] | None = None) -> tuple[NDArray[np.bool_], FloatArray]:
     """Inside-ROI mask (N,) and ROI-weighted scores (N,) of ``detections``: detector score
-    times ``exp(-2 d^2)``, ``d`` the normalised distance to the ROI centre (0 outside)."""
+    times ``exp(-2 d^2)``, ``d`` the normalised distance to the ROI centre (0 outside the ROI
+    and where ``gate`` (N,) is False)."""
     n = len(detections)
     scores = np.array([d.score for d in detections], dtype=float)
+    if gate is not None:
+        scores = np.where(gate, scores, 0.0)
     if roi is None or n == 0:
         return np.ones(n, dtype=bool), scores
     r = np.array([d.range_m for d in detections])
@@ -130,23 +152,27 @@ class TrackingStack:
         if frame.t_s > self.now_s:
             self._pending.append(frame)
             return None
-        boxes, scores = self.detector.candidates(frame.fan, frame.geometry.m_per_px)
+        boxes, scores, feats = self.detector.clusters(frame.fan, frame.geometry.m_per_px)
         cands = tuple(self._centre_detections(frame, boxes, scores))
+        cfg = self.cfg
+        shape_ok = shape_gate(feats, cfg.target_size_m, cfg.min_extent_frac, cfg.min_area_frac)
         rois: dict[str, PolarRoi | None] = {}
         inside: dict[str, NDArray[np.bool_]] = {}
+        accepted: dict[str, NDArray[np.bool_]] = {}
         chosen: dict[str, Detection | None] = {}
         for m in MODES:
             tr = self.trackers[m]
             rois[m] = tr.roi(frame.t_s) if m != "usbl" and tr.initialised else None
-            inside[m], s = roi_score(cands, rois[m])
+            inside[m], s = roi_score(cands, rois[m], shape_ok)
+            accepted[m] = inside[m] & shape_ok
             chosen[m] = None
             if m == "usbl" or not cands:
                 continue
             best = int(np.argmax(s))
-            if s[best] >= self.cfg.detector_score_threshold:
+            if accepted[m][best] and s[best] >= cfg.detector_score_threshold:
                 chosen[m] = cands[best]
                 tr.on_sonar(frame.t_s, cands[best].range_m, cands[best].azimuth_rad)
-        result = TrackingFrameResult(float(frame.t_s), cands, rois, inside, chosen)
+        result = TrackingFrameResult(float(frame.t_s), cands, rois, inside, chosen, feats, accepted)
         self.results.append(result)
         return result
 

@@ -10,9 +10,10 @@ truly lies in the sonar's field of view and how far it is from the vehicle.
 
 Each sonar frame's clusters are labelled against truth: a cluster within ``match_m`` of the
 target's true (range, azimuth) in the sonar frame (distance ``hypot(dr, r da)``) is the
-target, else one within ``match_m`` of a live bubble is a bubble, else clutter; the ROI
-gating figures are the fraction of bubble clusters outside the fused filter's ROI
-(rejected by the window alone) and of target clusters inside it (kept), and, with the
+target, else one within ``match_m`` of a live bubble is a bubble, else clutter; the
+gating figures are the fraction of bubble clusters the fused filter's gate refuses (outside
+its ROI or failing the size gate; the window alone: ``bubble_outside_roi_fraction``) and of
+target clusters it accepts (kept), and, with the
 in-ROI scoring, the fraction of bubble clusters not chosen as the target and of frames
 showing the target whose target cluster was chosen. The sonar pose at ping time is the
 truth at the nearest tick (the vehicle moves < 0.1 m between ticks).
@@ -62,6 +63,7 @@ class TrackingEvaluation:
         self._n_results = 0
         self.n_bubble = self.n_bubble_rejected = self.n_target = self.n_target_kept = 0
         self.n_bubble_not_chosen = self.n_frames_with_target = self.n_target_chosen = 0
+        self.n_bubble_outside = 0
 
     # observer interface
     def on_start(self, info: Any) -> None:
@@ -121,7 +123,8 @@ class TrackingEvaluation:
         d_bub = dist(bub).min(axis=1) if bub is not None and len(bub) else np.full(len(cr), np.inf)
         is_tgt = d_tgt <= self.match_m
         is_bub = ~is_tgt & (d_bub <= self.match_m)
-        inside = res.inside["fused"]
+        inside = res.accepted["fused"]
+        self.n_bubble_outside += int((is_bub & ~res.inside["fused"]).sum())
         chosen = np.array([c is res.chosen["fused"] for c in res.candidates])
         self.n_target += int(is_tgt.sum())
         self.n_target_kept += int((is_tgt & inside).sum())
@@ -157,6 +160,8 @@ class TrackingEvaluation:
                     self.n_bubble_rejected / self.n_bubble if self.n_bubble else math.nan,
                     "target_clusters": self.n_target, "target_kept_fraction":
                     self.n_target_kept / self.n_target if self.n_target else math.nan,
+                    "bubble_outside_roi_fraction":
+                    self.n_bubble_outside / self.n_bubble if self.n_bubble else math.nan,
                     "bubble_not_chosen_fraction": self.n_bubble_not_chosen / self.n_bubble if self.n_bubble else math.nan,
                     "target_chosen_fraction": self.n_target_chosen / self.n_frames_with_target
                     if self.n_frames_with_target else math.nan},
