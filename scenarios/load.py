@@ -188,6 +188,8 @@ def _format_validation_error(exc: ValidationError, source: str, overrides: list[
         given = err.get("input")
         given_txt = "" if kind in ("extra_forbidden", "missing") or isinstance(given, dict) else f" (got {given!r})"
         lines.append(f"  {loc}: {msg}{given_txt}")
+    if len(lines) == 2:  # one error: one line, file then key
+        return f"{source}: {lines[1].strip()}"
     return "\n".join(lines)
 
 
@@ -326,7 +328,7 @@ def check_scenario(scenario: Scenario, source: str, overrides: list[str] | tuple
     if problems:
         lines = [f"{source}: impossible scenario ({len(problems)} problem{'s' if len(problems) != 1 else ''})"]
         lines += [f"  {p}" for p in problems]
-        raise ScenarioError("\n".join(lines))
+        raise ScenarioError("\n".join(lines) if len(problems) > 1 else f"{source}: {problems[0]}")
 
 
 def scenario_from_dict(data: dict[str, Any], source: str = "<dict>") -> Scenario:
