@@ -106,18 +106,18 @@ def resolve_path(name_or_path: str | Path) -> Path:
     return shipped
 
 
-def _parse_override(item: str, source: str) -> tuple[list[str], Any]:
+def _parse_override(item: str) -> tuple[list[str], Any]:
     if "=" not in item:
-        raise ScenarioError(f"{source} {item}: must look like key.path=value (e.g. --set seed=3)")
+        raise ScenarioError(f"--set {item}: must look like key.path=value (e.g. --set seed=3)")
     key, raw = item.split("=", 1)
     key = key.strip()
     if not key or any(not part for part in key.split(".")):
-        raise ScenarioError(f"{source} {item}: has an empty key (must look like key.path=value)")
+        raise ScenarioError(f"--set {item}: has an empty key (must look like key.path=value)")
     try:
         value = _yaml_load(raw) if raw.strip() else ""
     except yaml.YAMLError as exc:
         problem = str(getattr(exc, "problem", "") or exc).splitlines()[0]
-        raise ScenarioError(f"{source} {item}: cannot parse the value {raw!r} as YAML ({problem})") from None
+        raise ScenarioError(f"--set {item}: cannot parse the value {raw!r} as YAML ({problem})") from None
     return key.split("."), value
 
 
@@ -131,7 +131,7 @@ def _list_index(node: list, part: str, item: str, where: str) -> int:
     return index
 
 
-def apply_overrides(data: dict[str, Any], overrides: list[str] | tuple[str, ...], source: str) -> dict[str, Any]:
+def apply_overrides(data: dict[str, Any], overrides: list[str] | tuple[str, ...]) -> dict[str, Any]:
     """Apply ``key.path=value`` overrides (values parsed as YAML) to a raw mapping.
 
     Raises:
@@ -139,7 +139,7 @@ def apply_overrides(data: dict[str, Any], overrides: list[str] | tuple[str, ...]
             value that is not a mapping; the message names the ``--set`` argument.
     """
     for item in overrides:
-        path, value = _parse_override(item, "--set")
+        path, value = _parse_override(item)
         node: Any = data
         for i, part in enumerate(path):
             where = ".".join(path[:i]) or "the scenario"
@@ -259,7 +259,7 @@ def load_scenario(name_or_path: str | Path, overrides: list[str] | tuple[str, ..
     if not isinstance(data, dict):
         raise ScenarioError(f"{source}: top level must be a mapping of keys, got {type(data).__name__}")
     _resolve_seabed_file(data, path.parent)
-    data = apply_overrides(data, list(overrides), source)
+    data = apply_overrides(data, list(overrides))
     data.setdefault("name", path.stem)
     scenario = _validate(data, source, overrides)
     check_scenario(scenario, source, overrides)

@@ -51,37 +51,23 @@ def _target_height_m(t) -> float:
             "box": t.size_m[2], "tyre": 2.0 * t.tube_radius_m}[t.shape]
 
 
-def _target_footprint(t) -> np.ndarray:
-    """Convex (k, 2) north-east polygon that holds the target's footprint on the seabed."""
-    n0, e0 = t.pos_ned[0], t.pos_ned[1]
-    roll, pitch, yaw = (math.radians(a) for a in t.rpy_deg)
-    upright = abs(roll) < 1e-9 and abs(pitch) < 1e-9
-    if t.shape == "box" and upright:
-        hx, hy = 0.5 * t.size_m[0], 0.5 * t.size_m[1]
-        local = np.array([[hx, hy], [-hx, hy], [-hx, -hy], [hx, -hy]])
-    else:
-        if upright:
-            r = t.radius_m
-        else:  # tilted: the sphere around the base centre that holds the whole object
-            half_extent = {"box": 0.5 * float(np.linalg.norm(t.size_m[:2]))}.get(t.shape, t.radius_m)
-            r = math.hypot(half_extent, _target_height_m(t))
-        a = np.linspace(0.0, 2.0 * math.pi, 24, endpoint=False)
-        # The circumscribed 24-gon holds the circle.
-        local = (r / math.cos(math.pi / 24)) * np.c_[np.cos(a), np.sin(a)]
-    c, s = math.cos(yaw), math.sin(yaw)
-    rot = np.array([[c, -s], [s, c]])
-    return local @ rot.T + np.array([n0, e0])
+def _inscribed_radius_m(t) -> float:
+    """Radius of a circle about the base centre that lies inside the target's footprint, m."""
+    return t.radius_m if t.shape != "box" else 0.5 * min(t.size_m[0], t.size_m[1])
 
 
 def _inscribed_footprint(t) -> np.ndarray:
-    """Convex polygon inside the target's footprint (for overlap: both must be certain)."""
-    poly = _target_footprint(t)
-    if t.shape == "box" and abs(t.rpy_deg[0]) < 1e-9 and abs(t.rpy_deg[1]) < 1e-9:
-        return poly
-    centre = np.array(t.pos_ned[:2])
-    radius = t.radius_m if t.shape != "box" else 0.5 * min(t.size_m[0], t.size_m[1])
+    """Convex (k, 2) north-east polygon inside the target's footprint (for overlap: only a
+    certain overlap is reported): an upright box's rotated rectangle, else an inscribed circle."""
+    n0, e0 = t.pos_ned[0], t.pos_ned[1]
+    roll, pitch, yaw = (math.radians(a) for a in t.rpy_deg)
+    if t.shape == "box" and abs(roll) < 1e-9 and abs(pitch) < 1e-9:
+        hx, hy = 0.5 * t.size_m[0], 0.5 * t.size_m[1]
+        local = np.array([[hx, hy], [-hx, hy], [-hx, -hy], [hx, -hy]])
+        c, s = math.cos(yaw), math.sin(yaw)
+        return local @ np.array([[c, -s], [s, c]]).T + np.array([n0, e0])
     a = np.linspace(0.0, 2.0 * math.pi, 24, endpoint=False)
-    return centre + radius * np.c_[np.cos(a), np.sin(a)]
+    return np.array([n0, e0]) + _inscribed_radius_m(t) * np.c_[np.cos(a), np.sin(a)]
 
 
 def convex_polygons_overlap(a: np.ndarray, b: np.ndarray, tol_m: float = 1e-6) -> bool:
@@ -219,7 +205,7 @@ def placement_problems(scenario: Scenario) -> list[str]:
     hull_r = 0.5 * math.hypot(length, width)
     for i, t in enumerate(targets):
         tn, te, tz = t.pos_ned
-        inscribed = t.radius_m if t.shape != "box" else 0.5 * min(t.size_m[0], t.size_m[1])
+        inscribed = _inscribed_radius_m(t)
         apart_m = math.hypot(tn - n, te - e)
         hull_bottom = d + 0.5 * height
         if apart_m < inscribed + hull_r and hull_bottom > tz - _target_height_m(t):

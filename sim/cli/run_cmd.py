@@ -41,7 +41,6 @@ def print_summary(metrics: dict, out: str) -> None:
 
 def _cmd_run(args: argparse.Namespace) -> int:
     from sim.outputs.mission_outputs import run_mission
-    from sim.outputs.run_dir import check_output_dir
 
     overrides = list(args.overrides)
     if args.seed is not None:
@@ -57,7 +56,6 @@ def _cmd_run(args: argparse.Namespace) -> int:
             what = "--rosbag" if args.rosbag else "outputs.rosbag"
             raise CliError(f"{what}: needs the rosbags package (pip install 'auvsim[rosbag]')") from None
     fls_every = args.rosbag_fls_every if args.rosbag_fls_every is not None else scenario.outputs.rosbag_fls_every
-    check_output_dir(args.out, kind="run", overwrite=args.overwrite)  # before the slow build
     metrics = run_mission(scenario, args.out, nav_source=args.nav, rerun=not args.no_rerun,
                           overwrite=args.overwrite, progress=not args.quiet, rosbag=rosbag,
                           rosbag_fls_every=fls_every)

@@ -60,6 +60,20 @@ def write_atomic(path: Path, data: bytes | str) -> None:
     os.replace(tmp, path)
 
 
+def write_png_atomic(path: Path, image: NDArray[np.uint8]) -> None:
+    """Encode ``image`` (H, W) uint8 as PNG and write it atomically.
+
+    Raises:
+        RuntimeError: OpenCV could not encode the image.
+    """
+    import cv2
+
+    ok, png = cv2.imencode(".png", image)
+    if not ok:
+        raise RuntimeError(f"PNG encoding failed for {path}")
+    write_atomic(path, png.tobytes())
+
+
 def write_coco(path: Path, images: list[dict], annotations: list[dict], categories: list[dict],
                info: dict) -> None:
     """Write a COCO detection file (ids made consistent by the caller)."""

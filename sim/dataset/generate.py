@@ -26,7 +26,8 @@ from pathlib import Path
 import numpy as np
 
 from scenarios.config.fls import FlsConfig
-from sim.dataset.coco_io import ANNOTATIONS_FILE, IMAGES_DIR, LABELS_DIR, write_atomic, write_coco, yolo_lines
+from sim.dataset.coco_io import (ANNOTATIONS_FILE, IMAGES_DIR, LABELS_DIR, write_atomic, write_coco, write_png_atomic,
+                                 yolo_lines)
 from sim.dataset.errors import DatasetError
 from sim.dataset.sss_generate import SssSettings
 from sim.dataset.randomization import (HELDOUT_RANDOMIZATION, TRAIN_RANDOMIZATION, WIDE_RANDOMIZATION,
@@ -81,7 +82,6 @@ def fls_config(spec: SceneSpec, settings: RenderSettings) -> FlsConfig:
 def render_scene(spec: SceneSpec, seed: int, settings: RenderSettings, frame_ids: list[int],
                  out_dir: Path) -> dict:
     """Render the frames of one scene, write their PNGs; return the scene's label part."""
-    import cv2
 
     from sim.dataset.scene_render import render_frames
 
@@ -90,10 +90,7 @@ def render_scene(spec: SceneSpec, seed: int, settings: RenderSettings, frame_ids
     images, annotations = [], []
     for frame_id, rec in zip(frame_ids, records):
         name = f"{IMAGES_DIR}/{frame_id:06d}.png"
-        ok, png = cv2.imencode(".png", rec.fan)
-        if not ok:
-            raise RuntimeError(f"PNG encoding failed for {name}")
-        write_atomic(out_dir / name, png.tobytes())
+        write_png_atomic(out_dir / name, rec.fan)
         g = rec.geometry
         images.append({
             "id": frame_id, "file_name": name, "width": int(rec.fan.shape[1]), "height": int(rec.fan.shape[0]),

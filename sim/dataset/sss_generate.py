@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from scenarios.config.world import SeabedConfig, TargetConfig
-from sim.dataset.coco_io import IMAGES_DIR, write_atomic
+from sim.dataset.coco_io import IMAGES_DIR, write_png_atomic
 from sim.dataset.errors import DatasetError
 from sim.dataset.randomization import Randomization, _object, _u
 from sim.rng import component_rng
@@ -176,8 +176,6 @@ def render_sss_scene(spec: SssSceneSpec, seed: int, settings: SssSettings, tile_
                      out_dir: Path) -> dict:
     """Ping along the scene's line, cut the waterfall into tiles, write the first
     ``len(tile_ids)`` tiles' PNGs; return the scene's label part (COCO images/annotations)."""
-    import cv2
-
     from autonomy.frames import rot_from_euler
     from scenarios.config.world import WorldConfig
     from scenarios.schema import Scenario
@@ -206,10 +204,7 @@ def render_sss_scene(spec: SssSceneSpec, seed: int, settings: SssSettings, tile_
     images, annotations = [], []
     for tile_id, tile in zip(tile_ids, tiles):
         name = f"{IMAGES_DIR}/{tile_id:06d}.png"
-        ok, png = cv2.imencode(".png", tile.image)
-        if not ok:
-            raise RuntimeError(f"PNG encoding failed for {name}")
-        write_atomic(out_dir / name, png.tobytes())
+        write_png_atomic(out_dir / name, tile.image)
         h_px, w_px = tile.image.shape
         first = positions[tile.first_ping]
         images.append({

@@ -15,7 +15,7 @@ def resolve_scenario(scenario: str | Path | Scenario, overrides: Sequence[str] =
     if isinstance(scenario, Scenario):
         if not overrides:
             return scenario
-        data = apply_overrides(scenario.model_dump(mode="python"), list(overrides), f"<scenario {scenario.name}>")
+        data = apply_overrides(scenario.model_dump(mode="python"), list(overrides))
         return scenario_from_dict(data, f"<scenario {scenario.name}>")
     if isinstance(scenario, (str, Path)):
         return load_scenario(scenario, list(overrides))

@@ -27,7 +27,7 @@ class MissionProgress:
         self.enabled = enabled
         self._tty = bool(getattr(self.stream, "isatty", lambda: False)())
         self._next_pct = self.line_every_pct
-        self._shown_s = 0.0
+        self._last_draw = -1.0
         self._wall0 = time.perf_counter()
 
     def start(self) -> None:
@@ -52,7 +52,6 @@ class MissionProgress:
             if now - self._last_draw >= 0.5:
                 self._last_draw = now
                 self._write("\r\x1b[K" + self._line(t_s, mode))
-            self._shown_s = t_s
             return
         pct = 100.0 * t_s / self.planned_s
         if pct >= self._next_pct:
