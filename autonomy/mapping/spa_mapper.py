@@ -44,7 +44,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.special import betaln
 
-from autonomy.mapping.auv_motion import heading_rad, nct_predict
+from autonomy.mapping.auv_motion import heading_rad, nct_predict_ins_proposal
 from autonomy.mapping.config import SpaMapperConfig
 from autonomy.mapping.data_association import loopy_bp
 
@@ -128,14 +128,16 @@ class SpaMapper:
             speed = float(np.hypot(self.point_state[2], self.point_state[3])) or 1.0
             self.point_state = np.array([g[0], g[1], speed * np.cos(g[2]), speed * np.sin(g[2]), 0.0])
             return
-        if dt > 0.0:
-            self.S = nct_predict(self.S, dt, cfg.sigma_lin_mps2, np.deg2rad(cfg.sigma_ang_degps2), self.rng)
         tau = t_s / S_PER_H
         var_p = max(cfg.nav_floor_pos_m ** 2, (3.0 * cfg.varsigma_p) ** 2 * tau ** 3 / 3.0)
         var_h = max(np.deg2rad(cfg.nav_floor_heading_deg) ** 2,
                     (3.0 * np.deg2rad(cfg.varsigma_h_deg_per_sqrt_h)) ** 2 * tau ** 2)
-        dpsi = np.angle(np.exp(1j * (heading_rad(self.S) - g[2])))
-        logl = -0.5 * (((self.S[:, 0] - g[0]) ** 2 + (self.S[:, 1] - g[1]) ** 2) / var_p + dpsi ** 2 / var_h)
+        if dt > 0.0:
+            self.S, logl = nct_predict_ins_proposal(self.S, dt, cfg.sigma_lin_mps2, np.deg2rad(cfg.sigma_ang_degps2),
+                                                    g, var_p, var_h, self.rng)
+        else:
+            dpsi = np.angle(np.exp(1j * (heading_rad(self.S) - g[2])))
+            logl = -0.5 * (((self.S[:, 0] - g[0]) ** 2 + (self.S[:, 1] - g[1]) ** 2) / var_p + dpsi ** 2 / var_h)
         self._reweight(np.log(np.maximum(self.w, 1e-300)) + logl)
 
     def set_true_state(self, state: ArrayLike) -> None:
