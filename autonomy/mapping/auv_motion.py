@@ -61,7 +61,8 @@ def nct_predict_ins_proposal(states: FloatArray, dt_s: float, sigma_lin_mps2: fl
     ``psi + (omega + dt u_ang) dt``, linear in ``u_ang``; the linear noise acts along the new
     heading, ``p = p0 + dt^2/2 h u_lin``, linear in ``u_lin``. Both posteriors are Gaussian and
     exact (up to heading wrap and a speed that turns negative). The returned log-weights are the
-    predictive likelihoods ``log p(g | s_{t-1})`` up to one constant, so that the weighted
+    predictive likelihoods ``log p(g | s_{t-1})`` with the INS likelihood's own normalising
+    constant left out (as a bootstrap filter's ``log f(g | s_t)`` would), so that the weighted
     particles represent the same posterior as the bootstrap filter (prior draw times
     likelihood) with far less degeneracy: with paper 003's process noise (20 deg/s^2 at 1 Hz) a
     prior draw puts the heading about 20 deg off and a 2 deg INS likelihood kills most particles.
@@ -97,7 +98,8 @@ def nct_predict_ins_proposal(states: FloatArray, dt_s: float, sigma_lin_mps2: fl
     u_lin = sl2 * b * along / s_a + np.sqrt(sl2 * var_pos_m2 / s_a) * rng.standard_normal(len(states))
     out[:, :2] += (b * u_lin)[:, None] * h
     out[:, 2:4] += (dt_s * u_lin)[:, None] * h
-    logw = -0.5 * (e_h * e_h / s_h + along * along / s_a + cross * cross / var_pos_m2)
+    logw = -0.5 * (e_h * e_h / s_h + along * along / s_a + cross * cross / var_pos_m2
+                   + np.log(s_h / var_heading_rad2) + np.log(s_a / var_pos_m2))
     # a draw that reverses the velocity turns the heading by pi, outside the linear model above:
     # weight it by its true heading likelihood (about zero, as the bootstrap filter would)
     flipped = np.einsum("ij,ij->i", out[:, 2:4], h) < 0.0

@@ -6,7 +6,8 @@ algorithm under unknown AUV position", JAIF 2023, Section IV (messages) and V (s
 Beliefs:
 * vehicle state ``s = [north, east, v_north, v_east, turn rate]`` (NED, m, m/s, rad/s): N
   particles, propagated at the INS rate by the nearly-constant-turn model
-  (:mod:`autonomy.mapping.auv_motion`) and weighted by the INS output
+  (:mod:`autonomy.mapping.auv_motion`, drawn from the locally optimal proposal given each
+  INS output, :func:`~autonomy.mapping.auv_motion.nct_predict_ins_proposal`) and weighted by the INS output
   ``g = [north, east, heading] + v`` with ``var v = diag(s_p^2, s_p^2, s_h^2)``,
   ``s_p^2 = (3 varsigma_p)^2 tau^3 / 3``, ``s_h^2 = (3 varsigma_h)^2 tau^2`` (tau hours; paper eq.
   after 30), floored by ``nav_floor_*`` so the first seconds do not degenerate the particles;
@@ -16,11 +17,11 @@ Beliefs:
 At each tile pair (measurements: positions ``ell`` in the vehicle frame, along-track forward
 and across-track starboard, m, and the ATR probability ``pi`` of class 1), the legacy POs'
 association weights ``beta_k(m)`` are particle integrals over the PO and vehicle beliefs
-(paired particles), new-PO weights ``xi_m = 1 + mu_N pd / mu_0 sum_c f_N(c) f(pi_m | c)``
+(paired particles), new-PO weights ``xi_m = 1 + mu_N / mu_0 sum_c f_N(c) f(pi_m | c)``
 (uniform new-object prior over the tile, uniform clutter ``pi``), association by loopy BP
 (:mod:`autonomy.mapping.data_association`), then the messages back to the vehicle state
 (``spa`` mode) and the PO beliefs, new POs from the measurements, pruning at ``P_th`` and
-confirmation at ``E_th``. Resampled particles are roughened (Gordon, Salmond and Smith 1993:
+confirmation at ``E_th``. Resampled PO particles are roughened (Gordon, Salmond and Smith 1993:
 jitter of standard deviation ``K E N^(-1/d)``, E the particle range per dimension, here the
 1-99 percentile range so that a few outliers do not inflate it).
 
@@ -154,11 +155,12 @@ class SpaMapper:
             w = np.full(len(w), 1.0 / len(w))
         self.w = w
 
-    def _resample_vehicle(self, rough: bool) -> None:
+    def _resample_vehicle(self) -> None:
+        """Resample the vehicle particles to equal weights. Not roughened: an isotropic jitter
+        of the velocity is a heading jitter (0.1 m/s at 1.5 m/s is 4 deg, 5 m at 70 m abeam),
+        and the next second's process noise restores the diversity anyway."""
         n = len(self.w)
         self.S = self.S[systematic_resample(self.w, self.rng)]
-        if rough:
-            self.S = self.S + self._roughening(self.S)
         self.w = np.full(n, 1.0 / n)
 
     def _roughening(self, particles: FloatArray) -> FloatArray:
@@ -205,10 +207,10 @@ class SpaMapper:
             raise ValueError("tile_update: ell_m (M, 2) and pi1 (M,) must be finite and of one length")
         n, m_n = cfg.n_particles, len(ell)
         if cfg.mode in ("spa", "ins_filter"):
-            self._resample_vehicle(rough=False)
+            self._resample_vehicle()
         f_pi = np.stack([beta_pdf(p1, *cfg.class_beta_1), beta_pdf(p1, *cfg.class_beta_2)], axis=1)  # (M, C)
         ratio = self.tile_area_m2 / cfg.clutter_mean  # 1 / (mu_0 f_FA(ell)) with uniform pi
-        xi = 1.0 + cfg.new_object_mean * cfg.pd / cfg.clutter_mean * f_pi.mean(axis=1)
+        xi = 1.0 + cfg.new_object_mean / cfg.clutter_mean * f_pi.mean(axis=1)  # eq. 15: mu_N counts detected objects
         veh = self._object_frame_particles()
         rel = self._relevant(veh)
         k_r = len(rel)
@@ -304,7 +306,7 @@ class SpaMapper:
         logw -= logw.max()
         w = np.exp(logw)
         self.w = w / w.sum()
-        self._resample_vehicle(rough=True)
+        self._resample_vehicle()
 
     def _update_legacy(self, rel, veh, ell, f_pi, nu, ratio) -> None:
         """PO beliefs from the association messages (Gaussian summary of the vehicle belief)."""
