@@ -221,43 +221,77 @@ class SpaMapper:
             self.last_association = bp
         else:
             nu, phi_sum = np.ones((k_r, m_n)), np.zeros(m_n)
+        ext_logw = np.zeros((k_r, n))  # extrinsic vehicle log-weights seen by each legacy PO
+        logw_post = None
         if cfg.mode == "spa" and k_r:
-            self._update_vehicle(rel, ell, f_pi, nu, ratio)
-            veh = self._object_frame_particles()
+            log_gamma = self._po_to_vehicle_messages(rel, ell, f_pi, nu, ratio)  # (Kr, N)
+            logw_post = log_gamma.sum(axis=0)
+            # message to PO k: the vehicle belief times every message but its own (paper IV-D)
+            ext_logw = logw_post[None, :] - log_gamma
         if k_r:
-            self._update_legacy(rel, veh, ell, f_pi, nu, ratio)
+            self._update_legacy(rel, veh, ell, f_pi, nu, ratio, ext_logw)
+        if logw_post is not None:
+            lw = np.exp(logw_post - logw_post.max())
+            self.w = lw / lw.sum()
+            self._resample_vehicle()
+            veh = self._object_frame_particles()
         self._add_new(veh, ell, f_pi, xi, phi_sum)
         keep = self.r >= cfg.prune_threshold
         self.r, self.X, self.W = self.r[keep], self.X[keep], self.W[keep]
 
     def association_weights(self, rel: NDArray[np.intp], veh: FloatArray, ell: FloatArray, f_pi: FloatArray
                             ) -> FloatArray:
-        """Association weights ``beta`` (Kr, M + 1) of POs ``rel`` (paper 003, messages from
-        ``q_k`` to ``a_k``): column 0 ``(1 - r) + r E[1 - P_d]``, column m
-        ``r pd E[in tile f(ell_m | x, s) f(pi_m | c)] / (mu_0 f_FA(z_m))``, expectations over the
-        PO particles paired with a random permutation of the vehicle particles ``veh`` (N, 5).
+        """Association weights ``beta`` (Kr, M + 1) of POs ``rel`` (paper 003, IV-C, message
+        ``zeta_{q_k -> a_k}``): column 0 ``(1 - r) + r E[1 - P_d]``, column m
+        ``r pd E[in tile f(ell_m | x, s) f(pi_m | c)] / (mu_0 f_FA(z_m))``; the expectation over
+        the vehicle belief ``veh`` (N, 5), equally weighted, is taken in closed form over its
+        Gaussian summary (:meth:`_vehicle_summary`), the one over the PO over its particles.
 
         Args:
             rel: (Kr,) PO indices; veh: (N, 5) vehicle states; ell: (M, 2) detections (vehicle
                 frame, m); f_pi: (M, C) class likelihoods ``f(pi_m | c)``.
         """
         cfg = self.cfg
-        n, m_n = cfg.n_particles, len(ell)
-        sig2 = cfg.sigma_meas_m ** 2
         ratio = self.tile_area_m2 / cfg.clutter_mean
-        perm = self.rng.permutation(n)
-        vp, vpsi = veh[perm, :2], heading_rad(veh[perm])
-        L = rotate_to_local(self.X[rel] - vp[None], vpsi[None])  # (Kr, N, 2)
-        inside = self._in_tile(L)
-        d2 = ((ell[None, None, :, :] - L[:, :, None, :]) ** 2).sum(-1)  # (Kr, N, M)
-        f_l = np.exp(-0.5 * d2 / sig2) / (2.0 * np.pi * sig2)
+        summary = self._vehicle_summary(veh, np.full(len(veh), 1.0 / len(veh)))
+        lik, inside = self._po_likelihoods(self.X[rel], summary, ell)  # (Kr, N, M), (Kr, N)
         cls = np.einsum("kic,mc->kim", self.W[rel], f_pi)  # (Kr, N, M)
         rr = self.r[rel]
-        beta = np.empty((len(rel), m_n + 1))
-        beta[:, 1:] = rr[:, None] * cfg.pd * ratio * np.einsum("ki,kim->km", inside, f_l * cls)
+        beta = np.empty((len(rel), len(ell) + 1))
+        beta[:, 1:] = rr[:, None] * cfg.pd * ratio * np.einsum("ki,kim->km", inside, lik * cls)
         miss = (self.W[rel].sum(-1) * (1.0 - cfg.pd * inside)).sum(1)
         beta[:, 0] = (1.0 - rr) + rr * miss
         return beta
+
+    def _vehicle_summary(self, veh: FloatArray, w: FloatArray) -> tuple[FloatArray, float, FloatArray, float]:
+        """Gaussian summary of weighted vehicle particles (N, 5), weights (N,) summing to 1:
+        ``(pos mean (2,), heading mean, pos covariance (2, 2), heading variance)``; the
+        point modes have no spread."""
+        psis = heading_rad(veh)
+        p_mean = w @ veh[:, :2]
+        psi_mean = float(np.angle(w @ np.exp(1j * psis)))
+        if self.cfg.mode != "spa":
+            return p_mean, psi_mean, np.zeros((2, 2)), 0.0
+        dp = veh[:, :2] - p_mean
+        return p_mean, psi_mean, (dp * w[:, None]).T @ dp, float(w @ np.angle(np.exp(1j * (psis - psi_mean))) ** 2)
+
+    def _po_likelihoods(self, X: FloatArray, summary, ell: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Measurement likelihoods of PO particles ``X`` (K, N, 2) NED, marginalised over a
+        Gaussian vehicle belief ``summary``: ``N(ell_m; L, R^T P R + s^2 I + var_psi J J^T)``
+        with ``L`` the particle in the mean vehicle frame and ``J = d ell / d psi = [ell_across,
+        -ell_along]`` (heading linearised at the measurement). Returns (K, N, M) likelihoods
+        (1/m^2) and (K, N) in-tile indicators (at the mean vehicle state)."""
+        p_mean, psi_mean, P_s, var_psi = summary
+        c, s = np.cos(psi_mean), np.sin(psi_mean)
+        R = np.array([[c, -s], [s, c]])  # vehicle -> NED
+        J = np.stack([ell[:, 1], -ell[:, 0]], axis=1)  # (M, 2)
+        S = (R.T @ P_s @ R + self.cfg.sigma_meas_m ** 2 * np.eye(2))[None] + var_psi * J[:, :, None] * J[:, None, :]
+        det = S[:, 0, 0] * S[:, 1, 1] - S[:, 0, 1] ** 2  # (M,)
+        L = rotate_to_local(X - p_mean, np.full(X.shape[:-1], psi_mean))  # (K, N, 2)
+        e0 = ell[None, None, :, 0] - L[..., 0, None]
+        e1 = ell[None, None, :, 1] - L[..., 1, None]  # (K, N, M)
+        q2 = (S[:, 1, 1] * e0 * e0 - 2.0 * S[:, 0, 1] * e0 * e1 + S[:, 0, 0] * e1 * e1) / det
+        return np.exp(-0.5 * q2) / (2.0 * np.pi * np.sqrt(det)), self._in_tile(L)
 
     def _relevant(self, veh: FloatArray) -> NDArray[np.intp]:
         """POs whose belief may reach the tile (mean within the tile grown by 3 sigma + 10 m)."""
@@ -274,12 +308,14 @@ class SpaMapper:
               & (a <= cfg.tile_near_m + cfg.tile_width_m + grow))
         return np.flatnonzero(ok)
 
-    def _update_vehicle(self, rel, ell, f_pi, nu, ratio) -> None:
-        """Messages from the legacy POs to the vehicle state (Gaussian summary of each PO)."""
+    def _po_to_vehicle_messages(self, rel, ell, f_pi, nu, ratio) -> FloatArray:
+        """Log-messages (Kr, N) from the legacy POs ``rel`` to the vehicle particles (paper 003,
+        IV-D, ``zeta_{q_k -> s}``; Gaussian summary of each PO belief); the vehicle particles are
+        equally weighted on entry."""
         cfg = self.cfg
         sig2 = cfg.sigma_meas_m ** 2
         pos, psi = self.S[:, :2], heading_rad(self.S)
-        logw = np.log(np.maximum(self.w, 1e-300))
+        out = np.empty((len(rel), len(self.S)))
         for j, k in enumerate(rel):
             q = self.W[k].sum(-1)  # (N,) position weights
             mu = q @ self.X[k]
@@ -302,43 +338,20 @@ class SpaMapper:
                 det_term = det_term + nu[j, m] * lik * float(pc @ f_pi[m])
             rk = self.r[k]
             gamma = (1.0 - rk) + rk * ((1.0 - cfg.pd * inside) + cfg.pd * inside * ratio * det_term)
-            logw = logw + np.log(np.maximum(gamma, 1e-300))
-        logw -= logw.max()
-        w = np.exp(logw)
-        self.w = w / w.sum()
-        self._resample_vehicle()
+            out[j] = np.log(np.maximum(gamma, 1e-300))
+        return out
 
-    def _update_legacy(self, rel, veh, ell, f_pi, nu, ratio) -> None:
-        """PO beliefs from the association messages (Gaussian summary of the vehicle belief)."""
+    def _update_legacy(self, rel, veh, ell, f_pi, nu, ratio, ext_logw) -> None:
+        """PO beliefs from the association messages (paper 003, IV-D/E, ``zeta_{q_k -> y_k}``):
+        the vehicle belief each PO sees is the extrinsic one (every message but its own,
+        ``ext_logw`` (Kr, N) log-weights over ``veh``), as a Gaussian summary."""
         cfg = self.cfg
         n = cfg.n_particles
-        sig2 = cfg.sigma_meas_m ** 2
-        p_mean = veh[:, :2].mean(axis=0)
-        psis = heading_rad(veh)
-        psi_mean = float(np.angle(np.exp(1j * psis).mean()))
-        dpsi = np.angle(np.exp(1j * (psis - psi_mean)))
-        var_psi = float(np.mean(dpsi ** 2))
-        P_s = np.cov(veh[:, :2].T) if cfg.mode == "spa" else np.zeros((2, 2))
-        if cfg.mode != "spa":
-            var_psi = 0.0
-        c, s = np.cos(psi_mean), np.sin(psi_mean)
-        R = np.array([[c, -s], [s, c]])  # vehicle -> NED
-        base = R.T @ P_s @ R + sig2 * np.eye(2)
-        S_inv, S_norm = [], []
-        for m in range(len(ell)):
-            J = np.array([ell[m, 1], -ell[m, 0]])
-            S = base + var_psi * np.outer(J, J)
-            S_inv.append(np.linalg.inv(S))
-            S_norm.append(1.0 / (2 * np.pi * np.sqrt(np.linalg.det(S))))
         for j, k in enumerate(rel):
-            L = rotate_to_local(self.X[k] - p_mean, np.full(n, psi_mean))
-            inside = self._in_tile(L)
-            acc = np.zeros((n, cfg.n_classes))
-            for m in range(len(ell)):
-                e = ell[m] - L
-                q2 = np.einsum("ni,ij,nj->n", e, S_inv[m], e)
-                acc += (nu[j, m] * S_norm[m] * np.exp(-0.5 * q2))[:, None] * f_pi[m][None, :]
-            factor = (1.0 - cfg.pd * inside)[:, None] + cfg.pd * inside[:, None] * ratio * acc
+            lw = np.exp(ext_logw[j] - ext_logw[j].max())
+            lik, inside = self._po_likelihoods(self.X[k][None], self._vehicle_summary(veh, lw / lw.sum()), ell)
+            acc = (lik[0] * nu[j][None, :]) @ f_pi  # (N, C)
+            factor = (1.0 - cfg.pd * inside[0])[:, None] + cfg.pd * inside[0][:, None] * ratio * acc
             w = self.W[k] * factor
             z = float(w.sum())
             rk = self.r[k]
