@@ -43,7 +43,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.special import betaln
+from scipy.special import betaln, ndtr
 
 from autonomy.mapping.auv_motion import heading_rad, nct_predict_ins_proposal
 from autonomy.mapping.config import SpaMapperConfig
@@ -258,7 +258,9 @@ class SpaMapper:
         cls = np.einsum("kic,mc->kim", self.W[rel], f_pi)  # (Kr, N, M)
         rr = self.r[rel]
         beta = np.empty((len(rel), len(ell) + 1))
-        beta[:, 1:] = rr[:, None] * cfg.pd * ratio * np.einsum("ki,kim->km", inside, lik * cls)
+        # a detection lies in the tile: its term needs no in-tile factor (f(ell | x, s) is
+        # negligible where x is outside); the miss term takes E_s[P_d]
+        beta[:, 1:] = rr[:, None] * cfg.pd * ratio * np.einsum("kim->km", lik * cls)
         miss = (self.W[rel].sum(-1) * (1.0 - cfg.pd * inside)).sum(1)
         beta[:, 0] = (1.0 - rr) + rr * miss
         return beta
@@ -291,7 +293,23 @@ class SpaMapper:
         e0 = ell[None, None, :, 0] - L[..., 0, None]
         e1 = ell[None, None, :, 1] - L[..., 1, None]  # (K, N, M)
         q2 = (S[:, 1, 1] * e0 * e0 - 2.0 * S[:, 0, 1] * e0 * e1 + S[:, 0, 0] * e1 * e1) / det
-        return np.exp(-0.5 * q2) / (2.0 * np.pi * np.sqrt(det)), self._in_tile(L)
+        P_loc = R.T @ P_s @ R
+        sd_along = np.sqrt(P_loc[0, 0] + var_psi * L[..., 1] ** 2) + 1e-9
+        sd_across = np.sqrt(P_loc[1, 1] + var_psi * L[..., 0] ** 2) + 1e-9
+        return np.exp(-0.5 * q2) / (2.0 * np.pi * np.sqrt(det)), self._in_tile_probability(L, sd_along, sd_across)
+
+    def _in_tile_probability(self, L: FloatArray, sd_along: FloatArray, sd_across: FloatArray) -> FloatArray:
+        """Probability that a point at vehicle-frame ``L`` (..., 2), blurred by independent
+        Gaussian errors (along, across; m), lies in the tile pair: the detection probability
+        ``E_s[P_d]`` over the vehicle belief (a hard edge at the mean vehicle state turns every
+        object near a tile boundary into a miss, then into a new PO)."""
+        cfg = self.cfg
+        a0, a1 = L[..., 0], L[..., 1]
+        p_along = ndtr(-a0 / sd_along) - ndtr((-cfg.tile_length_m - a0) / sd_along)
+        near, far = cfg.tile_near_m, cfg.tile_near_m + cfg.tile_width_m
+        p_across = (ndtr((far - a1) / sd_across) - ndtr((near - a1) / sd_across)
+                    + ndtr((-near - a1) / sd_across) - ndtr((-far - a1) / sd_across))
+        return p_along * p_across
 
     def _relevant(self, veh: FloatArray) -> NDArray[np.intp]:
         """POs whose belief may reach the tile (mean within the tile grown by 3 sigma + 10 m)."""
@@ -329,7 +347,7 @@ class SpaMapper:
             a22 = s * s * P[0, 0] - 2 * c * s * P[0, 1] + c * c * P[1, 1] + sig2
             a12 = (c * c - s * s) * P[0, 1] + c * s * (P[1, 1] - P[0, 0])
             det = a11 * a22 - a12 * a12
-            inside = self._in_tile(L)
+            inside = self._in_tile_probability(L, np.sqrt(a11 - sig2) + 1e-9, np.sqrt(a22 - sig2) + 1e-9)
             det_term = 0.0
             for m in range(len(ell)):
                 e0, e1 = ell[m, 0] - L[:, 0], ell[m, 1] - L[:, 1]
@@ -337,7 +355,7 @@ class SpaMapper:
                 lik = np.exp(-0.5 * q2) / (2 * np.pi * np.sqrt(det))
                 det_term = det_term + nu[j, m] * lik * float(pc @ f_pi[m])
             rk = self.r[k]
-            gamma = (1.0 - rk) + rk * ((1.0 - cfg.pd * inside) + cfg.pd * inside * ratio * det_term)
+            gamma = (1.0 - rk) + rk * ((1.0 - cfg.pd * inside) + cfg.pd * ratio * det_term)
             out[j] = np.log(np.maximum(gamma, 1e-300))
         return out
 
@@ -351,7 +369,7 @@ class SpaMapper:
             lw = np.exp(ext_logw[j] - ext_logw[j].max())
             lik, inside = self._po_likelihoods(self.X[k][None], self._vehicle_summary(veh, lw / lw.sum()), ell)
             acc = (lik[0] * nu[j][None, :]) @ f_pi  # (N, C)
-            factor = (1.0 - cfg.pd * inside[0])[:, None] + cfg.pd * inside[0][:, None] * ratio * acc
+            factor = (1.0 - cfg.pd * inside[0])[:, None] + cfg.pd * ratio * acc
             w = self.W[k] * factor
             z = float(w.sum())
             rk = self.r[k]
