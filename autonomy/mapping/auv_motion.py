@@ -15,6 +15,11 @@ from numpy.typing import NDArray
 FloatArray = NDArray[np.float64]
 
 
+def wrap_angle(a: FloatArray) -> FloatArray:
+    """Angles (rad) wrapped into [-pi, pi)."""
+    return (np.asarray(a) + np.pi) % (2.0 * np.pi) - np.pi
+
+
 def heading_rad(states: FloatArray) -> FloatArray:
     """(N,) heading (NED yaw) of states (N, 5)."""
     return np.arctan2(states[:, 3], states[:, 2])
@@ -82,7 +87,7 @@ def nct_predict_ins_proposal(states: FloatArray, dt_s: float, sigma_lin_mps2: fl
     psi = heading_rad(states)
     # angular noise: heading_t = psi0 + dt^2 u_ang
     psi0 = psi + states[:, 4] * dt_s
-    e_h = np.angle(np.exp(1j * (g[2] - psi0)))
+    e_h = wrap_angle(g[2] - psi0)
     sa2 = sigma_ang_radps2 ** 2
     s_h = var_heading_rad2 + d2 * d2 * sa2
     u_ang = sa2 * d2 * e_h / s_h + np.sqrt(sa2 * var_heading_rad2 / s_h) * rng.standard_normal(len(states))
@@ -104,6 +109,6 @@ def nct_predict_ins_proposal(states: FloatArray, dt_s: float, sigma_lin_mps2: fl
     # weight it by its true heading likelihood (about zero, as the bootstrap filter would)
     flipped = np.einsum("ij,ij->i", out[:, 2:4], h) < 0.0
     if np.any(flipped):
-        e_f = np.angle(np.exp(1j * (g[2] - heading_rad(out[flipped]))))
+        e_f = wrap_angle(g[2] - heading_rad(out[flipped]))
         logw[flipped] += -0.5 * e_f * e_f / var_heading_rad2
     return out, logw

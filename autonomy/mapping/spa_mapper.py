@@ -45,7 +45,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.special import betaln, ndtr
 
-from autonomy.mapping.auv_motion import heading_rad, nct_predict_ins_proposal
+from autonomy.mapping.auv_motion import heading_rad, nct_predict_ins_proposal, wrap_angle
 from autonomy.mapping.config import SpaMapperConfig
 from autonomy.mapping.data_association import loopy_bp
 
@@ -111,6 +111,7 @@ class SpaMapper:
         self.r = np.zeros(0)
         self.X = np.zeros((0, n, 2))
         self.W = np.zeros((0, n, cfg.n_classes))
+        self._po_stats = np.zeros((0, 3))  # per PO: position mean (2) and total variance, m, m^2
         self.t_s = 0.0
         self.tile_area_m2 = 2.0 * cfg.tile_length_m * cfg.tile_width_m
         self.last_association: object = None
@@ -137,7 +138,7 @@ class SpaMapper:
             self.S, logl = nct_predict_ins_proposal(self.S, dt, cfg.sigma_lin_mps2, np.deg2rad(cfg.sigma_ang_degps2),
                                                     g, var_p, var_h, self.rng)
         else:
-            dpsi = np.angle(np.exp(1j * (heading_rad(self.S) - g[2])))
+            dpsi = wrap_angle(heading_rad(self.S) - g[2])
             logl = -0.5 * (((self.S[:, 0] - g[0]) ** 2 + (self.S[:, 1] - g[1]) ** 2) / var_p + dpsi ** 2 / var_h)
         self._reweight(np.log(np.maximum(self.w, 1e-300)) + logl)
 
@@ -238,6 +239,8 @@ class SpaMapper:
         self._add_new(veh, ell, f_pi, xi, phi_sum)
         keep = self.r >= cfg.prune_threshold
         self.r, self.X, self.W = self.r[keep], self.X[keep], self.W[keep]
+        if len(self._po_stats) == len(keep):
+            self._po_stats = self._po_stats[keep]
 
     def association_weights(self, rel: NDArray[np.intp], veh: FloatArray, ell: FloatArray, f_pi: FloatArray
                             ) -> FloatArray:
@@ -275,7 +278,7 @@ class SpaMapper:
         if self.cfg.mode != "spa":
             return p_mean, psi_mean, np.zeros((2, 2)), 0.0
         dp = veh[:, :2] - p_mean
-        return p_mean, psi_mean, (dp * w[:, None]).T @ dp, float(w @ np.angle(np.exp(1j * (psis - psi_mean))) ** 2)
+        return p_mean, psi_mean, (dp * w[:, None]).T @ dp, float(w @ wrap_angle(psis - psi_mean) ** 2)
 
     def _po_likelihoods(self, X: FloatArray, summary, ell: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Measurement likelihoods of PO particles ``X`` (K, N, 2) NED, marginalised over a
@@ -311,13 +314,21 @@ class SpaMapper:
                     + ndtr((-near - a1) / sd_across) - ndtr((-far - a1) / sd_across))
         return p_along * p_across
 
+    @staticmethod
+    def _summarise_pos(X: FloatArray) -> FloatArray:
+        """(K, 3) position mean (north, east) and total variance of PO particles X (K, N, 2)."""
+        mu = X.mean(axis=1)
+        return np.concatenate([mu, ((X - mu[:, None]) ** 2).sum(-1).mean(1)[:, None]], axis=1)
+
     def _relevant(self, veh: FloatArray) -> NDArray[np.intp]:
         """POs whose belief may reach the tile (mean within the tile grown by 3 sigma + 10 m)."""
         if len(self.r) == 0:
             return np.zeros(0, dtype=np.intp)
         cfg = self.cfg
-        mu = self.X.mean(axis=1)  # (K, 2), position means
-        sd = np.sqrt(self.X.var(axis=1).sum(-1) + veh[:, :2].var(axis=0).sum())
+        if len(self._po_stats) != len(self.r):  # set from outside: summarise every PO again
+            self._po_stats = self._summarise_pos(self.X)
+        mu = self._po_stats[:, :2]  # (K, 2), position means
+        sd = np.sqrt(self._po_stats[:, 2] + veh[:, :2].var(axis=0).sum())
         vm = veh.mean(axis=0)
         L = rotate_to_local(mu - vm[:2], np.full(len(mu), np.arctan2(vm[3], vm[2])))
         grow = 3.0 * sd + 10.0
@@ -385,6 +396,8 @@ class SpaMapper:
                 self.W[k] = w[idx] / q[idx][:, None] / n
             else:
                 self.W[k] = w
+        if len(self._po_stats) == len(self.r):
+            self._po_stats[rel] = self._summarise_pos(self.X[rel])
 
     def _add_new(self, veh, ell, f_pi, xi, phi_sum) -> None:
         cfg = self.cfg
@@ -398,6 +411,8 @@ class SpaMapper:
         X = veh[j, :2] + rotate_to_ned(noisy, heading_rad(veh)[j])
         pc = f_pi / f_pi.sum(axis=1, keepdims=True)
         W = np.repeat(pc[:, None, :], n, axis=1) / n
+        if len(self._po_stats) == len(self.r):
+            self._po_stats = np.concatenate([self._po_stats, self._summarise_pos(X)])
         self.r = np.concatenate([self.r, r_new])
         self.X = np.concatenate([self.X, X])
         self.W = np.concatenate([self.W, W])
