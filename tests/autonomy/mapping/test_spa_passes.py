@@ -40,7 +40,7 @@ def _run(mode: str, ins_offset_east_m: float, seed: int = 0):
     turn. Returns the mapper and the vehicle errors (m) at the tiles after the turn."""
     # the paper's process noise (a smaller one cannot follow the 8.6 deg/s turn and leaves the
     # belief metres off after it); the exact INS is trusted only to 10 m
-    cfg = SpaMapperConfig(mode=mode, n_particles=400, pd=1.0, nav_floor_pos_m=10.0, nav_floor_heading_deg=1.0)
+    cfg = SpaMapperConfig(mode=mode, n_particles=400, pd=1.0, nav_floor_pos_m=5.0, nav_floor_heading_deg=1.0)
     rng = np.random.default_rng(seed)
     m = SpaMapper(cfg, _state(0.0), np.random.default_rng(seed + 100), initial_std=(0.3, 0.3, 0.02, 0.02, 1e-4))
     errs = []
