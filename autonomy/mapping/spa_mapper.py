@@ -16,21 +16,27 @@ Beliefs:
 
 At each tile pair (measurements: positions ``ell`` in the vehicle frame, along-track forward
 and across-track starboard, m, and the ATR probability ``pi`` of class 1), the legacy POs'
-association weights ``beta_k(m)`` are particle integrals over the PO and vehicle beliefs
-(paired particles), new-PO weights ``xi_m = 1 + mu_N / mu_0 sum_c f_N(c) f(pi_m | c)``
-(uniform new-object prior over the tile, uniform clutter ``pi``), association by loopy BP
-(:mod:`autonomy.mapping.data_association`), then the messages back to the vehicle state
-(``spa`` mode) and the PO beliefs, new POs from the measurements, pruning at ``P_th`` and
-confirmation at ``E_th``. Resampled PO particles are roughened (Gordon, Salmond and Smith 1993:
-jitter of standard deviation ``K E N^(-1/d)``, E the particle range per dimension, here the
-1-99 percentile range so that a few outliers do not inflate it).
+association weights ``beta_k(m)`` (IV-C), new-PO weights
+``xi_m = 1 + mu_N / mu_0 sum_c f_N(c) f(pi_m | c)`` (eq. 15: uniform new-object prior over the
+tile, uniform clutter ``pi``), association by loopy BP
+(:mod:`autonomy.mapping.data_association`), then the messages from the legacy POs to the
+vehicle state (``spa`` mode), the PO beliefs from the *extrinsic* vehicle belief (every message
+but the PO's own, IV-D), new POs from the measurements mapped through the updated vehicle
+belief, pruning at ``P_th`` and confirmation at ``E_th``. The detection probability is
+averaged over the vehicle (and PO) uncertainty (a hard tile edge at the mean state turns
+objects near a tile boundary into misses, then into new duplicate POs); detection terms carry
+no in-tile factor (a detection lies in the tile). Resampled PO particles are roughened
+(Gordon, Salmond and Smith 1993: jitter of standard deviation ``K E N^(-1/d)``, E the particle
+range per dimension, here the 1-99 percentile range so that a few outliers do not inflate it);
+the vehicle particles are not (a velocity jitter is a heading jitter).
 
 Implementation choice (documented deviation): the paper's particle messages are quadratic in
-N (every vehicle particle against every PO particle). Here the two cross integrals that need
-it, the message from a PO to the vehicle state and from the vehicle state to a PO, use a
+N (every vehicle particle against every PO particle). Here every cross integral uses a
 Gaussian summary of the *other* belief (its mean and covariance; the heading spread enters
-linearised), so a step is linear in N. The association weights ``beta`` keep the paired
-particle integral.
+linearised): the association weights and PO updates summarise the vehicle belief, the
+messages to the vehicle summarise each PO, so a step is linear in N. (Pairing the particles
+at random instead starves ``beta`` once the vehicle spread exceeds the measurement noise:
+with 300 pairs, a 20 m spread and sigma 1 m almost no pair lands near the detection.)
 
 Modes (paper 003's baselines from the same code): ``spa``; ``clairvoyant`` (true state given
 by :meth:`SpaMapper.set_true_state`); ``ins_plain`` (the INS output as the state);
