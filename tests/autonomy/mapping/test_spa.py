@@ -79,3 +79,41 @@ def test_bad_config_is_refused():
         McmSurveyConfig(n_lanes=1, area_side_m=40.0, tile_length_m=50.0)
     with pytest.raises(ValueError):
         McmSurveyConfig(pd=-0.1)
+
+
+def test_association_weight_under_a_wide_vehicle_belief_is_the_gaussian_convolution():
+    # vehicle drawn from N(0, diag(20^2, 8^2)) m with heading N(0, 1 deg^2), PO from N(mu, 0.7^2 I):
+    # beta = r pd ratio f N(ell; mu_local, diag(20^2, 8^2) + 0.7^2 + 1^2 + heading term), closed form
+    # (randomly paired particles gave 0 or several times this at 300 pairs)
+    cfg = SpaMapperConfig(mode="spa", n_particles=400)
+    rng = np.random.default_rng(11)
+    m = SpaMapper(cfg, [0.0, 0.0, 1.5, 0.0, 0.0], rng)
+    n = cfg.n_particles
+    psi = np.deg2rad(1.0) * rng.standard_normal(n)
+    veh = np.column_stack([20.0 * rng.standard_normal(n), 8.0 * rng.standard_normal(n), 1.5 * np.cos(psi),
+                           1.5 * np.sin(psi), np.zeros(n)])
+    mu = np.array([-25.0, 60.0])  # heading north: along = north, across = east
+    m.r = np.array([0.7])
+    m.X = (mu + 0.7 * rng.standard_normal((n, 2)))[None]
+    m.W = np.full((1, n, 2), 0.5 / n)
+    ell = np.array([[-21.0, 61.0], [-32.0, 58.0]])
+    f_pi = np.array([[2.0, 0.5], [1.0, 1.0]])
+    beta = m.association_weights(np.array([0]), veh, ell, f_pi)
+    var_psi = np.deg2rad(1.0) ** 2
+    J = np.array([mu[1], -mu[0]])  # d(local) / d(heading) at the PO
+    S = np.diag([400.0 + 0.49 + 1.0, 64.0 + 0.49 + 1.0]) + var_psi * np.outer(J, J)
+    ratio = m.tile_area_m2 / cfg.clutter_mean
+    for j in range(2):
+        e = ell[j] - mu
+        g = np.exp(-0.5 * e @ np.linalg.solve(S, e)) / (2 * np.pi * np.sqrt(np.linalg.det(S)))
+        assert beta[0, j + 1] == pytest.approx(0.7 * cfg.pd * ratio * g * f_pi[j].mean(), rel=0.1)
+
+
+def test_detection_probability_is_blurred_across_a_tile_edge():
+    # a PO on the along-track edge of the tile with a vehicle belief of several metres along
+    # track: E_s[P_d] = pd / 2 (a hard edge at the mean state would give 0 or pd)
+    cfg = SpaMapperConfig(mode="spa", n_particles=2000)
+    m = SpaMapper(cfg, [0.0, 0.0, 1.5, 0.0, 0.0], np.random.default_rng(2))
+    L = np.array([[0.0, 60.0], [-50.0, -60.0], [-25.0, 75.0], [-25.0, 20.0]])
+    p = m._in_tile_probability(L, np.full(4, 4.0), np.full(4, 1e-6))
+    assert p == pytest.approx([0.5, 0.5, 1.0, 0.5], abs=1e-6)
