@@ -151,16 +151,19 @@ class CovSummary:
             ValueError: not a finite, symmetric (3, 3) matrix with non-negative variances.
         """
         c = np.asarray(cov_ned, dtype=float)
-        if c.shape != (3, 3) or not np.all(np.isfinite(c)) or not np.allclose(c, c.T, rtol=1e-9, atol=1e-12):
+        if c.shape != (3, 3):
             raise ValueError(f"cov_ned must be a finite symmetric (3, 3) matrix, got shape {c.shape}")
-        if c[2, 2] < 0.0:
-            raise ValueError(f"cov_ned has a negative variance: {np.diag(c)}")
-        w, v = np.linalg.eigh(c[:2, :2])
-        if w[0] < -1e-9 * max(1.0, abs(w[1])):
-            raise ValueError(f"cov_ned's horizontal block is not positive semi-definite (eigenvalues {w})")
-        major = v[:, 1]
-        azimuth = math.atan2(major[1], major[0]) % math.pi
-        return cls(math.sqrt(max(w[1], 0.0)), math.sqrt(max(w[0], 0.0)), azimuth, math.sqrt(c[2, 2]))
+        (nn, ne, _), (en, ee, _), (_, _, dd) = c.tolist()
+        if not all(math.isfinite(v) for v in (nn, ne, en, ee, dd)) or abs(ne - en) > 1e-9 * (abs(nn) + abs(ee)) + 1e-12:
+            raise ValueError(f"cov_ned must be a finite symmetric (3, 3) matrix, got {c.tolist()}")
+        # eigen-decomposition of the symmetric 2 x 2 horizontal block, closed form
+        mid, half_diff = 0.5 * (nn + ee), math.hypot(0.5 * (nn - ee), ne)
+        lam_major, lam_minor = mid + half_diff, mid - half_diff
+        if dd < 0.0 or lam_minor < -1e-9 * max(1.0, abs(lam_major)):
+            raise ValueError(f"cov_ned is not positive semi-definite: variances {nn}, {ee}, {dd}, "
+                             f"horizontal eigenvalues {lam_major}, {lam_minor}")
+        azimuth = (0.5 * math.atan2(2.0 * ne, nn - ee)) % math.pi
+        return cls(math.sqrt(max(lam_major, 0.0)), math.sqrt(max(lam_minor, 0.0)), azimuth, math.sqrt(dd))
 
     def cov_ned(self) -> FloatArray:
         """The (3, 3) block-diagonal NED covariance it stands for, m^2."""

@@ -117,6 +117,17 @@ class LinkStats:
         return {k: getattr(self, k) for k in self.__dataclass_fields__}
 
 
+def _position(name: str, value: ArrayLike) -> tuple[float, float, float]:
+    """A finite (3,) position as a tuple of floats (plain Python: this runs every tick)."""
+    try:
+        x, y, z = (float(v) for v in (value.tolist() if isinstance(value, np.ndarray) else value))
+    except (TypeError, ValueError):
+        x = y = z = math.nan
+    if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(z)):
+        raise ValueError(f"acoustic link: position of {name!r} must be a finite (3,) NED vector, got {value!r}")
+    return x, y, z
+
+
 def _overlap(a0: float, a1: float, b0: float, b1: float) -> bool:
     """[a0, a1) and [b0, b1) share more than :data:`_EPS_S`."""
     return min(a1, b1) - max(a0, b0) > _EPS_S
@@ -240,10 +251,7 @@ class AcousticLink:
         for name, node in self._nodes.items():
             if name not in positions_ned:
                 raise ValueError(f"acoustic link: no position for node {name!r}")
-            p = np.asarray(positions_ned[name], dtype=float)
-            if p.shape != (3,) or not np.all(np.isfinite(p)):
-                raise ValueError(f"acoustic link: position of {name!r} must be a finite (3,) NED vector, got {p}")
-            pos = (float(p[0]), float(p[1]), float(p[2]))
+            pos = _position(name, positions_ned[name])
             node.pos_prev = node.pos if node.pos is not None else pos
             node.pos = pos
             if speeds_mps is not None and name in speeds_mps:
