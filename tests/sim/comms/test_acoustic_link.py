@@ -249,3 +249,10 @@ def test_config_limits_and_scenario_default():
     assert sc.comms.acoustic.enabled is False
     on = load_scenario("cssn_lawnmower", ["comms.acoustic.enabled=true", "comms.acoustic.bit_rate_bps=500"])
     assert on.comms.acoustic.bit_rate_bps == 500.0
+
+
+def test_bad_link_setting_is_one_error_naming_the_key():
+    from scenarios.load import ScenarioError, load_scenario
+
+    with pytest.raises(ScenarioError, match=r"comms\.acoustic\.bit_rate_bps .*greater than or equal to 50"):
+        load_scenario("cssn_lawnmower", ["comms.acoustic.bit_rate_bps=10"])
