@@ -15,6 +15,8 @@ and depth; the default origin is the CSSN basin in La Spezia ([CSSN]).
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import pymap3d
 from numpy.typing import ArrayLike, NDArray
@@ -59,10 +61,7 @@ def ned_to_geodetic(pos_ned: ArrayLike, origin: GeodeticOrigin) -> FloatArray:
     Raises:
         ValueError: the last axis is not 3 long.
     """
-    p = _last_axis3(pos_ned, "pos_ned")
-    lat, lon, h = pymap3d.ned2geodetic(p[..., 0], p[..., 1], p[..., 2], origin.lat_deg, origin.lon_deg,
-                                       origin.height_m)
-    return np.stack(np.broadcast_arrays(lat, lon, h), axis=-1).astype(float)
+    return _convert(pymap3d.ned2geodetic, pos_ned, origin, "pos_ned")
 
 
 def geodetic_to_ned(lat_lon_h: ArrayLike, origin: GeodeticOrigin) -> FloatArray:
@@ -71,10 +70,14 @@ def geodetic_to_ned(lat_lon_h: ArrayLike, origin: GeodeticOrigin) -> FloatArray:
     Raises:
         ValueError: the last axis is not 3 long.
     """
-    g = _last_axis3(lat_lon_h, "lat_lon_h")
-    n, e, d = pymap3d.geodetic2ned(g[..., 0], g[..., 1], g[..., 2], origin.lat_deg, origin.lon_deg,
-                                   origin.height_m)
-    return np.stack(np.broadcast_arrays(n, e, d), axis=-1).astype(float)
+    return _convert(pymap3d.geodetic2ned, lat_lon_h, origin, "lat_lon_h")
+
+
+def _convert(fn: Callable[..., tuple], values: ArrayLike, origin: GeodeticOrigin, name: str) -> FloatArray:
+    """Apply a pymap3d conversion taking three coordinates and the origin to (..., 3) values."""
+    v = _last_axis3(values, name)
+    out = fn(v[..., 0], v[..., 1], v[..., 2], origin.lat_deg, origin.lon_deg, origin.height_m)
+    return np.stack(np.broadcast_arrays(*out), axis=-1).astype(float)
 
 
 def ned_to_lat_lon_depth(pos_ned: ArrayLike, origin: GeodeticOrigin) -> FloatArray:
