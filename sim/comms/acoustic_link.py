@@ -247,11 +247,13 @@ class AcousticLink:
         """
         if not t_s >= self._t:
             raise ValueError(f"acoustic link: advance to t = {t_s} s, before {self._t} s")
+        missing = [n for n in self._nodes if n not in positions_ned]
+        if missing:
+            raise ValueError(f"acoustic link: no position for node {missing[0]!r}")
+        new_pos = {name: _position(name, positions_ned[name]) for name in self._nodes}  # all checked first
         dt = t_s - self._t_prev
         for name, node in self._nodes.items():
-            if name not in positions_ned:
-                raise ValueError(f"acoustic link: no position for node {name!r}")
-            pos = _position(name, positions_ned[name])
+            pos = new_pos[name]
             node.pos_prev = node.pos if node.pos is not None else pos
             node.pos = pos
             if speeds_mps is not None and name in speeds_mps:

@@ -227,6 +227,10 @@ def test_queue_full_drops_and_bad_calls_raise():
         link.delivered(2.0)
     with pytest.raises(ValueError, match="no position for node 'b'"):
         link.advance(2.0, {"a": A})
+    with pytest.raises(ValueError, match=r"position of 'b' must be a finite \(3,\) NED vector"):
+        link.advance(2.0, {"a": A, "b": [np.nan, 0.0, 0.0]})
+    with pytest.raises(ValueError, match=r"position of 'a' must be a finite \(3,\) NED vector"):
+        link.advance(2.0, {"a": [1.0, 2.0], "b": B})
     with pytest.raises(ValueError, match="distinct node names"):
         _link(nodes=("a", "a"))
 
