@@ -243,10 +243,45 @@ class SpaMapper:
             self._resample_vehicle()
             veh = self._object_frame_particles()
         self._add_new(veh, ell, f_pi, xi, phi_sum)
-        keep = self.r >= cfg.prune_threshold
-        self.r, self.X, self.W = self.r[keep], self.X[keep], self.W[keep]
+        self._drop(self.r < cfg.prune_threshold)
+        if cfg.merge_gate > 0.0:
+            self._merge_coincident()
+
+    def _drop(self, gone: NDArray[np.bool_]) -> None:
+        keep = ~gone
         if len(self._po_stats) == len(keep):
             self._po_stats = self._po_stats[keep]
+        self.r, self.X, self.W = self.r[keep], self.X[keep], self.W[keep]
+
+    def _merge_coincident(self) -> None:
+        """Merge POs whose position beliefs coincide (documented deviation from paper 003).
+
+        The BP keeps one PO per measurement but nothing removes a second PO of the same object:
+        once two POs of one object are both near existence 1 (each tile one takes the detection,
+        the other a miss), a miss divides the odds only by about five, and the stationary model
+        has no survival probability, so both stay confirmed for the rest of the survey and the
+        duplicate counts as a false object. Two POs with existence above 0.05 whose means are
+        closer than ``sqrt(merge_gate (var_1 + var_2 + 2 sigma^2))`` (total position variances)
+        become the one with the higher existence, with existence ``1 - (1 - r_1)(1 - r_2)``.
+        """
+        if len(self._po_stats) != len(self.r):
+            self._po_stats = self._summarise_pos(self.X)
+        cand = np.flatnonzero(self.r > 0.05)
+        if len(cand) < 2:
+            return
+        mu, var = self._po_stats[cand, :2], self._po_stats[cand, 2]
+        d2 = ((mu[:, None] - mu[None]) ** 2).sum(-1)
+        gate = self.cfg.merge_gate * (var[:, None] + var[None] + 2.0 * self.cfg.sigma_meas_m ** 2)
+        gone = np.zeros(len(self.r), dtype=bool)
+        for i, j in zip(*np.nonzero(np.triu(d2 < gate, 1))):
+            a, b = cand[i], cand[j]
+            if gone[a] or gone[b]:
+                continue
+            keep, lose = (a, b) if self.r[a] >= self.r[b] else (b, a)
+            self.r[keep] = 1.0 - (1.0 - self.r[keep]) * (1.0 - self.r[lose])
+            gone[lose] = True
+        if gone.any():
+            self._drop(gone)
 
     def association_weights(self, rel: NDArray[np.intp], veh: FloatArray, ell: FloatArray, f_pi: FloatArray
                             ) -> FloatArray:

@@ -117,3 +117,19 @@ def test_detection_probability_is_blurred_across_a_tile_edge():
     L = np.array([[0.0, 60.0], [-50.0, -60.0], [-25.0, 75.0], [-25.0, 20.0]])
     p = m._in_tile_probability(L, np.full(4, 4.0), np.full(4, 1e-6))
     assert p == pytest.approx([0.5, 0.5, 1.0, 0.5], abs=1e-6)
+
+
+def test_coincident_pos_merge_and_distinct_ones_stay():
+    cfg = SpaMapperConfig(mode="clairvoyant", n_particles=200)
+    rng = np.random.default_rng(8)
+    m = SpaMapper(cfg, [0.0, 0.0, 1.5, 0.0, 0.0], rng)
+    centres = np.array([[100.0, 50.0], [100.8, 50.5], [100.0, 58.0], [300.0, 300.0]])
+    m.r = np.array([0.9, 0.95, 0.9, 0.01])
+    m.X = centres[:, None, :] + 0.5 * rng.standard_normal((4, cfg.n_particles, 2))
+    m.W = np.full((4, cfg.n_particles, 2), 0.5 / cfg.n_particles)
+    m._merge_coincident()
+    # 0.9 m apart with 0.5 m spreads: one PO (the likelier one's belief); 8 m away: another object
+    assert len(m.r) == 3
+    assert m.r[0] == pytest.approx(1.0 - 0.1 * 0.05)
+    assert m.X[0].mean(0) == pytest.approx(centres[1], abs=0.1)
+    assert m.X[1].mean(0) == pytest.approx(centres[2], abs=0.1) and m.r[2] == 0.01
