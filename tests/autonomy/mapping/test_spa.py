@@ -133,3 +133,39 @@ def test_coincident_pos_merge_and_distinct_ones_stay():
     assert m.r[0] == pytest.approx(1.0 - 0.1 * 0.05)
     assert m.X[0].mean(0) == pytest.approx(centres[1], abs=0.1)
     assert m.X[1].mean(0) == pytest.approx(centres[2], abs=0.1) and m.r[2] == 0.01
+
+
+def test_hand_worked_one_object_update_heading_east():
+    # vehicle at the origin heading east (NED yaw 90 deg): a detection 25 m behind and 60 m to
+    # starboard is the object at north -60, east -25. A PO there (r 0.5, zero spread, classes
+    # 50/50) and one detection: BP gives nu = 1 / xi, the PO factor is
+    # z = (1 - pd) + pd / (mu_0 f_FA) nu N(0; 0, s^2 I) mean_c f(pi | c), r' = r z / (r z + 1 - r)
+    cfg = SpaMapperConfig(mode="clairvoyant", n_particles=50, merge_gate=0.0)
+    m = SpaMapper(cfg, [0.0, 0.0, 0.0, 1.5, 0.0], np.random.default_rng(0))
+    m.set_true_state([0.0, 0.0, 0.0, 1.5, 0.0])
+    m.r = np.array([0.5])
+    m.X = np.tile([-60.0, -25.0], (1, cfg.n_particles, 1))
+    m.W = np.full((1, cfg.n_particles, 2), 0.5 / cfg.n_particles)
+    pi1 = 0.7
+    f = 0.5 * (beta_pdf(pi1, *cfg.class_beta_1) + beta_pdf(pi1, *cfg.class_beta_2))
+    xi = 1.0 + cfg.new_object_mean / cfg.clutter_mean * f
+    ratio = 2 * cfg.tile_length_m * cfg.tile_width_m / cfg.clutter_mean
+    beta1 = 0.5 * cfg.pd * ratio * f / (2 * np.pi * cfg.sigma_meas_m ** 2)
+    beta0 = 0.5 + 0.5 * (1.0 - cfg.pd)
+    z = (1.0 - cfg.pd) + cfg.pd * ratio * (1.0 / xi) * f / (2 * np.pi * cfg.sigma_meas_m ** 2)
+    m.tile_update([[-25.0, 60.0]], [pi1])
+    assert m.last_association.p_object[0] == pytest.approx([beta0 / (beta0 + beta1 / xi),
+                                                           beta1 / xi / (beta0 + beta1 / xi)])
+    assert m.r[0] == pytest.approx(0.5 * z / (0.5 * z + 0.5), rel=1e-9)
+    # the detection's new PO has existence (xi - 1) / (xi + phi) < P_th: pruned
+    assert (xi - 1.0) / (xi + beta1 / beta0) < cfg.prune_threshold and len(m.r) == 1
+    # without the legacy PO it is born at the object, existence (xi - 1) / xi
+    fresh = SpaMapper(cfg, [0.0, 0.0, 0.0, 1.5, 0.0], np.random.default_rng(1))
+    fresh.set_true_state([0.0, 0.0, 0.0, 1.5, 0.0])
+    fresh.tile_update([[-25.0, 60.0]], [pi1])
+    assert fresh.r == pytest.approx([(xi - 1.0) / xi]) and fresh.X[0].mean(0) == pytest.approx([-60.0, -25.0], abs=0.3)
+    # class: the factor of class c is (1 - pd) + pd ratio nu N f(pi | c)
+    w = m.W[0].sum(0)
+    k = cfg.pd * ratio / xi / (2 * np.pi * cfg.sigma_meas_m ** 2)
+    f1, f2 = beta_pdf(pi1, *cfg.class_beta_1), beta_pdf(pi1, *cfg.class_beta_2)
+    assert w[0] / w[1] == pytest.approx((1 - cfg.pd + k * f1) / (1 - cfg.pd + k * f2), rel=1e-9)
