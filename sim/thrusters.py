@@ -70,6 +70,7 @@ class ThrusterArray:
         tau = [0.0] * 6
         speed = self.speed
         thrust = self.thrust_n
+        cmd = cmd.tolist() if isinstance(cmd, np.ndarray) else cmd  # Python floats: faster scalar arithmetic
         for j in range(self.n):
             c = float(cmd[j])
             if c != c:

@@ -42,6 +42,8 @@ class ImuSensor(Sensor[ImuMsg]):
             raise ValueError(f"sensors.{self.name}: an IMU rotated w.r.t. the body is not modelled (mount_rpy_deg)")
         rp_noise = math.radians(cfg.roll_pitch_noise_deg)
         self._attitude_noise_rad = np.array([rp_noise, rp_noise, cfg.heading_noise_rad])
+        self._gyro_noise_radps = np.full(3, math.radians(cfg.gyro_noise_dps))
+        self._accel_noise_mps2 = np.full(3, cfg.accel_noise_mps2)
 
     def reset(self, rng: np.random.Generator) -> None:
         super().reset(rng)
@@ -66,8 +68,8 @@ class ImuSensor(Sensor[ImuMsg]):
     def corrupt(self, ideal: tuple[float, np.ndarray, np.ndarray, np.ndarray], truth: VehicleTruth) -> ImuMsg:
         t_s, rpy, rate, specific_force = ideal
         rpy = rpy + self._attitude_bias.at(t_s) + white_noise(self._rng, self._attitude_noise_rad)
-        rate = rate + self._gyro_bias_radps + white_noise(self._rng, np.full(3, math.radians(self.cfg.gyro_noise_dps)))
+        rate = rate + self._gyro_bias_radps + white_noise(self._rng, self._gyro_noise_radps)
         specific_force = (
-            specific_force + self._accel_bias_mps2 + white_noise(self._rng, np.full(3, self.cfg.accel_noise_mps2))
+            specific_force + self._accel_bias_mps2 + white_noise(self._rng, self._accel_noise_mps2)
         )
         return self.exact((t_s, rpy, rate, specific_force))
