@@ -115,7 +115,9 @@ def quat_from_euler(roll_rad: float, pitch_rad: float, yaw_rad: float) -> FloatA
 
 
 def wrap_angle(angle_rad: ArrayLike) -> FloatArray | float:
-    """Wrap angle(s) to [-pi, pi)."""
+    """Wrap angle(s) to [-pi, pi) (a Python float for a float, else an array)."""
+    if isinstance(angle_rad, float):
+        return (angle_rad + math.pi) % (2.0 * math.pi) - math.pi
     return (np.asarray(angle_rad) + np.pi) % (2.0 * np.pi) - np.pi
 
 
