@@ -129,13 +129,15 @@ class _ProgressObserver:
 def run_mission(
     scenario: Scenario, out: str | Path, *, nav_source: str = "estimate", rerun: bool = True,
     progress: bool = True, overwrite: bool = False, rosbag: bool | None = None, rosbag_fls_every: int | None = None,
+    workers: int = 1,
 ) -> dict[str, Any]:
     """Run ``scenario`` and write metrics.json, trajectory.csv, world_model.json, map.png
     (with target tracking also tracking_error.png and tracking_boxplot.png, and the
     trackers' figures under ``tracking`` in metrics.json; and recording.rrd; with ``rosbag``, a
     ROS 2 bag folder ``rosbag/`` in MCAP storage, :class:`sim.ros2bag.recorder.RosbagRecorder`,
     every ``rosbag_fls_every``-th sonar frame; None takes the scenario's ``outputs.rosbag`` /
-    ``outputs.rosbag_fls_every``) into ``out``. Returns the metrics.
+    ``outputs.rosbag_fls_every``) into ``out``; ``workers`` > 1 pipelines the sonar and its
+    perception on worker threads (:class:`sim.mission.Mission`; same outputs). Returns the metrics.
 
     Raises:
         OutputDirError: ``out`` is protected, a file, not creatable, or holds files that
@@ -159,7 +161,7 @@ def run_mission(
             from sim.ros2bag.recorder import RosbagRecorder
 
             observers.append(RosbagRecorder(partial / "rosbag", fls_every=rosbag_fls_every))
-        mission = Mission(scenario, nav_source=nav_source, observers=observers)
+        mission = Mission(scenario, nav_source=nav_source, observers=observers, workers=workers)
         msis = next(iter(p for p in mission.parts.processors.values() if hasattr(p, "localizer")), None)
         if msis is not None:
             from sim.msis_evaluation import LocalizationErrorObserver
@@ -175,7 +177,10 @@ def run_mission(
             tracking = evaluation_for(mission)
             mission.observers.append(tracking)
         mission.reset()
-        mission.run(progress=False)
+        try:
+            mission.run(progress=False)
+        finally:
+            mission.close()
 
         metrics = collect_metrics(mission, log)
         overlay = extent = None
