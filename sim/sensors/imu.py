@@ -58,7 +58,8 @@ class ImuSensor(Sensor[ImuMsg]):
 
     def ideal(self, truth: VehicleTruth, scene: SceneView) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
         """(t_s, rpy_rad (3,), rate_body_radps (3,), specific force FRD (3,)), yaw unwrapped."""
-        specific_force = truth.point_accel_body(self.mount.pos_body_m) - truth.R_nb.T @ GRAVITY_NED_MPS2
+        # R_nb^T g_ned = g * (third row of R_nb): g_ned is along NED z
+        specific_force = truth.point_accel_body(self.mount.pos_body_m) - GRAVITY_MPS2 * truth.R_nb[2]
         return truth.t_s, np.array(truth.rpy_rad, dtype=float), np.array(truth.nu[3:], dtype=float), specific_force
 
     def exact(self, ideal: tuple[float, np.ndarray, np.ndarray, np.ndarray]) -> ImuMsg:
