@@ -59,7 +59,7 @@ def rot_z(angle_rad: float) -> FloatArray:
 def rot_from_euler(roll_rad: float, pitch_rad: float, yaw_rad: float) -> FloatArray:
     """Body(FRD)->NED rotation ``R_nb`` from ZYX Euler angles. Shape (3, 3).
 
-    ``Rz(yaw) Ry(pitch) Rx(roll)`` multiplied out (Fossen 2011, eq. 2.18)."""
+    ``Rz(yaw) Ry(pitch) Rx(roll)`` multiplied out ([Fossen2021] section 2.2.1)."""
     cf, sf = math.cos(roll_rad), math.sin(roll_rad)
     ct, st = math.cos(pitch_rad), math.sin(pitch_rad)
     cp, sp = math.cos(yaw_rad), math.sin(yaw_rad)

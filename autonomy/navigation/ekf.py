@@ -48,7 +48,7 @@ _MIN_ALTITUDE_VAR_M2 = 1e-6
 
 def _rotation_and_jacobian(roll: float, pitch: float, yaw: float, v0: float, v1: float, v2: float
                            ) -> tuple[tuple[float, ...], tuple[float, ...]]:
-    """Row-major entries of ``R = Rz(yaw) Ry(pitch) Rx(roll)`` (Fossen 2011, eq. 2.18) and of
+    """Row-major entries of ``R = Rz(yaw) Ry(pitch) Rx(roll)`` ([Fossen2021] section 2.2.1) and of
     ``d(R v)/d(roll, pitch, yaw)`` (3, 3), in Python floats (numpy's per-call cost dominates
     for 3-vectors). The Jacobian's columns are ``R (e_x x v)``, ``Rz Ry (e_y x Rx v)`` and
     ``e_z x (R v)``."""
