@@ -93,6 +93,11 @@ BENCHES: dict[str, tuple[list[str], list[tuple[str, Callable[[dict], str], str]]
     "tracking": (["tracking"], [
         ("`tracking` (USBL + sonar EKF, 10 Hz tick)", lambda r: f"p50 {r['p50_ms']:.2f} ms, p99 {r['p99_ms']:.2f} ms",
          "p99 1 ms")]),
+    "link": (["link"], [
+        ("`link` (acoustic modem link, 10 Hz ticks, two vehicles)",
+         lambda r: f"{r['link_us_per_message']:.0f} us per message, {r['link_us_per_tick_idle']:.1f} us per idle tick; "
+                   f"encode {r['encode_us_per_message']:.0f} us, decode {r['decode_us_per_message']:.0f} us",
+         "microseconds")]),
 }
 
 
