@@ -30,7 +30,7 @@ from scenarios.schema import Scenario
 from sim.mission_build import NAV_SOURCES, MissionParts, build_mission_parts
 from sim.physics import Physics
 from sim.records import MissionInfo, MissionObserver, MissionSummary, StepRecord
-from sim.sensors.base import SceneView
+from sim.sensors.base import SceneView, Sensor
 from sim.sonar_pipeline import FrameTicket, SonarPipeline
 from sim.stage_timer import NULL_TIMER, StageTimer
 from sim.truth import VehicleTruth
@@ -178,7 +178,10 @@ class Mission:
         parts.autopilot.reset()
         if parts.perception is not None:
             parts.perception.reset()
-        if self.workers > 1 and parts.perception is not None and parts.tracking is None:
+        # pipelined only where perception is a sink and the sonar's latency is fixed (the
+        # scheduler gets a ticket, not the frame, to time the delivery by)
+        if (self.workers > 1 and parts.perception is not None and parts.tracking is None
+                and type(parts.sonar).latency_s is Sensor.latency_s):
             self._pipeline = SonarPipeline(self.physics, parts.sonar, parts.perception.process, self.workers)
         self.last_dvl_lock = True
         self._setpoint: Setpoint | None = None
@@ -310,13 +313,10 @@ class Mission:
         with timer.stage("nav_filter"):
             for handler in self._by_type.get(type(result), ()) if result is not None else ():
                 handler(result)  # onboard results the filter fuses (position fixes)
-        with timer.stage("observers"):
-            for obs in self.observers:
-                obs.on_message(name, msg)
-                if result is not None:
-                    obs.on_message(name, result)
+        self._to_observers(((name, msg, result),))
 
     def _to_observers(self, ready) -> None:
+        """Hand ``(name, message, result or None)`` triples to every observer, in order."""
         with self.timer.stage("observers"):
             for name, msg, result in ready:
                 for obs in self.observers:
