@@ -207,7 +207,11 @@ class Mission:
             nav = self.nav_filter.estimate()
         if parts.tracking is not None:
             with timer.stage("tracking"):
-                parts.tracking.on_nav(nav)
+                results = parts.tracking.on_nav(nav)  # frames that waited for this pose
+            with timer.stage("observers"):
+                for res in results:
+                    for obs in self.observers:
+                        obs.on_message(parts.sonar.name, res)
         with timer.stage("guidance"):
             if setpoint is not None:
                 sp = setpoint

@@ -8,9 +8,11 @@ available", the paper's fourth error set) and whether the fused filter took a so
 detection (the fraction of filter steps with sonar, paper: ~30 %), and whether the target
 truly lies in the sonar's field of view and how far it is from the vehicle.
 
-Each sonar frame's clusters are labelled against truth: a cluster within ``match_m`` of the
-target's true (range, azimuth) in the sonar frame (distance ``hypot(dr, r da)``) is the
-target, else one within ``match_m`` of a live bubble is a bubble, else clutter; the
+Each sonar frame's clusters are labelled against truth in the sonar's (range, azimuth) plane
+(points at ``(r cos a, r sin a)``): a cluster within ``match_m`` of the target's body (the
+segment of its long axis: a diver's echo may be its legs or its head alone, and a diver cut
+by the edge of the view shows only the part inside) is the target, else one within
+``match_m`` of a live bubble is a bubble, else clutter; the
 gating figures are the fraction of bubble clusters the fused filter's gate refuses (outside
 its ROI or failing the size gate; the window alone: ``bubble_outside_roi_fraction``) and of
 target clusters it accepts (kept), and, with the
@@ -29,6 +31,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from autonomy.tracking.onboard import MODES, TrackingStack
+from sim.movers import DIVER_HALF_LENGTH_M, VEHICLE_HALF_SIZE_M
 
 FloatArray = NDArray[np.float64]
 ERROR_SETS = ("sonar", "sonar_when_available", "usbl", "fused")
@@ -41,6 +44,8 @@ class TrackingEvaluation:
         stack: the run's tracking stack (read only).
         target_pos_at: t_s -> (3,) true NED position of the tracked mover, m.
         bubbles_at: t_s -> (k, 3) NED positions of its live bubbles (or None: no plume).
+        target_axis_at: t_s -> (2, 3) NED ends of the mover's long body axis, m (None: the
+            position alone).
         sonar_mount_body_m, R_bs: (3,) FRD sonar position, m, and (3, 3) sonar->body rotation.
         fov_rad, window_m, vertical_beam_rad: the sonar's field of view (azimuth, range window
             (near, far) m, vertical beam).
@@ -50,9 +55,10 @@ class TrackingEvaluation:
 
     def __init__(self, stack: TrackingStack, target_pos_at, bubbles_at, sonar_mount_body_m: FloatArray,
                  R_bs: FloatArray, fov_rad: float, window_m: tuple[float, float], vertical_beam_rad: float,
-                 warmup_s: float = 10.0, match_m: float = 0.6) -> None:
+                 warmup_s: float = 10.0, match_m: float = 0.6, target_axis_at=None) -> None:
         self.stack = stack
         self.target_pos_at = target_pos_at
+        self.target_axis_at = target_axis_at or (lambda t: np.repeat(np.atleast_2d(target_pos_at(t)), 2, axis=0))
         self.bubbles_at = bubbles_at
         self.mount = np.asarray(sonar_mount_body_m, dtype=float)
         self.R_bs = np.asarray(R_bs, dtype=float)
@@ -113,14 +119,19 @@ class TrackingEvaluation:
         pos, R_nb = pose
         cr = np.array([c.range_m for c in res.candidates])
         ca = np.array([c.azimuth_rad for c in res.candidates])
+        c_xy = np.c_[cr * np.cos(ca), cr * np.sin(ca)]
 
-        def dist(points: FloatArray) -> FloatArray:  # (n_cand, k) polar distance, m
+        def plane_xy(points: FloatArray) -> FloatArray:  # (k, 2) in the sonar's (range, azimuth) plane
             sp = self._sonar_polar(points, pos, R_nb)
-            return np.hypot(cr[:, None] - sp[None, :, 0], cr[:, None] * np.angle(np.exp(1j * (ca[:, None] - sp[None, :, 1]))))
+            return np.c_[sp[:, 0] * np.cos(sp[:, 1]), sp[:, 0] * np.sin(sp[:, 1])]
 
-        d_tgt = dist(np.asarray(self.target_pos_at(res.t_s), dtype=float))[:, 0]
+        a, b = plane_xy(np.asarray(self.target_axis_at(res.t_s), dtype=float))
+        ab = b - a
+        u = np.clip((c_xy - a) @ ab / max(float(ab @ ab), 1e-12), 0.0, 1.0)
+        d_tgt = np.linalg.norm(c_xy - (a + u[:, None] * ab), axis=1)
         bub = self.bubbles_at(res.t_s) if self.bubbles_at is not None else None
-        d_bub = dist(bub).min(axis=1) if bub is not None and len(bub) else np.full(len(cr), np.inf)
+        d_bub = (np.linalg.norm(c_xy[:, None, :] - plane_xy(bub)[None, :, :], axis=2).min(axis=1)
+                 if bub is not None and len(bub) else np.full(len(cr), np.inf))
         is_tgt = d_tgt <= self.match_m
         is_bub = ~is_tgt & (d_bub <= self.match_m)
         inside = res.accepted["fused"]
@@ -220,6 +231,13 @@ def evaluation_for(mission: Any, warmup_s: float = 10.0) -> TrackingEvaluation:
         raise ValueError(f"evaluation_for: no mover named {name!r} carries the transponder")
     traj = movers.trajectories[name]
     plume = movers.plumes.get(name)
+    kind = next(m.kind for m in movers.movers if m.name == name)
+    half_length_m = DIVER_HALF_LENGTH_M if kind == "diver" else VEHICLE_HALF_SIZE_M[0]
+
+    def axis_at(t_s: float) -> FloatArray:
+        pos, course = traj.pose_at(t_s)
+        half = half_length_m * np.array([np.cos(course), np.sin(course), 0.0])
+        return np.stack([pos - half, pos + half])
 
     def bubbles_at(t_s: float) -> FloatArray:
         pos, alive = plume.positions_at(t_s)
@@ -229,4 +247,4 @@ def evaluation_for(mission: Any, warmup_s: float = 10.0) -> TrackingEvaluation:
     g = sonar.geometry
     return TrackingEvaluation(stack, lambda t: traj.pose_at(t)[0], bubbles_at if plume is not None else None,
                               sonar.mount.pos_body_m, sonar.mount.R_bs, g.fov_rad, (g.window_near_m, g.window_far_m),
-                              g.vertical_beamwidth_rad, warmup_s=warmup_s)
+                              g.vertical_beamwidth_rad, warmup_s=warmup_s, target_axis_at=axis_at)
