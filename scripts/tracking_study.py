@@ -3,9 +3,10 @@
 Runs each tracking scenario over N seeds (no output files) and reports, per scenario, the
 mean over seeds of each error set's mean and spread (m), the fraction of filter steps with a
 sonar detection in the fused filter, and the ROI gating of bubble clusters; with
-``--json`` also every run's figures.
+``--json`` also every run's figures; with ``--png DIR`` the box plot of the four error sets
+pooled over the seeds (``DIR/tracking_study_<scenario>.png``).
 
-    python scripts/tracking_study.py --seeds 20 --duration 150 \
+    python scripts/tracking_study.py --seeds 20 --duration 150 --png runs/study \
         --scenarios track_static_vehicle track_moving_vehicle diver_follow
 """
 
@@ -24,11 +25,11 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from scenarios.load import load_scenario  # noqa: E402
-from sim.evaluation.tracking_eval import ERROR_SETS, evaluation_for  # noqa: E402
+from sim.evaluation.tracking_eval import ERROR_SETS, error_boxplot_png, evaluation_for  # noqa: E402
 from sim.mission import Mission  # noqa: E402
 
 
-def run_one(scenario_path: Path, seed: int, duration_s: float | None) -> dict:
+def run_one(scenario_path: Path, seed: int, duration_s: float | None) -> tuple[dict, dict[str, np.ndarray]]:
     overrides = [f"seed={seed}"] + ([f"duration_s={duration_s}"] if duration_s else [])
     mission = Mission(load_scenario(str(scenario_path), overrides), perception=True)
     ev = evaluation_for(mission)
@@ -36,7 +37,7 @@ def run_one(scenario_path: Path, seed: int, duration_s: float | None) -> dict:
     mission.reset()
     while not mission.done:
         mission.step()
-    return ev.metrics()
+    return ev.metrics(), ev.error_sets()
 
 
 def summarise(runs: list[dict]) -> dict:
@@ -69,18 +70,26 @@ def main() -> int:
     p.add_argument("--duration", type=float, default=None, help="override duration_s (s)")
     p.add_argument("--scenarios", nargs="+", default=["track_static_vehicle", "track_moving_vehicle"])
     p.add_argument("--json", type=Path, default=None, help="write every run and the summary here")
+    p.add_argument("--png", type=Path, default=None, help="folder for the pooled box plots")
     args = p.parse_args()
     logging.getLogger("autonomy.tracking.tracker").setLevel(logging.ERROR)
     report = {}
     for name in args.scenarios:
         path = ROOT / "scenarios" / f"{name}.yaml"
-        runs = []
+        runs, pooled = [], {k: [] for k in ERROR_SETS}
         for seed in range(args.seeds):
-            runs.append(run_one(path, seed, args.duration))
+            metrics, sets = run_one(path, seed, args.duration)
+            runs.append(metrics)
+            for k in ERROR_SETS:
+                pooled[k].append(sets[k])
             e = runs[-1]["errors"]
             print(f"{name} seed {seed}: " + ", ".join(f"{k} {e[k].get('mean_m', math.nan):.2f}" for k in ERROR_SETS)
                   + f"; sonar steps {runs[-1]['fused_sonar_step_fraction']:.2f}", flush=True)
         report[name] = {"summary": summarise(runs), "runs": runs}
+        if args.png:
+            args.png.mkdir(parents=True, exist_ok=True)
+            error_boxplot_png({k: np.concatenate(v) for k, v in pooled.items()}, args.png / f"tracking_study_{name}.png",
+                              f"{name}: {args.seeds} seeds")
         print(json.dumps({name: report[name]["summary"]}, indent=1), flush=True)
     if args.json:
         args.json.write_text(json.dumps(report, indent=1, default=float))

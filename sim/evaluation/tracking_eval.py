@@ -202,17 +202,24 @@ class TrackingEvaluation:
         ax.grid(alpha=0.3)
         fig.tight_layout()
         fig.savefig(error_png, dpi=110)
-        sets = self.error_sets()
-        fig = Figure(figsize=(6, 4))
-        FigureCanvasAgg(fig)
-        ax = fig.add_subplot()
-        ax.boxplot([sets[k] if sets[k].size else [np.nan] for k in ERROR_SETS], showfliers=False)
-        ax.set_xticks(range(1, 5), ["sonar", "sonar when\navailable", "USBL", "fused"])
-        ax.set_ylabel("position error (m)")
-        ax.set_title(title or "error sets")
-        ax.grid(alpha=0.3, axis="y")
-        fig.tight_layout()
-        fig.savefig(box_png, dpi=110)
+        error_boxplot_png(self.error_sets(), box_png, title or "error sets")
+
+
+def error_boxplot_png(sets: dict[str, FloatArray], path: Path, title: str) -> None:
+    """Box plot (PNG) of the four error sets (m), as paper 004 fig. 8 (whiskers 1.5 IQR, no fliers)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(6, 4))
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    ax.boxplot([sets[k] if sets[k].size else [np.nan] for k in ERROR_SETS], showfliers=False)
+    ax.set_xticks(range(1, 5), ["sonar", "sonar when\navailable", "USBL", "fused"])
+    ax.set_ylabel("position error (m)")
+    ax.set_title(title)
+    ax.grid(alpha=0.3, axis="y")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
 
 
 def evaluation_for(mission: Any, warmup_s: float = 10.0) -> TrackingEvaluation:
