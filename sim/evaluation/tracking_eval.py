@@ -35,6 +35,7 @@ from sim.movers import DIVER_HALF_LENGTH_M, VEHICLE_HALF_SIZE_M
 
 FloatArray = NDArray[np.float64]
 ERROR_SETS = ("sonar", "sonar_when_available", "usbl", "fused")
+_COLS = 11
 
 
 class TrackingEvaluation:
@@ -64,7 +65,7 @@ class TrackingEvaluation:
         self.R_bs = np.asarray(R_bs, dtype=float)
         self.fov_rad, self.window_m, self.vbeam_rad = float(fov_rad), tuple(window_m), float(vertical_beam_rad)
         self.warmup_s, self.match_m = float(warmup_s), float(match_m)
-        self.rows: list[tuple[float, ...]] = []  # t, err x3 modes, sonar_avail, fused_sonar, in_fov, distance
+        self.rows: list[tuple[float, ...]] = []  # t, err x3 modes, sonar_avail, fused_sonar, in_fov, distance, horizontal err x3
         self._poses: dict[int, tuple[FloatArray, FloatArray]] = {}
         self._n_results = 0
         self.n_bubble = self.n_bubble_rejected = self.n_target = self.n_target_kept = 0
@@ -97,17 +98,18 @@ class TrackingEvaluation:
         for res in results:
             self._label(res)
         tgt = np.asarray(self.target_pos_at(t), dtype=float)
-        errs = []
+        errs, errs_h = [], []
         for m in MODES:
             est = self.stack.trackers[m].estimate(t)
             errs.append(float(np.linalg.norm(est[0][:3] - tgt)) if est is not None else math.nan)
+            errs_h.append(float(np.linalg.norm(est[0][:2] - tgt[:2])) if est is not None else math.nan)
         sonar_avail = any(r.chosen["sonar"] is not None for r in results)
         fused_sonar = any(r.chosen["fused"] is not None for r in results)
         r, a, e = self._sonar_polar(tgt, truth.pos_ned, truth.R_nb)[0]
         in_fov = (abs(a) <= 0.5 * self.fov_rad and self.window_m[0] <= r <= self.window_m[1]
                   and abs(e) <= 0.5 * self.vbeam_rad)
         self.rows.append((t, *errs, float(sonar_avail), float(fused_sonar), float(in_fov),
-                          float(np.linalg.norm(tgt - truth.pos_ned))))
+                          float(np.linalg.norm(tgt - truth.pos_ned)), *errs_h))
 
     def _label(self, res: Any) -> None:
         if not res.candidates or res.roi["fused"] is None:
@@ -146,26 +148,32 @@ class TrackingEvaluation:
         self.n_target_chosen += int((is_tgt & chosen).any())
 
     # results
-    def error_sets(self) -> dict[str, FloatArray]:
+    def error_sets(self, horizontal: bool = False) -> dict[str, FloatArray]:
         """The four error sets (m) after the warm-up: each filter's error at every tick, and
-        the sonar-only filter's at the ticks it had a detection."""
-        a = np.array(self.rows, dtype=float).reshape(-1, 8)
+        the sonar-only filter's at the ticks it had a detection; 3-D, or ``horizontal`` (north
+        and east only: paper 004's GPS ground truth of a target in the vehicle's plane)."""
+        a = np.array(self.rows, dtype=float).reshape(-1, _COLS)
         a = a[a[:, 0] >= self.warmup_s]
-        out = {"sonar": a[:, 1], "usbl": a[:, 2], "fused": a[:, 3], "sonar_when_available": a[a[:, 4] > 0, 1]}
+        c = 8 if horizontal else 1
+        out = {"sonar": a[:, c], "usbl": a[:, c + 1], "fused": a[:, c + 2], "sonar_when_available": a[a[:, 4] > 0, c]}
         return {k: v[np.isfinite(v)] for k, v in out.items()}
 
     def metrics(self) -> dict[str, Any]:
-        """Statistics of the error sets (m), sonar-step fraction, ROI gating, field of view."""
-        a = np.array(self.rows, dtype=float).reshape(-1, 8)
+        """Statistics of the error sets (m; 3-D under ``errors``, north-east under
+        ``errors_horizontal``), sonar-step fraction, ROI gating, field of view."""
+        a = np.array(self.rows, dtype=float).reshape(-1, _COLS)
         scored = a[a[:, 0] >= self.warmup_s]
-        stats = {}
-        for k, v in self.error_sets().items():
-            stats[k] = ({"n": int(v.size), "mean_m": float(v.mean()), "std_m": float(v.std()),
-                         "median_m": float(np.median(v)), "p95_m": float(np.percentile(v, 95))} if v.size else
-                        {"n": 0})
+        stats: dict[str, dict] = {}
+        stats_h: dict[str, dict] = {}
+        for out, horizontal in ((stats, False), (stats_h, True)):
+            for k, v in self.error_sets(horizontal).items():
+                out[k] = ({"n": int(v.size), "mean_m": float(v.mean()), "std_m": float(v.std()),
+                           "median_m": float(np.median(v)), "p95_m": float(np.percentile(v, 95))} if v.size else
+                          {"n": 0})
         return {
             "mode": self.stack.cfg.mode,
             "errors": stats,
+            "errors_horizontal": stats_h,
             "fused_sonar_step_fraction": float(scored[:, 5].mean()) if len(scored) else math.nan,
             "roi": {"bubble_clusters": self.n_bubble, "bubble_rejected_fraction":
                     self.n_bubble_rejected / self.n_bubble if self.n_bubble else math.nan,
@@ -185,7 +193,7 @@ class TrackingEvaluation:
         from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.figure import Figure
 
-        a = np.array(self.rows, dtype=float).reshape(-1, 8)
+        a = np.array(self.rows, dtype=float).reshape(-1, _COLS)
         fig = Figure(figsize=(9, 4))
         FigureCanvasAgg(fig)
         ax = fig.add_subplot()
