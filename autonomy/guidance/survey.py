@@ -53,6 +53,10 @@ class SurveyGuidance:
     speed drops linearly with heading error, to ``min_speed_fraction`` at
     ``slow_down_heading_error_deg``, so turns stay tight.
 
+    With ``heading_rad`` (NED, rad) an omnidirectional vehicle holds that heading and moves
+    along the LOS course by surge ``V cos(course - yaw)`` and sway ``V sin(course - yaw)``
+    (body frame, starboard > 0), no sideslip compensation or slow-down.
+
     Call :meth:`start` once with the current position, then :meth:`update` at the
     autonomy rate. After the last waypoint :attr:`finished` is True and the setpoint holds
     heading with zero speed.
