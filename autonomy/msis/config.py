@@ -24,6 +24,8 @@ class MsisLocalizationConfig(StrictModel):
     pool_radius_m: PositiveFloat = Field(6.0, le=1000.0)
     tank_size_ne_m: tuple[PositiveFloat, PositiveFloat] = (20.0, 10.0)
     threshold_u8: int = Field(200, ge=1, le=255, description="echo threshold on the raw samples")
+    echo_mode: Literal["first", "first_centre", "peaks"] = Field(
+        "first_centre", description="echo range per ping (autonomy.msis.sonar_buffer.echo_ranges_m)")
     min_range_m: float = Field(0.75, ge=0.0, le=50.0)
     fix_interval_s: float = Field(9.0, gt=0.0, le=600.0)
     min_points: int = Field(60, ge=5, le=100000)

@@ -95,7 +95,7 @@ class MsisLocalizer:
     def __init__(self, cfg: MsisLocalizationConfig, rng: np.random.Generator) -> None:
         self.cfg = cfg
         self.rng = rng
-        self.buffer = SonarBuffer(cfg.threshold_u8, cfg.min_range_m, max_age_s=2.0 * cfg.fix_interval_s)
+        self.buffer = SonarBuffer(cfg.threshold_u8, cfg.min_range_m, max_age_s=2.0 * cfg.fix_interval_s, mode=cfg.echo_mode)
         self.reset()
 
     def reset(self) -> None:
