@@ -13,15 +13,18 @@ in the navigation frame. Then:
 * rectangular tank (``walls``): IEPF runs on the ordered points, each run's eigenvector fit
   of at least ``min_segment_length_m`` becomes a fuzzy segment, its rho cuts widened by the
   heading uncertainty about the vehicle (``max(sqrt(cov_yaw), heading_sigma_deg)``,
-  :meth:`~autonomy.msis.fuzzy_segments.FuzzySegment.with_heading_uncertainty`), and collinear
-  segments fuse (:class:`autonomy.msis.fuzzy_segments.FuzzySegmentMap`). Each segment that
-  matches a known wall (normal within ``wall_match_angle_deg``, rho within
+  :meth:`~autonomy.msis.fuzzy_segments.FuzzySegment.with_heading_uncertainty`), and joins the
+  persistent local map (:class:`autonomy.msis.fuzzy_segments.FuzzySegmentMap`, vehicle-centred,
+  ``map_*`` settings): fused with the collinear map segment or added. Between fixes the map
+  moves with the motion estimate of every ping (``R(rpy) v_body dt``, horizontal), growing the
+  segments' uncertainty with that motion and with age and removing those too uncertain. Each
+  map segment that matches a known wall (normal within ``wall_match_angle_deg``, rho within
   ``wall_match_distance_m``) is assigned to it; the segments of one wall then fuse into one
-  estimate per wall and sweep (eqs. 18-19, :func:`fuse_wall_segments`), kept when its
-  extent reaches ``min_wall_support_m``. Each wall estimate gives the offset of the estimate
-  along that wall's normal from the vehicle's distance to the wall, which a heading error
-  (a rotation of the sweep about the vehicle) leaves unchanged: with ``r = rho - n_s . p``,
-  ``n_w . d = c_w - r - n_w . p``. With walls of both directions, the weighted least-squares
+  estimate per wall (eqs. 18-19, :func:`fuse_wall_segments`), kept when its extent reaches
+  ``min_wall_support_m``. Each wall estimate gives the offset of the estimate along that
+  wall's normal from the vehicle's distance to the wall, which a heading error (a rotation of
+  the sweep about the vehicle) leaves unchanged: with ``r`` the estimate's rho in the
+  vehicle-centred frame (normal along the wall's), ``n_w . d = c_w - r - n_w . p``. With walls of both directions, the weighted least-squares
   offset ``d`` (weights ``1 / sigma^2``, sigma from the estimate's 68 % cut) makes the fix
   ``p_hat + d`` with covariance ``(H^T W H)^-1``.
 """
@@ -34,7 +37,7 @@ from dataclasses import replace
 import numpy as np
 from numpy.typing import NDArray
 
-from autonomy.frames import wrap_angle
+from autonomy.frames import rot_from_euler, wrap_angle
 from autonomy.messages import MsisPing, NavEstimate, PositionFixMsg
 from autonomy.msis.circle_fit import mlesac_circle
 from autonomy.msis.config import MsisLocalizationConfig
@@ -96,10 +99,15 @@ class MsisLocalizer:
         self.cfg = cfg
         self.rng = rng
         self.buffer = SonarBuffer(cfg.threshold_u8, cfg.min_range_m, max_age_s=2.0 * cfg.fix_interval_s, mode=cfg.echo_mode)
+        self.map = FuzzySegmentMap(max_angle_rad=math.radians(cfg.map_match_angle_deg), min_match=cfg.map_min_match,
+                                   motion_growth=cfg.map_motion_growth, age_growth_mps=cfg.map_age_growth_mps,
+                                   max_area_m=cfg.map_max_area_m)
         self.reset()
 
     def reset(self) -> None:
         self.buffer.clear()
+        self.map.clear()
+        self._t_map_s = math.nan
         self._t_last_fix = -math.inf
         self._t_first = math.nan
         self.last_circle = None
@@ -111,6 +119,8 @@ class MsisLocalizer:
         if self.cfg.method == "none":
             return None
         self.buffer.add_ping(ping, nav)
+        if self.cfg.method == "walls":
+            self._move_map(ping.t_s, nav)
         if math.isnan(self._t_first):
             self._t_first = ping.t_s
         if ping.t_s - max(self._t_last_fix, self._t_first) < self.cfg.fix_interval_s or \
@@ -134,6 +144,14 @@ class MsisLocalizer:
         return PositionFixMsg(t_s=float(ping.t_s), pos_ne_m=pos, cov_ne_m2=cov, source=self.cfg.method,
                               points_ne_m=pts, **feats)
 
+    def _move_map(self, t_s: float, nav: NavEstimate) -> None:
+        """Move the local map by the motion estimate since the last ping: ``R(rpy) v_body dt``."""
+        dt = 0.0 if math.isnan(self._t_map_s) else float(t_s) - self._t_map_s
+        self._t_map_s = float(t_s)
+        if dt > 0.0 and self.map.segments:
+            v_ned = rot_from_euler(*nav.rpy_rad) @ np.asarray(nav.vel_body_mps, dtype=float)
+            self.map.move(v_ned[:2] * dt, dt)
+
     def _circle_fix(self, pts: FloatArray, nav: NavEstimate) -> tuple[FloatArray, FloatArray] | None:
         cfg = self.cfg
         R = cfg.pool_radius_m
@@ -149,35 +167,36 @@ class MsisLocalizer:
 
     def segments(self, pts: FloatArray, t_s: float, pivot_ne: FloatArray | None = None,
                  sigma_heading_rad: float = 0.0) -> list[FuzzySegment]:
-        """Fuzzy segments of ordered points (IEPF, eigenvector fits, heading uncertainty about the
-        vehicle at ``pivot_ne``, collinear fusion)."""
+        """Fuzzy segments of ordered points, in their frame (IEPF, eigenvector fits of at least
+        ``min_segment_length_m``, heading uncertainty about the vehicle at ``pivot_ne``)."""
         cfg = self.cfg
         pivot = np.zeros(2) if pivot_ne is None else np.asarray(pivot_ne, dtype=float)
-        fmap = FuzzySegmentMap(max_angle_rad=math.radians(3.0), min_match=0.2)
+        out = []
         for a, b in iepf_split(pts, cfg.iepf_k_min, cfg.iepf_rho_max_m):
             try:
                 fit = fit_line(pts[a:b])
             except ValueError:
                 continue
             if fit.length_m >= cfg.min_segment_length_m:
-                fmap.add(FuzzySegment.from_fit(fit, t_s).with_heading_uncertainty(pivot, sigma_heading_rad))
-        return fmap.segments
+                out.append(FuzzySegment.from_fit(fit, t_s).with_heading_uncertainty(pivot, sigma_heading_rad))
+        return out
 
     def _walls_fix(self, pts: FloatArray, nav: NavEstimate) -> tuple[FloatArray, FloatArray] | None:
         cfg = self.cfg
         p = np.asarray(nav.pos_ned[:2], dtype=float)
         sigma_psi = max(math.sqrt(max(float(nav.cov_yaw_rad2), 0.0)), math.radians(cfg.heading_sigma_deg))
-        segs = self.segments(pts, nav.t_s, p, sigma_psi)
-        self.last_segments = segs
+        for s in self.segments(pts, nav.t_s, p, sigma_psi):
+            self.map.add(s.shifted(-p))  # into the vehicle-centred map
+        self.last_segments = [s.shifted(p) for s in self.map.segments]
         walls = tank_walls(np.asarray(cfg.centre_ne_m, float), np.asarray(cfg.tank_size_ne_m, float))
         cos_max = math.cos(math.radians(cfg.wall_match_angle_deg))
         assigned: dict[int, list[FuzzySegment]] = {}
-        for s in segs:
+        for s in self.map.segments:
             for i, (n_w, c_w) in enumerate(walls):
                 n_s, rho = s.normal, s.rho_m
                 if n_s @ n_w < 0.0:  # the same line with the opposite normal
                     n_s, rho = -n_s, -rho
-                if n_s @ n_w >= cos_max and abs(rho - c_w) <= cfg.wall_match_distance_m:
+                if n_s @ n_w >= cos_max and abs(rho - (c_w - float(n_w @ p))) <= cfg.wall_match_distance_m:
                     assigned.setdefault(i, []).append(s)
                     break
         self.last_walls = {}
@@ -187,8 +206,8 @@ class MsisLocalizer:
             est = fuse_wall_segments(group, n_w)
             if est.length_m < cfg.min_wall_support_m:
                 continue
-            self.last_walls[i] = est
-            r = est.rho_m - float(est.normal @ p)  # the vehicle's distance to the wall seen
+            self.last_walls[i] = est.shifted(p)  # in the navigation frame
+            r = est.rho_m  # the vehicle's distance to the wall seen, along n_w
             H.append(n_w)
             z.append(c_w - r - float(n_w @ p))
             w.append(1.0 / max(est.rho1_m, 1e-3) ** 2)

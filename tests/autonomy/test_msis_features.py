@@ -125,13 +125,6 @@ def test_fuzzy_segments_fuse_grow_and_age_out():
     f = a.fused(b)
     assert f.rho_m == pytest.approx(5.005, abs=2e-3) and f.rho0_m == pytest.approx(0.04 / math.sqrt(2))
     assert f.end_a[1] == pytest.approx(-2.0, abs=0.02) and f.end_b[1] == pytest.approx(3.0, abs=0.02)
-    m = FuzzySegmentMap(max_angle_rad=math.radians(2), motion_growth=0.1, age_growth_mps=0.0, max_area_m=0.5)
-    m.add(a), m.add(b), m.add(far)
-    assert len(m.segments) == 2
-    m.grow(travelled_m=1.0, dt_s=1.0)
-    assert m.segments[1].rho0_m == pytest.approx(0.04 + 0.1)
-    m.grow(travelled_m=3.0, dt_s=1.0)
-    assert m.segments == []
 
 
 def _split_wall_pieces(rng):
