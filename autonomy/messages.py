@@ -38,6 +38,14 @@ class DvlMsg:
 
 
 @dataclass(frozen=True, slots=True)
+class WrenchCmdMsg:
+    """The autopilot's commanded body wrench (what it asks of the thrusters, not what they give)."""
+
+    t_s: float
+    wrench_body: FloatArray  # (6,) X, Y, Z force (N), K, M, N moment (N m), FRD
+
+
+@dataclass(frozen=True, slots=True)
 class DepthMsg:
     t_s: float
     depth_m: float

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from autonomy.control.setpoint import Setpoint
-from autonomy.messages import DvlMsg, NavEstimate, UsblMsg
+from autonomy.messages import DvlMsg, NavEstimate, UsblMsg, WrenchCmdMsg
 from scenarios.schema import Scenario
 from sim.mission_build import NAV_SOURCES, MissionParts, build_mission_parts
 from sim.physics import Physics
@@ -220,6 +220,10 @@ class Mission:
         with timer.stage("control"):
             self.wrench_body = np.zeros(6) if sp is None else parts.autopilot.update(nav, sp, self.autonomy_dt_s)
             self.thruster_cmd = parts.allocator.allocate(self.wrench_body)
+        with timer.stage("nav_filter"):
+            cmd = WrenchCmdMsg(physics.t_s, self.wrench_body.copy())
+            for handler in self._by_type.get(WrenchCmdMsg, ()):
+                handler(cmd)  # the speed model of a DVL-free filter
         rec = self._record(truth, nav, parts.fsm.mode)
         self._wall_s = time.perf_counter() - self._wall_start
         return rec

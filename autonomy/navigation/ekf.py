@@ -13,6 +13,13 @@ beam-geometry covariance, so the held error integrates into position exactly as 
 the sensor. Depth, GPS (at the surface) and USBL fixes are EKF updates (Joseph form).
 In ``dead_reckoning`` mode GPS and USBL are ignored.
 
+Without a DVL (``velocity_source='speed_model'``) the held velocity is the surge/sway of the
+vehicle's speed model (:class:`autonomy.navigation.speed_model.SpeedModel`) driven by the
+commanded force (:class:`autonomy.messages.WrenchCmdMsg`), heave 0; ``n`` is then the model's
+velocity error, a random walk (``speed_model.noise_mps_per_sqrt_s``, heave
+``heave_noise_mps_per_sqrt_s``) never reset, and ``s`` its
+speed scale error (prior ``speed_model.scale_sigma``): position fixes estimate both.
+
 The altitude of the body origin above the seabed is a separate scalar Kalman filter. It is
 propagated with the dead-reckoned NED velocity over the local seabed plane,
 ``a_dot = g . v_ne - v_down`` (``g`` the seabed depth gradient d depth / d(north, east) from
@@ -30,9 +37,11 @@ from numpy.typing import ArrayLike, NDArray
 
 from autonomy.estimation.measurement import PositionFix, RangeBearingElevation
 from autonomy.frames import cross3, euler_rate_matrix, rot_from_euler, rot_x, rot_y, rot_z, wrap_angle
-from autonomy.messages import AltimeterMsg, DepthMsg, DvlMsg, GpsMsg, ImuMsg, NavEstimate, PositionFixMsg, UsblMsg
+from autonomy.messages import (AltimeterMsg, DepthMsg, DvlMsg, GpsMsg, ImuMsg, NavEstimate, PositionFixMsg, UsblMsg,
+                               WrenchCmdMsg)
 from autonomy.navigation.config import NavigationConfig
 from autonomy.navigation.noise_model import NavNoiseModel
+from autonomy.navigation.speed_model import SpeedModel
 
 FloatArray = NDArray[np.float64]
 
@@ -104,7 +113,8 @@ class NavigationFilter:
         p0 = np.zeros(N_STATES)
         p0[POS] = [cfg.initial_pos_sigma_m**2] * 2 + [cfg.initial_depth_sigma_m**2]
         p0[ATT] = self.noise.attitude_bias_sigma_rad**2
-        p0[SCALE] = self.noise.dvl_scale_sigma**2
+        self._speed_model = SpeedModel(cfg.speed_model) if cfg.velocity_source == "speed_model" else None
+        p0[SCALE] = (self.noise.dvl_scale_sigma if self._speed_model is None else cfg.speed_model.scale_sigma) ** 2
         p0[DVEL] = cfg.initial_vel_sigma_mps**2
         self._P = np.diag(p0)
         self._rpy_meas = np.array([0.0, 0.0, float(initial_yaw_rad)])
@@ -152,6 +162,8 @@ class NavigationFilter:
         if dt <= 0.0:
             return
         x, noise = self._x, self.noise
+        if self._speed_model is not None:
+            self._vel_dvl_meas = np.array([*self._speed_model.step(dt), 0.0])
         att = self._attitude(self._t_s + 0.5 * dt)  # midpoint attitude of the step
         R = rot_from_euler(*att)
         one_s = 1.0 + x[SCALE]
@@ -170,9 +182,12 @@ class NavigationFilter:
         # age tau of the ping gives var(a tau) = sigma_a^2 tau^2; after lock loss, a random walk
         age = min(self._t_s - self._t_dvl_valid_s, self.cfg.dvl_timeout_s)
         q_vel = self.cfg.hold_accel_sigma_mps2**2 * (2.0 * age * dt + dt * dt)
-        if self._t_s - self._t_dvl_valid_s > self.cfg.dvl_timeout_s:
+        if self._speed_model is not None:  # the model's error: a random walk (heave: its own)
+            sm = self.cfg.speed_model
+            q_vel = np.array([sm.noise_mps_per_sqrt_s, sm.noise_mps_per_sqrt_s, sm.heave_noise_mps_per_sqrt_s]) ** 2 * dt
+        elif self._t_s - self._t_dvl_valid_s > self.cfg.dvl_timeout_s:
             q_vel += self.cfg.dvl_lost_noise_mps_per_sqrt_s**2 * dt
-        Q[DVEL, DVEL] = q_vel * _E
+        Q[DVEL, DVEL] = np.diag(np.broadcast_to(q_vel, (3,)))
 
         v_ned = R @ v_body
         if np.isfinite(self._altitude_m):
@@ -207,10 +222,17 @@ class NavigationFilter:
         self._t_imu_s = max(self._t_s, float(msg.t_s))
         self._rate_meas = np.asarray(msg.rate_body_radps, dtype=float).copy()
 
-    def on_dvl(self, msg: DvlMsg) -> None:
-        """Valid bottom-track velocity replaces the held velocity and its error state."""
+    def on_wrench_cmd(self, msg: WrenchCmdMsg) -> None:
+        """The commanded body force drives the speed model (ignored with a DVL)."""
         self.predict(msg.t_s)
-        if not msg.valid:
+        if self._speed_model is not None:
+            self._speed_model.set_force(np.asarray(msg.wrench_body, dtype=float)[:2])
+
+    def on_dvl(self, msg: DvlMsg) -> None:
+        """Valid bottom-track velocity replaces the held velocity and its error state (ignored
+        with the speed model: the vehicle has no DVL velocity then)."""
+        self.predict(msg.t_s)
+        if not msg.valid or self._speed_model is not None:
             return
         vel = np.asarray(msg.vel_body_mps, dtype=float)
         ranges = np.asarray(msg.beam_ranges_m, dtype=float)
@@ -348,7 +370,7 @@ class NavigationFilter:
         """Message type -> the method that fuses it (what a message bus dispatches on)."""
         return {ImuMsg: self.on_imu, DvlMsg: self.on_dvl, DepthMsg: self.on_depth,
                 AltimeterMsg: self.on_altimeter, GpsMsg: self.on_gps, UsblMsg: self.on_usbl,
-                PositionFixMsg: self.on_position_fix}
+                PositionFixMsg: self.on_position_fix, WrenchCmdMsg: self.on_wrench_cmd}
 
     # ------------------------------------------------------------------ output
     def estimate(self) -> NavEstimate:
