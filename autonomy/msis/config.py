@@ -47,4 +47,6 @@ class MsisLocalizationConfig(StrictModel):
     map_max_area_m: float = Field(1.0, gt=0.0, le=100.0, description="segments above this trapezoid area are removed")
     wall_match_angle_deg: float = Field(10.0, gt=0.0, le=45.0)
     wall_match_distance_m: float = Field(1.5, gt=0.0, le=100.0)
+    wall_heading_fix: bool = Field(True, description="also fix the heading from the walls' known directions")
+    wall_heading_sigma_floor_deg: float = Field(0.3, gt=0.0, le=45.0, description="added to the heading fix's sigma")
     fix_sigma_floor_m: float = Field(0.05, ge=0.0, le=10.0, description="added to each fix's sigma")

@@ -26,7 +26,11 @@ in the navigation frame. Then:
   the sweep about the vehicle) leaves unchanged: with ``r`` the estimate's rho in the
   vehicle-centred frame (normal along the wall's), ``n_w . d = c_w - r - n_w . p``. With walls of both directions, the weighted least-squares
   offset ``d`` (weights ``1 / sigma^2``, sigma from the estimate's 68 % cut) makes the fix
-  ``p_hat + d`` with covariance ``(H^T W H)^-1``.
+  ``p_hat + d`` with covariance ``(H^T W H)^-1``. The walls' known directions also give the
+  heading error of the estimate the sweep was placed with (``wall_heading_fix``): the mean of
+  the wall estimates' signed angles from their walls' normals, weights ``1 / sigma_theta^2``
+  (the fits' own angle sigmas), variance ``1 / sum(w)`` plus ``wall_heading_sigma_floor_deg``
+  squared (the map's segments are not independent from fix to fix).
 """
 
 from __future__ import annotations
@@ -132,7 +136,7 @@ class MsisLocalizer:
         self.buffer.clear()
         if fix is None:
             return None
-        pos, cov = fix
+        pos, cov, heading = fix
         cov = cov + self.cfg.fix_sigma_floor_m ** 2 * np.eye(2)
         feats: dict[str, FloatArray] = {}
         if self.cfg.method == "circle" and self.last_circle is not None:
@@ -142,7 +146,7 @@ class MsisLocalizer:
             feats["segments_ne_m"] = np.array([[s.end_a, s.end_b] for s in self.last_segments], dtype=float)
             feats["segments_rho95_m"] = np.array([s.rho0_m for s in self.last_segments], dtype=float)
         return PositionFixMsg(t_s=float(ping.t_s), pos_ne_m=pos, cov_ne_m2=cov, source=self.cfg.method,
-                              points_ne_m=pts, **feats)
+                              points_ne_m=pts, heading_err_rad=heading[0], heading_var_rad2=heading[1], **feats)
 
     def _move_map(self, t_s: float, nav: NavEstimate) -> None:
         """Move the local map by the motion estimate since the last ping: ``R(rpy) v_body dt``."""
@@ -163,7 +167,7 @@ class MsisLocalizer:
         self.last_circle = circle
         cov = circle_centre_covariance(pts[circle.inliers], circle.centre, circle.radius_m)
         pos = np.asarray(nav.pos_ned[:2], dtype=float) + (np.asarray(cfg.centre_ne_m) - circle.centre)
-        return pos, cov
+        return pos, cov, (math.nan, math.nan)
 
     def segments(self, pts: FloatArray, t_s: float, pivot_ne: FloatArray | None = None,
                  sigma_heading_rad: float = 0.0) -> list[FuzzySegment]:
@@ -181,7 +185,9 @@ class MsisLocalizer:
                 out.append(FuzzySegment.from_fit(fit, t_s).with_heading_uncertainty(pivot, sigma_heading_rad))
         return out
 
-    def _walls_fix(self, pts: FloatArray, nav: NavEstimate) -> tuple[FloatArray, FloatArray] | None:
+    def _walls_fix(self, pts: FloatArray, nav: NavEstimate) -> tuple[FloatArray, FloatArray, tuple[float, float]] | None:
+        """Position fix (2,), its covariance (2, 2) and (heading error, its variance) (rad, rad^2;
+        NaN when ``wall_heading_fix`` is off) from the walls (module docstring), or None."""
         cfg = self.cfg
         p = np.asarray(nav.pos_ned[:2], dtype=float)
         sigma_psi = max(math.sqrt(max(float(nav.cov_yaw_rad2), 0.0)), math.radians(cfg.heading_sigma_deg))
@@ -200,7 +206,7 @@ class MsisLocalizer:
                     assigned.setdefault(i, []).append(s)
                     break
         self.last_walls = {}
-        H, z, w = [], [], []
+        H, z, w, ang, w_ang = [], [], [], [], []
         for i, group in sorted(assigned.items()):
             n_w, c_w = walls[i]
             est = fuse_wall_segments(group, n_w)
@@ -211,6 +217,8 @@ class MsisLocalizer:
             H.append(n_w)
             z.append(c_w - r - float(n_w @ p))
             w.append(1.0 / max(est.rho1_m, 1e-3) ** 2)
+            ang.append(math.atan2(n_w[0] * est.normal[1] - n_w[1] * est.normal[0], float(n_w @ est.normal)))
+            w_ang.append(1.0 / max(est.sigma_theta_rad, 1e-6) ** 2)
         if len(H) < 2:
             return None
         H, z, W = np.array(H), np.array(z), np.diag(w)
@@ -219,4 +227,8 @@ class MsisLocalizer:
             return None  # walls of one direction only
         cov = np.linalg.inv(info)
         d = cov @ H.T @ W @ z
-        return p + d, cov
+        heading = (math.nan, math.nan)
+        if cfg.wall_heading_fix:
+            heading = (float(np.average(ang, weights=w_ang)),
+                       1.0 / float(np.sum(w_ang)) + math.radians(cfg.wall_heading_sigma_floor_deg) ** 2)
+        return p + d, cov, heading

@@ -18,7 +18,10 @@ vehicle's speed model (:class:`autonomy.navigation.speed_model.SpeedModel`) driv
 commanded force (:class:`autonomy.messages.WrenchCmdMsg`), heave 0; ``n`` is then the model's
 velocity error, a random walk (``speed_model.noise_mps_per_sqrt_s``, heave
 ``heave_noise_mps_per_sqrt_s``) never reset, and ``s`` its
-speed scale error (prior ``speed_model.scale_sigma``): position fixes estimate both.
+speed scale error (prior ``speed_model.scale_sigma``): position fixes estimate both. The model
+velocity is turned into NED by the heading alone (``p_dot = Rz(psi) v``: the model's surge and
+sway are horizontal, its heave error vertical), so the depth sensor, which follows the heave,
+does not feed back into the horizontal velocity through the roll and pitch.
 
 The altitude of the body origin above the seabed is a separate scalar Kalman filter. It is
 propagated with the dead-reckoned NED velocity over the local seabed plane,
@@ -151,9 +154,15 @@ class NavigationFilter:
             rpy = rpy + euler_rate_matrix(rpy[0], rpy[1]) @ self._rate_meas * tau
         return rpy - self._x[ATT]
 
+    def _scaled_axes(self) -> FloatArray:
+        """(3,) 1 for the velocity axes the scale error divides: the DVL's three, the speed
+        model's surge and sway."""
+        return np.ones(3) if self._speed_model is None else np.array([1.0, 1.0, 0.0])
+
     def _vel_body(self) -> FloatArray:
+        scaled = self._scaled_axes()
         v_m = self._vel_dvl_meas - self._x[DVEL]
-        return v_m / (1.0 + self._x[SCALE]) - cross3(self._omega_at_dvl, self._r_dvl)
+        return v_m * (scaled / (1.0 + self._x[SCALE]) + 1.0 - scaled) - cross3(self._omega_at_dvl, self._r_dvl)
 
     # ------------------------------------------------------------------ propagation
     def predict(self, t_s: float) -> None:
@@ -165,16 +174,22 @@ class NavigationFilter:
         if self._speed_model is not None:
             self._vel_dvl_meas = np.array([*self._speed_model.step(dt), 0.0])
         att = self._attitude(self._t_s + 0.5 * dt)  # midpoint attitude of the step
-        R = rot_from_euler(*att)
         one_s = 1.0 + x[SCALE]
+        scaled = self._scaled_axes()
+        inv_scale = scaled / one_s + (1.0 - scaled)
         v_m = self._vel_dvl_meas - x[DVEL]
-        v_body = v_m / one_s - cross3(self._omega_at_dvl, self._r_dvl)
-        J_att = rotated_vector_jacobian(att, v_body)
+        v_body = v_m * inv_scale - cross3(self._omega_at_dvl, self._r_dvl)
+        if self._speed_model is None:
+            R = rot_from_euler(*att)
+            J_att = rotated_vector_jacobian(att, v_body)
+        else:  # the model's surge/sway along the heading only: depth says nothing of them
+            R = rot_z(att[2])
+            J_att = np.column_stack([np.zeros(3), np.zeros(3), cross3(_E[2], R @ v_body)])
 
         F = np.eye(N_STATES)
         F[POS, ATT] = -J_att * dt
-        F[POS, SCALE] = -(R @ v_m) / one_s**2 * dt
-        F[POS, DVEL] = -R / one_s * dt
+        F[POS, SCALE] = -(R @ (v_m * scaled)) / one_s**2 * dt
+        F[POS, DVEL] = -R * inv_scale[None, :] * dt
         Q = np.zeros((N_STATES, N_STATES))
         Q[POS, POS] = J_att @ np.diag(noise.attitude_noise_rad**2) @ J_att.T * dt**2
         Q[5, 5] = noise.heading_rw_rad_per_sqrt_s**2 * dt
@@ -193,7 +208,8 @@ class NavigationFilter:
         if np.isfinite(self._altitude_m):
             # altitude over the local seabed plane: a_dot = g . v_ne - v_down
             h = np.array([self._seabed_grad_ne[0], self._seabed_grad_ne[1], -1.0])
-            var_rate = float(h @ R @ self._P[DVEL, DVEL] @ R.T @ h) / one_s**2
+            Rs = R * inv_scale[None, :]
+            var_rate = float(h @ Rs @ self._P[DVEL, DVEL] @ Rs.T @ h)
             self._altitude_m += float(h @ v_ned) * dt
             self._altitude_var_m2 += (var_rate * dt * dt
                                       + SEABED_RELIEF_M_PER_SQRT_M**2 * float(np.hypot(v_ned[0], v_ned[1])) * dt)
@@ -355,16 +371,25 @@ class NavigationFilter:
 
     def on_position_fix(self, msg: PositionFixMsg) -> bool:
         """North/east fix of the body origin with its own covariance (feature-based localisation,
-        e.g. a scanning sonar in a known pool). Returns whether it was applied (EKF mode; no
-        innovation gate: the fixes come out of their own outlier rejection)."""
+        e.g. a scanning sonar in a known pool), and when the message has one, the heading error
+        of the estimate the features were placed with, fused into the heading bias state.
+        Returns whether the position was applied (EKF mode; no innovation gate: the fixes come
+        out of their own outlier rejection)."""
         if self.cfg.mode != "ekf":
             return False
         self.predict(msg.t_s)
         model = PositionFix(3, (0, 1), np.asarray(msg.cov_ne_m2, dtype=float).reshape(2, 2))
         H = np.zeros((2, N_STATES))
         H[:, POS] = model.jacobian()
-        return self._update(model.residual(np.asarray(msg.pos_ne_m, dtype=float), model.function(self._x[POS])), H,
-                            model.covar(), None)
+        applied = self._update(model.residual(np.asarray(msg.pos_ne_m, dtype=float), model.function(self._x[POS])),
+                               H, model.covar(), None)
+        if np.isfinite(msg.heading_err_rad) and np.isfinite(msg.heading_var_rad2) and msg.heading_var_rad2 > 0.0:
+            # the features were placed with heading psi_m - b, rotated by b_true - b from the truth:
+            # the error measures the heading bias state, residual = the error itself
+            H = np.zeros((1, N_STATES))
+            H[0, 5] = 1.0
+            self._update(np.array([float(msg.heading_err_rad)]), H, np.array([[float(msg.heading_var_rad2)]]), None)
+        return applied
 
     def message_handlers(self) -> dict[type, Callable[[Any], Any]]:
         """Message type -> the method that fuses it (what a message bus dispatches on)."""

@@ -180,8 +180,10 @@ def test_wall_fix_is_unaffected_by_a_heading_error_rotating_the_sweep():
     placed = est_p + (pts - true_p) @ R.T
     loc = MsisLocalizer(MsisLocalizationConfig(method="walls", tank_size_ne_m=(20.0, 10.0)), rng)
     nav = NavEstimate(0.0, np.array([*est_p, 2.0]), np.zeros(3), np.zeros(3), np.zeros(3), np.eye(3))
-    pos, cov = loc._walls_fix(placed, nav)
+    pos, cov, (heading_err, heading_var) = loc._walls_fix(placed, nav)
     assert np.linalg.norm(pos - true_p) < 0.05
+    # the walls' known directions give the heading error the sweep was placed with
+    assert math.degrees(heading_err) == pytest.approx(1.5, abs=0.2) and 0 < heading_var < math.radians(0.5) ** 2
     assert sorted(loc.last_walls) == [0, 1, 2, 3]
     for i, s in loc.last_walls.items():  # one fused estimate per wall, turned by the heading error
         assert abs(abs(math.degrees(math.remainder(s.theta_rad - [0, np.pi, np.pi / 2, -np.pi / 2][i], 2 * np.pi))) - 1.5) < 0.5
