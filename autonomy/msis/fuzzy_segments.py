@@ -145,6 +145,14 @@ class FuzzySegment:
             rho, theta = -rho, float(wrap_angle(theta + math.pi))
         return replace(self, theta_rad=theta, rho_m=rho, end_a=self.end_a + off, end_b=self.end_b + off)
 
+    def rotated(self, angle_rad: float) -> "FuzzySegment":
+        """The segment turned by ``angle_rad`` about its frame's origin (north towards east):
+        ``theta + angle``, rho unchanged, ends rotated."""
+        c, s_ = math.cos(angle_rad), math.sin(angle_rad)
+        R = np.array([[c, -s_], [s_, c]])
+        return replace(self, theta_rad=float(wrap_angle(self.theta_rad + angle_rad)), end_a=R @ self.end_a,
+                       end_b=R @ self.end_b)
+
     def oriented_like(self, other: "FuzzySegment") -> "FuzzySegment":
         """The same line with its normal on ``other``'s side (``theta + pi``, ``-rho`` if needed)."""
         if self.normal @ other.normal >= 0.0:
@@ -228,6 +236,11 @@ class FuzzySegmentMap:
         g0 = self.motion_growth * float(np.hypot(*delta)) + self.age_growth_mps * max(float(dt_s), 0.0)
         self.segments = [s.shifted(-delta).grown(g0 / 1.96, g0) for s in self.segments]
         self.segments = [s for s in self.segments if s.area_m <= self.max_area_m]
+
+    def rotate(self, angle_rad: float) -> None:
+        """Turn every segment by ``angle_rad`` about the vehicle (a correction of the heading the
+        map was built with)."""
+        self.segments = [s.rotated(angle_rad) for s in self.segments]
 
     def _best_match(self, seg: FuzzySegment, skip: int = -1) -> int:
         best, best_deg = -1, -1.0

@@ -30,7 +30,10 @@ in the navigation frame. Then:
   heading error of the estimate the sweep was placed with (``wall_heading_fix``): the mean of
   the wall estimates' signed angles from their walls' normals, weights ``1 / sigma_theta^2``
   (the fits' own angle sigmas), variance ``1 / sum(w)`` plus ``wall_heading_sigma_floor_deg``
-  squared (the map's segments are not independent from fix to fix).
+  squared (the map's segments are not independent from fix to fix). The navigation filter
+  then turns its heading by the scalar Kalman gain ``g = P_psi / (P_psi + var)`` times that
+  error (``P_psi`` the estimate's heading variance), so the map is turned by ``-g`` times it
+  about the vehicle to stay in the corrected heading.
 """
 
 from __future__ import annotations
@@ -231,4 +234,6 @@ class MsisLocalizer:
         if cfg.wall_heading_fix:
             heading = (float(np.average(ang, weights=w_ang)),
                        1.0 / float(np.sum(w_ang)) + math.radians(cfg.wall_heading_sigma_floor_deg) ** 2)
+            p_psi = max(float(nav.cov_yaw_rad2), 0.0)
+            self.map.rotate(-heading[0] * p_psi / (p_psi + heading[1]))
         return p + d, cov, heading

@@ -79,3 +79,12 @@ def test_a_new_segment_fuses_with_the_best_matching_one_and_opposite_normals_are
     m.add(new)
     assert len(m.segments) == 2 and m.segments[0].rho_m == 5.0
     assert m.segments[1].theta_rad == 0.0 and m.segments[1].rho_m == pytest.approx(5.35)
+
+
+def test_rotating_the_map_turns_normals_and_ends_about_the_vehicle_and_keeps_rho():
+    m = FuzzySegmentMap()
+    m.add(_seg(5.0, -1.0, 1.0))
+    m.rotate(math.pi / 2)  # x = 5 becomes y = 5
+    (s,) = m.segments
+    assert s.theta_rad == pytest.approx(math.pi / 2) and s.rho_m == 5.0
+    assert np.allclose(s.end_a, [1.0, 5.0]) and np.allclose(s.end_b, [-1.0, 5.0])
