@@ -1,7 +1,7 @@
 """Surge/sway speed model of the vehicle from its commanded force (DVL-free dead reckoning).
 
-Per horizontal body axis ``m dv/dt = F - d_lin v - d_quad v |v|`` ([vonBenzon2022] for the
-BlueROV2 Heavy's coefficients; Fossen's decoupled surge/sway model without Coriolis terms),
+Per horizontal body axis ``m dv/dt = F - d_lin v - d_quad v |v|`` ([Fossen2021]: decoupled
+surge and sway without Coriolis terms; [vonBenzon2022] for the BlueROV2 Heavy's coefficients),
 integrated with the semi-implicit step ``v' = (m v + F dt) / (m + (d_lin + d_quad |v|) dt)``
 (stable for any step, exact at the steady state ``F = d_lin v + d_quad v |v|``). What the
 model leaves out (thruster dynamics, dead zone and saturation, coupling in turns, currents)
