@@ -1,7 +1,8 @@
 """Localisation error of a scanning-sonar mission against dead reckoning in the same run.
 
 :class:`LocalizationErrorObserver` feeds a second navigation filter with every message the
-mission's filter gets except the sonar position fixes (:class:`autonomy.messages.PositionFixMsg`):
+mission's filter gets except the sonar position fixes (:class:`autonomy.messages.PositionFixMsg`),
+the commanded wrench (for a DVL-free filter's speed model) taken from each step record:
 the dead reckoning of the same run, same sensor noise, same path. At each step it records the
 horizontal error of both against the true body position.
 """
