@@ -4,6 +4,12 @@
 the scene tests step. Per physics step (:meth:`Physics.step`): the thrusters and the
 hydrodynamic wrench are updated with the present current (:meth:`VehicleDynamics.step_inputs`),
 MuJoCo integrates one step, the clock advances and the current evolves.
+
+More than one vehicle: the scenario's ``vehicle`` is the AUV (``physics.vehicle``, the
+default of every readout); ``scenario.vehicles`` adds surface vessels
+(:class:`sim.surface_vessel.SurfaceVesselDynamics`) stepped on the same clock in the same
+current, each holding the thruster command last given with :meth:`Physics.set_command`.
+``physics.vehicles`` maps ``"auv"`` and each extra name to its dynamics.
 """
 
 from __future__ import annotations
@@ -23,7 +29,8 @@ from sim.sensors.raycast import MujocoRayCaster
 from sim.truth import VehicleTruth
 from sim.vehicle import VehicleDynamics
 from sim.movers import MovingBodies
-from sim.vehicle_params import VehicleParams, load_vehicle_params
+from sim.surface_vessel import SurfaceVesselDynamics
+from sim.vehicle_params import VehicleParams, load_params_file, load_vehicle_params, params_path
 from sim.world import SceneObject, World, build_world
 
 FloatArray = NDArray[np.float64]
@@ -40,7 +47,9 @@ class Physics:
         world: compiled scene and its tables (objects, seabed, hull sites).
         model, data: the MuJoCo model and data.
         params: the vehicle's parameters.
-        vehicle: the vehicle dynamics bound to ``model`` / ``data``.
+        vehicle: the AUV's dynamics bound to ``model`` / ``data``.
+        extras: name -> dynamics of each extra vehicle (``scenario.vehicles``), in order.
+        vehicles: ``{"auv": vehicle, **extras}``.
         current: the water current acting on the vehicle.
         movers: the moving targets (mocap bodies) and their seeded trajectories.
         caster: ray caster over the acoustic geoms (the hull excluded).
@@ -57,6 +66,12 @@ class Physics:
         self.caster = MujocoRayCaster(self.model, self.data, self.world.geom_object_id,
                                       self.world.geom_reflectivity, self.world.vehicle_body_id)
         self.vehicle = VehicleDynamics(self.model, self.data, self.params, None, body_id=self.world.vehicle_body_id)
+        self.extras: dict[str, SurfaceVesselDynamics] = {
+            name: SurfaceVesselDynamics(self.model, self.data, load_params_file(params_path(cfg.preset)),
+                                        self.world.extra_body_ids[name])
+            for name, cfg in scenario.vehicles.items()}
+        self.vehicles: dict[str, VehicleDynamics | SurfaceVesselDynamics] = {"auv": self.vehicle, **self.extras}
+        self._extra_list = tuple(self.extras.values())
         self.current: OceanCurrent
         self.reseed(scenario.seed if seed is None else seed)
         self._moving = self._moving_objects()
@@ -77,14 +92,20 @@ class Physics:
         """
         self.current = OceanCurrent(cfg, rng)
         self.vehicle.set_current(self.current)
+        for extra in self._extra_list:
+            extra.set_current(self.current)
         return self.current
 
     def reset(self, pos_ned: ArrayLike, rpy_rad: ArrayLike) -> None:
         """Clock to 0, MuJoCo state cleared, vehicle at rest at ``pos_ned`` (m, NED) with
-        attitude ``rpy_rad``, current back to its mean."""
+        attitude ``rpy_rad``, current back to its mean; extra vehicles at rest at their
+        configured starts (``initial_pos_ne_m``, ``initial_heading_deg``), commands zero."""
         mujoco.mj_resetData(self.model, self.data)
         self.current.reset()
         self.vehicle.reset(pos_ned, rpy_rad)
+        for name, extra in self.extras.items():
+            cfg = self.scenario.vehicles[name]
+            extra.reset(cfg.initial_pos_ne_m, np.deg2rad(cfg.initial_heading_deg))
         if self.movers:
             self.movers.apply(self.data, 0.0)
         mujoco.mj_forward(self.model, self.data)
@@ -92,8 +113,11 @@ class Physics:
 
     # ------------------------------------------------------------------ stepping
     def step(self, thruster_cmd: ArrayLike) -> None:
-        """One physics step with normalised thruster commands (n_thr,) in [-1, 1]."""
+        """One physics step with the AUV's normalised thruster commands (n_thr,) in [-1, 1]
+        (extra vehicles: their held commands)."""
         self.vehicle.step_inputs(thruster_cmd, self.dt_s)
+        for extra in self._extra_list:
+            extra.step_inputs(self.dt_s)
         if self.movers:
             self.movers.apply(self.data, self.t_s)
         mujoco.mj_step(self.model, self.data)
@@ -101,14 +125,17 @@ class Physics:
         self.current.step(self.dt_s)
 
     def advance(self, thruster_cmd: ArrayLike, n_steps: int) -> bool:
-        """``n_steps`` physics steps holding ``thruster_cmd``; True if the vehicle touched
-        anything on any of them."""
+        """``n_steps`` physics steps holding the AUV's ``thruster_cmd`` (extra vehicles: their
+        held commands); True if the AUV touched anything on any of them."""
         step_inputs, mj_step, current_step = self.vehicle.step_inputs, mujoco.mj_step, self.current.step
         model, data, dt = self.model, self.data, self.dt_s
         contact = False
         movers = self.movers if self.movers else None
+        extras = self._extra_list
         for _ in range(n_steps):
             step_inputs(thruster_cmd, dt)
+            for extra in extras:
+                extra.step_inputs(dt)
             if movers is not None:
                 movers.apply(data, self.t_s)
             mj_step(model, data)
@@ -119,9 +146,30 @@ class Physics:
         return contact
 
     # ------------------------------------------------------------------ readouts
-    def truth(self) -> VehicleTruth:
-        """True vehicle state now."""
-        return self.vehicle.truth(self.t_s)
+    def set_command(self, name: str, thruster_cmd: ArrayLike) -> None:
+        """Hold normalised thruster commands for extra vehicle ``name`` from the next step on.
+
+        Raises:
+            KeyError: no extra vehicle of that name (the AUV's commands go to :meth:`step`).
+            ValueError: wrong number of commands.
+        """
+        self._extra(name).set_command(thruster_cmd)
+
+    def truth(self, name: str = "auv") -> VehicleTruth:
+        """True state now of the AUV (default) or of the extra vehicle ``name``.
+
+        Raises:
+            KeyError: unknown vehicle name.
+        """
+        if name == "auv":
+            return self.vehicle.truth(self.t_s)
+        return self._extra(name).truth(self.t_s)
+
+    def _extra(self, name: str) -> SurfaceVesselDynamics:
+        try:
+            return self.extras[name]
+        except KeyError:
+            raise KeyError(f"no vehicle {name!r}; vehicles: {', '.join(self.vehicles)}") from None
 
     def scene(self) -> SceneView:
         """What sensors see now: the ray caster and the scene objects at their present poses
@@ -144,7 +192,7 @@ class Physics:
         return tuple(objs)
 
     def vehicle_in_contact(self) -> bool:
-        """True when a contact involves the vehicle body."""
+        """True when a contact involves the AUV's body."""
         body = self.model.geom_bodyid
         vb = self.world.vehicle_body_id
         for i in range(self.data.ncon):
@@ -152,6 +200,19 @@ class Physics:
             if body[c.geom1] == vb or body[c.geom2] == vb:
                 return True
         return False
+
+    def vehicles_in_contact(self) -> list[tuple[str, str]]:
+        """Pairs of vehicle names (``"auv"`` and the extras) whose hulls touch now."""
+        body_name = {self.world.vehicle_body_id: "auv"}
+        body_name.update({bid: name for name, bid in self.world.extra_body_ids.items()})
+        body = self.model.geom_bodyid
+        pairs = set()
+        for i in range(self.data.ncon):
+            c = self.data.contact[i]
+            a, b = body_name.get(int(body[c.geom1])), body_name.get(int(body[c.geom2]))
+            if a is not None and b is not None and a != b:
+                pairs.add(tuple(sorted((a, b))))
+        return sorted(pairs)
 
     def site_pos_body(self, name: str) -> FloatArray:
         """(3,) FRD offset of hull site ``name`` from the body origin, m. Raises ``KeyError``."""
