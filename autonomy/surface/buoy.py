@@ -5,8 +5,8 @@ the buoy's USBL fixes) at a horizontal offset.
 compass reading that arrived since the last tick and, when following, the latest position of
 the followed vehicle; it returns normalised thruster commands. Guidance and control are in
 :class:`autonomy.surface.config.SurfaceAutonomyConfig`: position loop -> velocity demand
-(+ the followed point's velocity), PI velocity loop + surge-drag feedforward -> NED force,
-heading along the low-passed force (weathervaning in a hold; Fossen 2021, sec. 11.2.4,
+(+ the followed point's velocity), velocity loop with an integral of the position error + surge-drag feedforward -> NED force,
+heading along the low-passed steady force, drag feedforward + integral (weathervaning in a hold; Fossen 2021, sec. 11.2.4,
 dynamic positioning with weather-optimal heading), yaw PD (critically damped second order).
 """
 
@@ -19,11 +19,11 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from autonomy.control.allocation import ThrustAllocator, ThrusterLayout
+from autonomy.control.allocation import ThrustAllocator, ThrusterLayout, command_to_thrust
 from autonomy.frames import wrap_angle
 from autonomy.messages import GpsMsg, ImuMsg
 from autonomy.surface.config import SurfaceAutonomyConfig
-from autonomy.surface.navigation import GnssVelocityFilter
+from autonomy.surface.navigation import GnssDisturbanceFilter
 
 FloatArray = NDArray[np.float64]
 BEHAVIOURS = ("station_keep", "follow")
@@ -55,7 +55,8 @@ class SurfaceAutonomy:
         # Surge, sway and yaw only: the vessel is held level, so roll/pitch moments of the
         # thrusters act on nothing.
         self.allocator = ThrustAllocator.from_layout(layout, dof_weights=(1.0, 1.0, 0.0, 0.0, 0.0, 1.0))
-        self.nav = GnssVelocityFilter(cfg.navigation, initial_speed_sigma_mps=cfg.max_speed_mps)
+        self.nav = GnssDisturbanceFilter(cfg.navigation, cfg.model_mass_kg, cfg.model_drag_linear_n_per_mps,
+                                         cfg.model_drag_quadratic_n_per_mps2, initial_speed_sigma_mps=cfg.max_speed_mps)
         self.reset()
 
     def reset(self) -> None:
@@ -121,6 +122,7 @@ class SurfaceAutonomy:
         n_thr = self.allocator.config_matrix.shape[1]
         if compass is None or goal is None or not self.nav.valid(t_s):
             self.wrench_body = np.zeros(6)
+            self.nav.set_input((0.0, 0.0), 0.0 if compass is None else float(compass.rpy_rad[2]))
             return np.zeros(n_thr)
         point, point_vel = goal
         self.goal_ne_m = point.copy()
@@ -131,16 +133,19 @@ class SurfaceAutonomy:
             v_d *= cfg.max_speed_mps / speed
             speed = cfg.max_speed_mps
         ev = v_d - vel
-        self._integral += cfg.ki_vel_per_s2 * ev * dt
+        self._integral += cfg.ki_pos_per_s3 * (point - pos) * dt
         mag = float(np.hypot(*self._integral))
         if mag > cfg.integral_limit_mps2:
             self._integral *= cfg.integral_limit_mps2 / mag
-        drag = cfg.drag_linear_n_per_mps * speed + cfg.drag_quadratic_n_per_mps2 * speed * speed
-        force_ned = cfg.mass_kg * (cfg.k_vel_per_s * ev + self._integral)
+        mass = cfg.model_mass_kg[0]
+        drag = cfg.model_drag_linear_n_per_mps[0] * speed + cfg.model_drag_quadratic_n_per_mps2[0] * speed * speed
+        # The slow part: the estimated disturbance (current drag), the integral, the drag feedforward.
+        steady_ned = mass * (self._integral - self.nav.disturbance_ne_mps2)
         if speed > 0.0:
-            force_ned += drag * v_d / speed
+            steady_ned = steady_ned + drag * v_d / speed
+        force_ned = steady_ned + mass * cfg.k_vel_per_s * ev
         alpha = 1.0 - math.exp(-dt / cfg.force_filter_tau_s) if dt > 0.0 else 1.0
-        self._force_lp += alpha * (force_ned - self._force_lp)
+        self._force_lp += alpha * (steady_ned - self._force_lp)
         heading = float(compass.rpy_rad[2])
         if float(np.hypot(*self._force_lp)) > cfg.min_heading_force_n:
             self._heading_sp = math.atan2(self._force_lp[1], self._force_lp[0])
@@ -153,4 +158,8 @@ class SurfaceAutonomy:
         yaw_err = float(wrap_angle(self._heading_sp - heading))
         n_moment = cfg.yaw_inertia_kgm2 * (wn * wn * yaw_err - 2.0 * zeta * wn * float(compass.rate_body_radps[2]))
         self.wrench_body = np.array([fx, fy, 0.0, 0.0, 0.0, n_moment])
-        return self.allocator.allocate(self.wrench_body)
+        cmd = self.allocator.allocate(self.wrench_body)
+        # What the thrusters will deliver (saturation included) is the filter's input.
+        achieved = self.allocator.config_matrix @ command_to_thrust(cmd, self.allocator.layout)
+        self.nav.set_input(achieved[:2], heading)
+        return cmd
