@@ -53,7 +53,8 @@ class SurfaceVehicleRunner:
                                                component_rng(seed, f"vehicles.{name}.{entry}"))
         station = cfg.initial_pos_ne_m if cfg.station_ne_m is None else cfg.station_ne_m
         self.autonomy = SurfaceAutonomy(cfg.autonomy, params.layout, behaviour=cfg.behaviour,
-                                        station_ne_m=station, offset_ne_m=cfg.offset_ne_m)
+                                        station_ne_m=station, offset_ne_m=cfg.offset_m,
+                                        offset_frame=cfg.offset_frame)
         self.reset()
 
     def reset(self) -> None:

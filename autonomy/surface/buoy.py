@@ -27,6 +27,7 @@ from autonomy.surface.navigation import GnssDisturbanceFilter
 
 FloatArray = NDArray[np.float64]
 BEHAVIOURS = ("station_keep", "follow")
+OFFSET_FRAMES = ("track", "ned")
 
 
 class SurfaceAutonomy:
@@ -36,25 +37,33 @@ class SurfaceAutonomy:
         cfg: gains and limits.
         layout: the vessel's thrusters (allocation of [X, Y, 0, 0, 0, N]).
         behaviour: ``station_keep`` (hold ``station_ne_m``) or ``follow`` (hold
-            ``target + offset_ne_m``).
+            ``target + offset``).
         station_ne_m: (2,) NED north/east point held in ``station_keep``, m.
-        offset_ne_m: (2,) NED north/east offset from the followed point, m.
+        offset_ne_m: (2,) offset from the followed point, m: ``track`` frame (default):
+            (along, across) its course (estimated from its successive positions; (-5, 0) is 5 m
+            behind it); ``ned`` frame: (north, east).
+        offset_frame: ``track`` or ``ned``.
 
     Raises:
-        ValueError: unknown behaviour.
+        ValueError: unknown behaviour or offset frame.
     """
 
     def __init__(self, cfg: SurfaceAutonomyConfig, layout: ThrusterLayout, *,
                  behaviour: Literal["station_keep", "follow"] = "station_keep",
-                 station_ne_m: ArrayLike = (0.0, 0.0), offset_ne_m: ArrayLike = (0.0, 0.0)) -> None:
+                 station_ne_m: ArrayLike = (0.0, 0.0), offset_ne_m: ArrayLike = (0.0, 0.0),
+                 offset_frame: Literal["track", "ned"] = "track") -> None:
         if behaviour not in BEHAVIOURS:
             raise ValueError(f"behaviour must be one of {BEHAVIOURS}, got {behaviour!r}")
         self.cfg, self.behaviour = cfg, behaviour
         self.station_ne_m = np.asarray(station_ne_m, dtype=float).reshape(2)
+        if offset_frame not in OFFSET_FRAMES:
+            raise ValueError(f"offset_frame must be one of {OFFSET_FRAMES}, got {offset_frame!r}")
         self.offset_ne_m = np.asarray(offset_ne_m, dtype=float).reshape(2)
-        # Surge, sway and yaw only: the vessel is held level, so roll/pitch moments of the
-        # thrusters act on nothing.
-        self.allocator = ThrustAllocator.from_layout(layout, dof_weights=(1.0, 1.0, 0.0, 0.0, 0.0, 1.0))
+        self.offset_frame = offset_frame
+        # Surge, sway and yaw only (the vessel is held level: roll/pitch moments of the
+        # thrusters act on nothing); yaw weighted up so that, in saturation, the heading is
+        # kept and translation gives way (else the vessel crabs at a wrong heading).
+        self.allocator = ThrustAllocator.from_layout(layout, dof_weights=(1.0, 1.0, 0.0, 0.0, 0.0, 25.0))
         self.nav = GnssDisturbanceFilter(cfg.navigation, cfg.model_mass_kg, cfg.model_drag_linear_n_per_mps,
                                          cfg.model_drag_quadratic_n_per_mps2, initial_speed_sigma_mps=cfg.max_speed_mps)
         self.reset()
@@ -68,6 +77,7 @@ class SurfaceAutonomy:
         self._target: FloatArray | None = None
         self._target_t_s = -math.inf
         self._target_vel = np.zeros(2)
+        self._course_rad = 0.0
         self.goal_ne_m: FloatArray | None = None
         self.wrench_body = np.zeros(6)
 
@@ -86,6 +96,8 @@ class SurfaceAutonomy:
         alpha = 1.0 - math.exp(-dt / self.cfg.target_filter_tau_s)
         self._target_vel += alpha * ((p - self._target) / dt - self._target_vel)
         self._target, self._target_t_s = p.copy(), t_s
+        if float(np.hypot(*self._target_vel)) >= self.cfg.min_course_speed_mps:
+            self._course_rad = math.atan2(self._target_vel[1], self._target_vel[0])
 
     def goal(self) -> tuple[FloatArray, FloatArray] | None:
         """Point to hold (2,) and its velocity (2,), NED, or None (following, no target yet)."""
@@ -93,7 +105,11 @@ class SurfaceAutonomy:
             return self.station_ne_m, np.zeros(2)
         if self._target is None:
             return None
-        return self._target + self.offset_ne_m, self._target_vel
+        offset = self.offset_ne_m
+        if self.offset_frame == "track":  # (along, across) the followed point's course
+            c, s = math.cos(self._course_rad), math.sin(self._course_rad)
+            offset = np.array([c * offset[0] - s * offset[1], s * offset[0] + c * offset[1]])
+        return self._target + offset, self._target_vel
 
     # ------------------------------------------------------------------ the tick
     def update(self, t_s: float, gnss: Sequence[GpsMsg] = (), compass: ImuMsg | None = None,
@@ -129,11 +145,13 @@ class SurfaceAutonomy:
         pos, vel = self.nav.pos_ne_m, self.nav.vel_ne_mps
         v_d = cfg.k_pos_per_s * (point - pos) + point_vel
         speed = float(np.hypot(*v_d))
-        if speed > cfg.max_speed_mps:
+        saturated = speed > cfg.max_speed_mps
+        if saturated:
             v_d *= cfg.max_speed_mps / speed
             speed = cfg.max_speed_mps
         ev = v_d - vel
-        self._integral += cfg.ki_pos_per_s3 * (point - pos) * dt
+        if not saturated:  # anti-windup: no integral while catching up at full speed
+            self._integral += cfg.ki_pos_per_s3 * (point - pos) * dt
         mag = float(np.hypot(*self._integral))
         if mag > cfg.integral_limit_mps2:
             self._integral *= cfg.integral_limit_mps2 / mag

@@ -35,11 +35,11 @@ class SurfaceAutonomyConfig(StrictModel):
     """
 
     rate_hz: float = Field(10.0, gt=0.0, le=100.0)
-    max_speed_mps: PositiveFloat = Field(0.55, le=5.0, description="ground-speed demand limit")
+    max_speed_mps: PositiveFloat = Field(0.6, le=5.0, description="ground-speed demand limit")
     k_pos_per_s: PositiveFloat = Field(0.15, le=5.0, description="position error -> velocity demand")
     k_vel_per_s: PositiveFloat = Field(0.8, le=20.0, description="velocity error -> acceleration demand")
     ki_pos_per_s3: float = Field(0.01, ge=0.0, le=10.0, description="integral of the position error -> acceleration")
-    integral_limit_mps2: PositiveFloat = Field(0.3, le=10.0, description="max |integral acceleration|")
+    integral_limit_mps2: PositiveFloat = Field(0.1, le=10.0, description="max |integral acceleration|")
     model_mass_kg: tuple[PositiveFloat, PositiveFloat] = Field(
         (40.0, 59.7), description="surge, sway mass + added mass (filter input, force scaling)")
     model_drag_linear_n_per_mps: tuple[NonNegFloat, NonNegFloat] = Field(
@@ -51,5 +51,6 @@ class SurfaceAutonomyConfig(StrictModel):
     yaw_bandwidth_radps: PositiveFloat = Field(0.8, le=20.0)
     yaw_damping_ratio: PositiveFloat = Field(1.0, le=5.0)
     min_heading_force_n: PositiveFloat = Field(1.0, le=1e4, description="below it the heading setpoint is kept")
+    min_course_speed_mps: PositiveFloat = Field(0.1, le=5.0, description="slower: the followed course is kept")
     target_filter_tau_s: PositiveFloat = Field(3.0, le=120.0, description="smoothing of the followed point's velocity")
     navigation: SurfaceNavigationConfig = SurfaceNavigationConfig()

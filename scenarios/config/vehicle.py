@@ -44,7 +44,8 @@ class SurfaceVehicleConfig(StrictModel):
     parameter file in ``sim/assets``) with its GNSS, compass and autonomy.
 
     ``behaviour``: ``station_keep`` holds ``station_ne_m`` (default: the start point);
-    ``follow`` holds the AUV's position plus ``offset_ne_m`` (north, east, m).
+    ``follow`` holds the AUV's position plus ``offset_m``: (along, across) the AUV's course
+    with ``offset_frame: track`` ((-5, 0): 5 m behind it), (north, east) with ``ned``.
     """
 
     preset: Literal["surface_buoy"] = "surface_buoy"
@@ -52,7 +53,8 @@ class SurfaceVehicleConfig(StrictModel):
     initial_heading_deg: float = Field(0.0, ge=-360.0, le=360.0)
     behaviour: Literal["station_keep", "follow"] = "station_keep"
     station_ne_m: Vec2 | None = None
-    offset_ne_m: Vec2 = (-5.0, 0.0)
+    offset_m: Vec2 = (-5.0, 0.0)
+    offset_frame: Literal["track", "ned"] = "track"
     gnss: GpsConfig = GpsConfig(noise_m=0.7, dropout_prob=0.0)
     compass: ImuConfig = ImuConfig(rate_hz=10.0, heading_source="ahrs")
     autonomy: SurfaceAutonomyConfig = SurfaceAutonomyConfig()
