@@ -8,7 +8,8 @@ MuJoCo integrates one step, the clock advances and the current evolves.
 More than one vehicle: the scenario's ``vehicle`` is the AUV (``physics.vehicle``, the
 default of every readout); ``scenario.vehicles`` adds surface vessels
 (:class:`sim.surface_vessel.SurfaceVesselDynamics`) stepped on the same clock in the same
-current, each holding the thruster command last given with :meth:`Physics.set_command`.
+current, each holding the thruster command last given with :meth:`Physics.set_command`;
+their forces are updated at :data:`EXTRA_WRENCH_RATE_HZ` and held in between.
 ``physics.vehicles`` maps ``"auv"`` and each extra name to its dynamics.
 """
 
@@ -34,6 +35,8 @@ from sim.vehicle_params import VehicleParams, load_params_file, load_vehicle_par
 from sim.world import SceneObject, World, build_world
 
 FloatArray = NDArray[np.float64]
+#: Rate at which surface vessels' hydrodynamic and thruster forces are updated, Hz.
+EXTRA_WRENCH_RATE_HZ = 50.0
 
 
 class Physics:
@@ -72,6 +75,12 @@ class Physics:
             for name, cfg in scenario.vehicles.items()}
         self.vehicles: dict[str, VehicleDynamics | SurfaceVesselDynamics] = {"auv": self.vehicle, **self.extras}
         self._extra_list = tuple(self.extras.values())
+        # Surface vessels' wrench: updated every `_extra_every` physics steps (at about
+        # EXTRA_WRENCH_RATE_HZ) and held in between; their fastest mode (rotor lag 0.2 s,
+        # damping time constants ~1 s) is well resolved at that rate.
+        self._extra_every = max(1, int(round(1.0 / (self.dt_s * EXTRA_WRENCH_RATE_HZ))))
+        self._extra_dt_s = self._extra_every * self.dt_s
+        self._extra_count = 0
         self.current: OceanCurrent
         self.reseed(scenario.seed if seed is None else seed)
         self._moving = self._moving_objects()
@@ -106,6 +115,7 @@ class Physics:
         for name, extra in self.extras.items():
             cfg = self.scenario.vehicles[name]
             extra.reset(cfg.initial_pos_ne_m, np.deg2rad(cfg.initial_heading_deg))
+        self._extra_count = 0
         if self.movers:
             self.movers.apply(self.data, 0.0)
         mujoco.mj_forward(self.model, self.data)
@@ -116,8 +126,8 @@ class Physics:
         """One physics step with the AUV's normalised thruster commands (n_thr,) in [-1, 1]
         (extra vehicles: their held commands)."""
         self.vehicle.step_inputs(thruster_cmd, self.dt_s)
-        for extra in self._extra_list:
-            extra.step_inputs(self.dt_s)
+        if self._extra_list:
+            self._step_extras()
         if self.movers:
             self.movers.apply(self.data, self.t_s)
         mujoco.mj_step(self.model, self.data)
@@ -131,11 +141,11 @@ class Physics:
         model, data, dt = self.model, self.data, self.dt_s
         contact = False
         movers = self.movers if self.movers else None
-        extras = self._extra_list
+        step_extras = self._step_extras if self._extra_list else None
         for _ in range(n_steps):
             step_inputs(thruster_cmd, dt)
-            for extra in extras:
-                extra.step_inputs(dt)
+            if step_extras is not None:
+                step_extras()
             if movers is not None:
                 movers.apply(data, self.t_s)
             mj_step(model, data)
@@ -144,6 +154,14 @@ class Physics:
             if data.ncon and not contact:
                 contact = self.vehicle_in_contact()
         return contact
+
+    def _step_extras(self) -> None:
+        """Update the extra vehicles' joint forces on every ``_extra_every``-th step (held
+        by MuJoCo in ``qfrc_applied`` in between), their rotors advanced by the whole hold."""
+        if self._extra_count == 0:
+            for extra in self._extra_list:
+                extra.step_inputs(self._extra_dt_s)
+        self._extra_count = (self._extra_count + 1) % self._extra_every
 
     # ------------------------------------------------------------------ readouts
     def set_command(self, name: str, thruster_cmd: ArrayLike) -> None:

@@ -7,8 +7,9 @@ only sits at its hydrostatic equilibrium in those DOFs, and their stiff restorin
 (heave period ~0.5 s for a 37 kg hull on ~0.5 m^2 of waterplane) would add nothing but cost
 and step-size trouble.
 
-Equations (Fossen 2021, *Handbook of Marine Craft Hydrodynamics and Motion Control*, 2nd
-ed., eqs. 6.100-6.103, the 3-DOF manoeuvring model with the current: ``nu_r = nu - nu_c``)::
+Equations ([Fossen2021-3DOF] in ``docs/references.md``: Fossen 2021, *Handbook of Marine
+Craft Hydrodynamics and Motion Control*, 2nd ed., ch. 6-7, the 3-DOF manoeuvring model with
+the current: ``nu_r = nu - nu_c``)::
 
     M_RB nu_dot + C_RB(nu) nu + M_A nu_r_dot + C_A(nu_r) nu_r + D(nu_r) nu_r = tau
     nu = [u, v, r] (FRD, over ground), M_RB = diag(m, m, I_z), M_A = diag(X_udot, Y_vdot, N_rdot)

@@ -5,9 +5,11 @@ the buoy's USBL fixes) at a horizontal offset.
 compass reading that arrived since the last tick and, when following, the latest position of
 the followed vehicle; it returns normalised thruster commands. Guidance and control are in
 :class:`autonomy.surface.config.SurfaceAutonomyConfig`: position loop -> velocity demand
-(+ the followed point's velocity), velocity loop with an integral of the position error + surge-drag feedforward -> NED force,
-heading along the low-passed steady force, drag feedforward + integral (weathervaning in a hold; Fossen 2021, sec. 11.2.4,
-dynamic positioning with weather-optimal heading), yaw PD (critically damped second order).
+(+ the followed point's velocity), velocity loop with an integral of the position error
++ surge-drag feedforward - estimated disturbance -> NED force, heading along the low-passed steady force, drag feedforward + integral - disturbance
+estimate (weathervaning in a hold, as weather-optimal positioning control does,
+[FossenStrand2001]), yaw PD (critically damped second order). Source: paper 000 section
+VII-B ([P000]) for the buoy's role; the control is ours.
 """
 
 from __future__ import annotations

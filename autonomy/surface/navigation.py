@@ -1,9 +1,9 @@
 """Navigation of a surface vessel from GNSS fixes, a compass and its own thrust: a linear
 Kalman filter per horizontal axis on position, velocity over ground and a disturbance
 acceleration (the current's drag and whatever the thrust model misses), the standard
-dynamic-positioning observer structure with a bias state (Fossen 2021, *Handbook of Marine
-Craft Hydrodynamics and Motion Control*, 2nd ed., sec. 13.3, a Kalman filter for DP with
-the bias modelled as a random walk). Heading and yaw rate are taken from the compass/AHRS
+dynamic-positioning observer structure with a bias state modelled as a random walk
+([Fossen2021-3DOF]: Fossen 2021, *Handbook of Marine Craft Hydrodynamics and Motion
+Control*, 2nd ed., ch. 13). Heading and yaw rate are taken from the compass/AHRS
 as measured.
 
 In NED, with ``R = R(psi)`` the heading rotation, ``M = diag(m_u, m_v)`` the surge and sway
