@@ -17,6 +17,7 @@ from autonomy.navigation.config import NavigationConfig
 from autonomy.tracking.config import TrackingConfig
 from autonomy.world_model.config import WorldModelConfig
 from scenarios.config.base import StrictModel
+from scenarios.config.comms import CommsConfig
 from scenarios.config.outputs import OutputsConfig
 from scenarios.config.sensor import SensorConfig, fill_sensor_entries, sensor_config_kinds
 from scenarios.config.vehicle import SurfaceVehicleConfig, VehicleConfig
@@ -147,6 +148,7 @@ class Scenario(StrictModel):
     vehicles: dict[Annotated[str, Field(pattern=r"^[a-z][a-z0-9_]{0,31}$")], SurfaceVehicleConfig] = {}
     sensors: SensorsConfig = SensorsConfig()
     autonomy: AutonomyConfig = AutonomyConfig()
+    comms: CommsConfig = Field(CommsConfig(), description="channels between vehicles (acoustic modem link)")
     outputs: OutputsConfig = OutputsConfig()
 
     @field_validator("vehicles")
