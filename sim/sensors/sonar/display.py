@@ -72,9 +72,10 @@ class FanRemap:
         Stands in for ``cv2.resize(self.image(polar), (width_px, height_px), INTER_AREA)`` at a
         fraction of the cost: output pixel ``(x, y)`` samples the fan at the same point,
         ``((x + 0.5) W / w - 0.5, (y + 0.5) H / h - 0.5)``, bilinearly from the polar image
-        after a ``k``-bin box average in range, ``k`` the odd number of range bins nearest to
-        the range extent of one output pixel. The area-resized fan averages about as many
-        bins per pixel, so mean, spread and speckle grain come out alike (checked in
+        after a ``k``-bin box average in range, ``k`` the odd number nearest to the bins the
+        area-resized fan mixes into one pixel in range (its bilinear fan pixel interpolates
+        two bins, its area resize averages ``H / h`` fan pixels), so mean, spread and speckle
+        grain come out alike (checked in
         ``tests/sim/sensors/sonar/test_fan_resized.py``); the values are not bit-identical.
         Maps are built once per size. Returns (height_px, width_px) uint8, zero outside the fan.
         """
@@ -93,8 +94,10 @@ class FanRemap:
         ys, xs = np.mgrid[0:height_px, 0:width_px].astype(np.float64)
         sx, sy = fan.width_px / width_px, fan.height_px / height_px
         r, a = fan.pixel_to_polar((xs + 0.5) * sx - 0.5, (ys + 0.5) * sy - 0.5)
-        bins_per_px = fan.m_per_px * sy / self.range_resolution_m
-        k = max(1, 2 * int(round((bins_per_px - 1.0) / 2.0)) + 1)
+        # the oracle's fan pixel interpolates 2 bins (fewer where fan pixels are finer than
+        # bins), and its area resize averages sy fan pixels in range
+        bins_averaged = min(fan.m_per_px / self.range_resolution_m, 2.0) * sy
+        k = max(1, 2 * int(round((bins_averaged - 1.0) / 2.0)) + 1)
         n_groups = len(range(k // 2, self.n_bins, k))
         beam = (a - self.beam_azimuths_rad[0]) / self._beam_step_rad
         rbin = ((r - self.window_near_m) / self.range_resolution_m - 0.5 - 0.5 * (k - 1)) / k
