@@ -68,3 +68,14 @@ def test_frame_uses_the_direct_path_until_its_fan_is_formed(remap):
     assert np.array_equal(frame.fan_resized(*CNN_HW), remap.resized(polar, *CNN_HW))
     assert np.array_equal(frame.fan, remap.image(polar)) and frame.fan_formed
     assert np.array_equal(frame.fan_resized(*CNN_HW), _area(remap, polar))
+
+
+def test_frame_pickles_with_its_fan_formed(remap):
+    import pickle
+
+    polar = np.random.default_rng(2).integers(0, 256, (remap.n_beams, remap.n_bins), dtype=np.uint8)
+    frame = FlsFrame(1.5, polar, geometry=remap.fan, resampler=remap, mount_pos_body_m=np.zeros(3),
+                     mount_rpy_rad=np.zeros(3))
+    back = pickle.loads(pickle.dumps(frame))
+    assert back.fan_formed and back.t_s == 1.5 and np.array_equal(back.fan, remap.image(polar))
+    assert np.array_equal(back.polar, polar) and back.geometry == remap.fan
