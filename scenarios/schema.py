@@ -17,6 +17,7 @@ from autonomy.navigation.config import NavigationConfig
 from autonomy.tracking.config import TrackingConfig
 from autonomy.world_model.config import WorldModelConfig
 from scenarios.config.base import StrictModel
+from scenarios.config.comms import CommsConfig
 from scenarios.config.outputs import OutputsConfig
 from scenarios.config.sensor import SensorConfig, fill_sensor_entries, sensor_config_kinds
 from scenarios.config.vehicle import VehicleConfig
@@ -140,4 +141,5 @@ class Scenario(StrictModel):
     vehicle: VehicleConfig = VehicleConfig()
     sensors: SensorsConfig = SensorsConfig()
     autonomy: AutonomyConfig = AutonomyConfig()
+    comms: CommsConfig = Field(CommsConfig(), description="channels between vehicles (acoustic modem link)")
     outputs: OutputsConfig = OutputsConfig()

@@ -6,6 +6,7 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
+from autonomy.geodesy import GeodeticOrigin
 from scenarios.config.movers import MoverConfig
 from scenarios.config.base import NonNegFloat, PositiveFloat, Probability, StrictModel, Vec2, Vec3
 
@@ -110,6 +111,11 @@ class CurrentConfig(StrictModel):
 
 
 class WorldConfig(StrictModel):
+    """The scene: seabed, walls, targets, movers, current, and where on Earth the mission NED
+    frame sits (``origin``: latitude, longitude, ellipsoidal height; default the CSSN basin,
+    La Spezia; :mod:`autonomy.geodesy`)."""
+
+    origin: GeodeticOrigin = Field(GeodeticOrigin(), description="WGS-84 origin of the mission NED frame")
     seabed: SeabedConfig = SeabedConfig()
     basin: BasinConfig = BasinConfig()
     targets: tuple[TargetConfig, ...] = ()

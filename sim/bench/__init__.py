@@ -16,5 +16,6 @@ BENCHES: dict[str, tuple[str, str, str]] = {
     "tracking": ("sim.bench.tracking", "run", "USBL + sonar target tracker time per 10 Hz tick"),
     "sss": ("sim.bench.sss", "run", "side-scan sonar ping rendering (1000 bins per side)"),
     "msis": ("sim.bench.msis", "run", "scanning sonar pings per second and feature-extraction cost per ping"),
+    "link": ("sim.bench.link", "run", "acoustic modem link and message codec: cost per message and per tick"),
     "atr": ("sim.evaluation.atr_metrics", "bench_atr", "ATR inference frame rate (CNN and classical)"),
 }

@@ -1,0 +1,150 @@
+"""Binary acoustic messages: sizes, round trips within the stated quantisation, rejection of
+truncated and corrupt packets."""
+
+from __future__ import annotations
+
+import binascii
+import math
+
+import numpy as np
+import pytest
+
+from autonomy.comms import wire
+from autonomy.comms.messages import (
+    DETECTION_SIZE_BYTES,
+    USBL_FIX_SIZE_BYTES,
+    DetectionReport,
+    UsblFixReport,
+    decode,
+)
+from autonomy.geodesy import GeodeticOrigin, ned_to_lat_lon_depth
+from autonomy.localization.geolocate import LocalizedDetection
+
+# the bounds stated in autonomy.comms.wire
+T_TOL_S, DEG_TOL, DEPTH_TOL_M, SIGMA_TOL_M, AZ_TOL_RAD, P_TOL = 5e-4, 5e-8, 5e-3, 5e-4, math.pi / 512, 1 / 510
+EPS = 1e-9
+
+
+def _random_cov(rng):
+    a = rng.normal(size=(3, 3)) * rng.uniform(0.05, 3.0, 3)
+    return a @ a.T + 1e-4 * np.eye(3)
+
+
+def _random_detection(rng):
+    return DetectionReport(
+        int(rng.integers(0, 65536)), float(rng.uniform(1.5e9, 2.0e9)), float(rng.uniform(-89.9, 89.9)),
+        float(rng.uniform(-180, 180)), float(rng.uniform(-10, 300)), _random_cov(rng), int(rng.integers(0, 256)),
+        float(rng.random()), float(rng.random()))
+
+
+def _horizontal_bound(cov):
+    """Largest change of the horizontal block the sigma and azimuth quantisation can cause."""
+    w = np.linalg.eigvalsh(cov[:2, :2])
+    s = np.sqrt(np.maximum(w, 0))
+    return 2 * s[1] * SIGMA_TOL_M + SIGMA_TOL_M**2 + (w[1] - w[0]) * AZ_TOL_RAD + EPS
+
+
+def test_sizes_and_crc_check_value():
+    assert wire.crc16(b"123456789") == 0x29B1  # CRC-16/CCITT-FALSE catalogue check value
+    rng = np.random.default_rng(0)
+    assert len(_random_detection(rng).encode()) == DETECTION_SIZE_BYTES == 32
+    fix = UsblFixReport(1, 1.6e9, 44.0, 9.8, 5.0, np.eye(3), 44.001, 9.801)
+    assert len(fix.encode()) == USBL_FIX_SIZE_BYTES == 37
+
+
+def test_detection_round_trip_within_quantisation():
+    rng = np.random.default_rng(1)
+    for _ in range(500):
+        m = _random_detection(rng)
+        d = decode(m.encode())
+        assert isinstance(d, DetectionReport)
+        assert (d.detection_id, d.class_id) == (m.detection_id, m.class_id)
+        assert abs(d.t_unix_s - m.t_unix_s) <= T_TOL_S + 1e-6
+        assert abs(d.lat_deg - m.lat_deg) <= DEG_TOL + EPS and abs(d.lon_deg - m.lon_deg) <= DEG_TOL + EPS
+        assert abs(d.depth_m - m.depth_m) <= DEPTH_TOL_M + EPS
+        assert abs(d.class_prob - m.class_prob) <= P_TOL + EPS and abs(d.reliability - m.reliability) <= P_TOL + EPS
+        # the decoded covariance is the horizontal block and the down variance of the original
+        assert np.max(np.abs(d.cov_ned[:2, :2] - m.cov_ned[:2, :2])) <= _horizontal_bound(m.cov_ned)
+        s_d = math.sqrt(m.cov_ned[2, 2])
+        assert abs(math.sqrt(d.cov_ned[2, 2]) - s_d) <= SIGMA_TOL_M + EPS
+        assert np.all(d.cov_ned[:2, 2] == 0) and np.all(np.linalg.eigvalsh(d.cov_ned) >= 0)
+
+
+def test_usbl_fix_round_trip_and_position_in_metres():
+    origin = GeodeticOrigin()
+    rng = np.random.default_rng(2)
+    for _ in range(200):
+        auv_ned = rng.uniform([-500, -500, 0], [500, 500, 30])
+        buoy = ned_to_lat_lon_depth(auv_ned + rng.uniform([-20, -20, 0], [20, 20, 0]) * [1, 1, 0], origin)
+        lat, lon, depth = ned_to_lat_lon_depth(auv_ned, origin)
+        m = UsblFixReport(int(rng.integers(0, 65536)), float(rng.uniform(1.5e9, 2e9)), lat, lon, depth,
+                          _random_cov(rng), buoy[0], buoy[1])
+        d = decode(m.encode())
+        assert isinstance(d, UsblFixReport) and d.fix_id == m.fix_id
+        # 5e-8 deg is 5.6 mm north and 4 mm east here; depth 5 mm
+        err = d.pos_ned(origin) - auv_ned
+        assert np.hypot(err[0], err[1]) <= 0.0075 and abs(err[2]) <= DEPTH_TOL_M + 1e-6
+        assert abs(d.buoy_lat_deg - m.buoy_lat_deg) <= DEG_TOL + EPS
+        assert abs(d.buoy_lon_deg - m.buoy_lon_deg) <= DEG_TOL + EPS
+        assert np.max(np.abs(d.cov_ned[:2, :2] - m.cov_ned[:2, :2])) <= _horizontal_bound(m.cov_ned)
+
+
+def test_ellipse_summary_against_a_written_out_case():
+    """A 2 m x 0.5 m ellipse with its major axis 30 deg east of north, 0.3 m vertical."""
+    az = math.radians(30.0)
+    u, v = np.array([math.cos(az), math.sin(az)]), np.array([-math.sin(az), math.cos(az)])
+    cov = np.zeros((3, 3))
+    cov[:2, :2] = 4.0 * np.outer(u, u) + 0.25 * np.outer(v, v)
+    cov[2, 2] = 0.09
+    s = wire.CovSummary.from_cov_ned(cov)
+    assert (s.sigma_major_m, s.sigma_minor_m, s.sigma_down_m) == pytest.approx((2.0, 0.5, 0.3))
+    assert s.major_azimuth_rad == pytest.approx(az)
+    big = wire.CovSummary.unpack(wire.CovSummary(1e3, 0.1, 0.0, 1.0).pack(), 0)
+    assert big.sigma_major_m == 65.535  # saturated, not wrapped
+
+
+def test_truncated_and_corrupt_packets_raise_value_error():
+    rng = np.random.default_rng(3)
+    packet = _random_detection(rng).encode()
+    for n in range(len(packet)):
+        with pytest.raises(ValueError, match="acoustic message"):
+            decode(packet[:n])
+    for i in range(len(packet) * 8):  # every single-bit error
+        bad = bytearray(packet)
+        bad[i // 8] ^= 1 << (i % 8)
+        with pytest.raises(ValueError, match="CRC-16 mismatch"):
+            decode(bytes(bad))
+    with pytest.raises(ValueError, match="expected 32"):  # a valid CRC on a padded body
+        body = packet[:-2] + b"\x00"
+        decode(body + binascii.crc_hqx(body, 0xFFFF).to_bytes(2, "big"))
+    with pytest.raises(ValueError, match="protocol version 2"):
+        body = b"\x02" + packet[1:-2]
+        decode(body + binascii.crc_hqx(body, 0xFFFF).to_bytes(2, "big"))
+    with pytest.raises(ValueError, match="unknown type 9"):
+        body = b"\x01\x09" + packet[2:-2]
+        decode(body + binascii.crc_hqx(body, 0xFFFF).to_bytes(2, "big"))
+
+
+def test_encode_rejects_values_out_of_range():
+    m = DetectionReport(1, 1.6e9, 44.0, 9.8, 5.0, np.eye(3), 0, 0.5, 0.5)
+    for field, value, match in [("depth_m", 400.0, "depth_m = 400.0"), ("detection_id", 70000, "message id"),
+                                ("reliability", 1.5, "reliability"), ("lat_deg", float("nan"), "lat_deg"),
+                                ("cov_ned", np.ones((2, 2)), "cov_ned"), ("class_id", 256, "class_id"),
+                                ("t_unix_s", -1.0, "t_unix_s")]:
+        kwargs = {f: getattr(m, f) for f in DetectionReport.__dataclass_fields__} | {field: value}
+        with pytest.raises(ValueError, match=match):
+            DetectionReport(**kwargs).encode()
+
+
+def test_localized_detection_through_the_message():
+    origin, epoch = GeodeticOrigin(), 1_602_000_000.0
+    cov = np.diag([0.3, 0.2, 0.05])
+    det = LocalizedDetection(123.456, np.array([10.0, 25.0, 4.0]), cov, 0.87, "opi")
+    msg = DetectionReport.from_localized(det, 7, origin, epoch, ("opi", "tyre"))
+    back = decode(msg.encode()).to_localized(origin, epoch, ("opi", "tyre"))
+    assert back.class_name == "opi" and back.t_s == pytest.approx(123.456, abs=T_TOL_S + 1e-6)
+    assert np.allclose(back.pos_ned, det.pos_ned, atol=0.0075)
+    assert back.class_score == pytest.approx(0.87, abs=P_TOL)
+    assert np.allclose(back.cov_ned, cov, atol=1e-3)
+    with pytest.raises(ValueError, match="class 'opi' is not in the message class table"):
+        DetectionReport.from_localized(det, 7, origin, epoch, ("tyre",))
