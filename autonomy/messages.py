@@ -1,16 +1,13 @@
 """Sensor and autonomy messages exchanged between the simulator and the onboard stack.
 
 Frames: positions in NED (m), body quantities in FRD, angles in radians, times in
-seconds of mission time. Every message is an immutable dataclass, except :class:`FlsFrame`,
-which forms its fan image on demand (immutable by convention).
+seconds of mission time. Every message is an immutable dataclass.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Protocol
 
-import cv2
 import numpy as np
 from numpy.typing import NDArray
 
@@ -81,18 +78,7 @@ class UsblMsg:
     valid: bool = True
 
 
-class FanResampler(Protocol):
-    """What a sonar hands its frames to form fan images from the polar image on demand."""
-
-    def image(self, polar: NDArray[np.uint8]) -> NDArray[np.uint8]:
-        """The fan image (height_px, width_px) of a (n_beams, n_bins) polar image."""
-        ...
-
-    def resized(self, polar: NDArray[np.uint8], height_px: int, width_px: int) -> NDArray[np.uint8]:
-        """The fan image at (height_px, width_px), resampled from the polar image directly."""
-        ...
-
-
+@dataclass(frozen=True, slots=True)
 class FlsFrame:
     """One forward-looking-sonar frame as the vehicle sees it (no ground truth).
 
@@ -100,67 +86,14 @@ class FlsFrame:
     Cartesian fan image (height_px, width_px) uint8 made from it. ``geometry`` maps fan
     pixels to (range, azimuth) and back. ``mount_*`` give the sonar's fixed extrinsics on
     the hull.
-
-    A sonar may pass ``resampler`` instead of ``fan``: the fan is then formed from ``polar``
-    on first use of :attr:`fan` (identical to forming it eagerly), and :meth:`fan_resized`
-    resamples the polar image straight to a consumer's size without forming the full fan.
-    Immutable by convention (attributes are not reassigned). Pickles with its fan formed.
-
-    Raises:
-        ValueError: neither ``fan`` nor ``resampler`` given.
     """
 
-    __slots__ = ("t_s", "polar", "geometry", "mount_pos_body_m", "mount_rpy_rad", "_fan", "_resampler")
-
-    def __init__(self, t_s: float, polar: NDArray[np.uint8], fan: NDArray[np.uint8] | None = None,
-                 geometry: FanGeometry | None = None, mount_pos_body_m: FloatArray | None = None,
-                 mount_rpy_rad: FloatArray | None = None, *, resampler: FanResampler | None = None) -> None:
-        if fan is None and resampler is None:
-            raise ValueError("FlsFrame needs a fan image or a resampler to form it")
-        self.t_s = t_s
-        self.polar = polar
-        self.geometry = geometry
-        self.mount_pos_body_m = mount_pos_body_m  # (3,) FRD offset of the sonar head from the body origin
-        self.mount_rpy_rad = mount_rpy_rad  # (3,) sonar frame w.r.t. body (tilt is the pitch, down > 0)
-        self._fan = fan
-        self._resampler = resampler
-
-    @property
-    def fan(self) -> NDArray[np.uint8]:
-        """(height_px, width_px) uint8 fan image (formed from ``polar`` on first use)."""
-        if self._fan is None:
-            self._fan = self._resampler.image(self.polar)
-        return self._fan
-
-    @property
-    def fan_formed(self) -> bool:
-        """Whether :attr:`fan` exists already (given, or formed on an earlier use)."""
-        return self._fan is not None
-
-    @property
-    def fan_hw(self) -> tuple[int, ...]:
-        """Shape of :attr:`fan` without forming it."""
-        if self._fan is not None or self.geometry is None:
-            return tuple(np.shape(self.fan))
-        return (int(self.geometry.height_px), int(self.geometry.width_px))
-
-    def fan_resized(self, height_px: int, width_px: int) -> NDArray[np.uint8]:
-        """The fan shrunk to (height_px, width_px) for a consumer such as the CNN ATR.
-
-        Without a resampler (or once the fan is formed): ``cv2.resize`` of :attr:`fan` with
-        ``INTER_AREA``. With one: the resampler's direct polar -> small image resampling on
-        the same pixel grid (cheaper, statistically alike, not bit-identical;
-        :meth:`sim.sensors.sonar.display.FanRemap.resized`).
-        """
-        if self._resampler is not None and self._fan is None:
-            return self._resampler.resized(self.polar, int(height_px), int(width_px))
-        return cv2.resize(self.fan, (int(width_px), int(height_px)), interpolation=cv2.INTER_AREA)
-
-    def __reduce__(self):
-        return (FlsFrame, (self.t_s, self.polar, self.fan, self.geometry, self.mount_pos_body_m, self.mount_rpy_rad))
-
-    def __repr__(self) -> str:
-        return f"FlsFrame(t_s={self.t_s!r}, polar={np.shape(self.polar)}, fan={self.fan_hw})"
+    t_s: float
+    polar: NDArray[np.uint8]
+    fan: NDArray[np.uint8]
+    geometry: FanGeometry
+    mount_pos_body_m: FloatArray  # (3,) FRD offset of the sonar head from the body origin
+    mount_rpy_rad: FloatArray  # (3,) sonar frame w.r.t. body (tilt is the pitch, down > 0)
 
 
 @dataclass(frozen=True, slots=True)

@@ -89,33 +89,23 @@ class CnnDetector:
     def preprocess(self, fan: NDArray[np.uint8]) -> NDArray[np.float32]:
         """Fan image (H_fan, W_fan) uint8 -> model input (1, 1, H, W) float32."""
         h, w = self.input_hw
-        return self._scaled(cv2.resize(fan, (w, h), interpolation=cv2.INTER_AREA))
-
-    def _scaled(self, small: NDArray[np.uint8]) -> NDArray[np.float32]:
-        """Input-size image (H, W) uint8 -> model input (1, 1, H, W) float32 in [0, 1]."""
+        small = cv2.resize(fan, (w, h), interpolation=cv2.INTER_AREA)
         return (small.astype(np.float32) * np.float32(1.0 / 255.0))[None, None]
-
-    def _run(self, x: NDArray[np.float32]) -> dict[str, NDArray[np.float32]]:
-        outs = self._session.run(list(OUTPUT_NAMES), {INPUT_NAME: x})
-        return {k: v[0] for k, v in zip(OUTPUT_NAMES, outs)}
 
     def raw_outputs(self, fan: NDArray[np.uint8]) -> dict[str, NDArray[np.float32]]:
         """Model outputs for one fan image, by name, batch dimension removed."""
-        return self._run(self.preprocess(fan))
+        outs = self._session.run(list(OUTPUT_NAMES), {INPUT_NAME: self.preprocess(fan)})
+        return {k: v[0] for k, v in zip(OUTPUT_NAMES, outs)}
 
     def detect_boxes(self, fan: NDArray[np.uint8], score_threshold: float | None = None
                      ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
         """Boxes in fan px (N, 4), scores (N,), class ids (N,) after NMS, by decreasing score."""
-        return self._boxes(self.raw_outputs(fan), fan.shape[:2], score_threshold)
-
-    def _boxes(self, out: dict[str, NDArray[np.float32]], fan_hw: tuple[int, ...], score_threshold: float | None
-               ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
-        """Decoded, NMS-filtered boxes in the px of a fan of shape ``fan_hw``."""
         thr = self.score_threshold if score_threshold is None else float(score_threshold)
+        out = self.raw_outputs(fan)
         boxes, scores, cls = decode_centernet(out["heatmap"], out["size"], out["offset"], self.stride,
                                               thr, self.max_detections)
-        sx = fan_hw[1] / self.input_hw[1]
-        sy = fan_hw[0] / self.input_hw[0]
+        sx = fan.shape[1] / self.input_hw[1]
+        sy = fan.shape[0] / self.input_hw[0]
         # Input px (pixel centres at integers) -> fan px.
         boxes = boxes.copy()
         boxes[:, [0, 2]] = (boxes[:, [0, 2]] + 0.5) * sx - 0.5
@@ -125,10 +115,7 @@ class CnnDetector:
 
     def detect(self, frame: FlsFrame, score_threshold: float | None = None) -> list[Detection]:
         check_frame(frame, self.fan_hw, source=f"CNN detector ({self.model_path})")
-        # the frame shrinks its fan to the input size (straight from the polar image for a
-        # frame fresh from the sonar: the full fan is never formed in the closed loop)
-        small = frame.fan_resized(*self.input_hw)
-        boxes, scores, cls = self._boxes(self._run(self._scaled(small)), frame.fan_hw, score_threshold)
+        boxes, scores, cls = self.detect_boxes(frame.fan, score_threshold)
         names = [self.class_names[i] for i in cls]
         if self._keep is not None:
             sel = [i for i, n in enumerate(names) if n in self._keep]

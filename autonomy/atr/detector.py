@@ -27,24 +27,16 @@ class NullDetector:
 
 
 def check_frame(frame: FlsFrame, expected_hw: tuple[int, int] | None, source: str = "detector") -> None:
-    """Raise ``ValueError`` unless ``frame.fan`` is a 2-D uint8 image of ``expected_hw``.
-
-    A frame that forms its fan on demand (``FlsFrame`` with a resampler) is checked by its
-    geometry, without forming the fan."""
-    lazy = isinstance(frame, FlsFrame) and not frame.fan_formed
-    if lazy and frame.polar.dtype == np.uint8 and frame.polar.ndim == 2:
-        hw = frame.fan_hw
-    else:
-        fan = getattr(frame, "fan", None)
-        if not isinstance(fan, np.ndarray) or fan.ndim != 2 or fan.dtype != np.uint8:
-            desc = "missing" if fan is None else f"{getattr(fan, 'dtype', type(fan))} {getattr(fan, 'shape', '')}"
-            want = f"{expected_hw[0]} x {expected_hw[1]} (height x width)" if expected_hw else "(height, width)"
-            raise ValueError(f"{source}: expects FlsFrame.fan as a 2-D uint8 image {want}, got {desc}")
-        hw = fan.shape
-    if expected_hw is not None and tuple(hw) != tuple(expected_hw):
+    """Raise ``ValueError`` unless ``frame.fan`` is a 2-D uint8 image of ``expected_hw``."""
+    fan = getattr(frame, "fan", None)
+    if not isinstance(fan, np.ndarray) or fan.ndim != 2 or fan.dtype != np.uint8:
+        desc = "missing" if fan is None else f"{getattr(fan, 'dtype', type(fan))} {getattr(fan, 'shape', '')}"
+        want = f"{expected_hw[0]} x {expected_hw[1]} (height x width)" if expected_hw else "(height, width)"
+        raise ValueError(f"{source}: expects FlsFrame.fan as a 2-D uint8 image {want}, got {desc}")
+    if expected_hw is not None and fan.shape != tuple(expected_hw):
         raise ValueError(
             f"{source}: expects a fan image of {expected_hw[0]} x {expected_hw[1]} px "
-            f"(height x width), got {hw[0]} x {hw[1]}"
+            f"(height x width), got {fan.shape[0]} x {fan.shape[1]}"
         )
 
 

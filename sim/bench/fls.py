@@ -2,10 +2,7 @@
 
 ``auvsim bench fls`` renders the scenario's scene (the ``cssn_lawnmower`` basin by default)
 from a survey pose, 2 m above the seabed looking along the target rows, with the
-scenario's sonar limited to a 30 m range window, noise on, ground truth included, twice:
-forming what the closed loop consumes (the scenario's CNN input image, resampled straight
-from the polar image; the polar image alone for other detectors) and forming the full fan
-image (what datasets and recordings store).
+scenario's sonar limited to a 30 m range window, noise on, ground truth included.
 """
 
 from __future__ import annotations
@@ -15,7 +12,6 @@ import time
 import numpy as np
 
 from autonomy.frames import rot_from_euler
-from autonomy.atr import build_detector
 from scenarios.config.fls import FlsConfig
 from scenarios.schema import Scenario
 from sim.rng import component_rng
@@ -56,10 +52,7 @@ def run(scenario: Scenario, n_frames: int = 60, range_window_m: tuple[float, flo
 
     Returns:
         dict with ``frames_per_s``, ``ms_per_frame`` (wall clock), ``cpu_ms_per_frame`` and
-        ``cpu_frames_per_s`` (process CPU time, all threads: steadier on a shared machine) of
-        the closed-loop product (``loop_image_hw``: the CNN input size, None for other
-        detectors), ``full_frames_per_s`` and ``full_cpu_frames_per_s`` with the full fan
-        image formed instead, ``rays_per_s`` (all rays cast, edge
+        ``cpu_frames_per_s`` (process CPU time, all threads: steadier on a shared machine), ``rays_per_s`` (all rays cast, edge
         refinement and occlusion casts included, per second of total frame time),
         ``raw_raycast_fraction`` (time inside ``mj_multiRay`` calls / total),
         ``n_rays`` (base rays per frame), ``rays_cast_per_frame``, ``n_beams``, ``n_bins``,
@@ -81,41 +74,25 @@ def run(scenario: Scenario, n_frames: int = 60, range_window_m: tuple[float, flo
     def pose(i: int) -> np.ndarray:  # creep forward 0.5 m/s at 3 Hz, like a survey leg
         return start + np.array([0.0, 0.5 / 3.0 * i, 0.0]) + R_nb @ mount
 
-    input_hw = getattr(build_detector(scenario.autonomy.atr), "input_hw", None)
-
-    def loop_product(out) -> None:  # what the closed loop forms from a frame
-        if input_hw is not None:
-            out.frame.fan_resized(*input_hw)
-
-    def full_product(out) -> None:  # what datasets and recordings form
-        out.frame.fan
-
-    figures = {}
-    for mode, product in (("loop", loop_product), ("full", full_product)):
-        product(sensor.render(0.0, pose(0), R_nb, caster, world.objects))  # warm-up
-        caster.time_s, caster.n_rays = 0.0, 0
-        visible = 0
-        t0, c0 = time.perf_counter(), time.process_time()
-        for i in range(n_frames):
-            out = sensor.render(i / 3.0, pose(i), R_nb, caster, world.objects)
-            product(out)
-            visible += sum(o.visible for o in out.truth.objects)
-        figures[mode] = (time.perf_counter() - t0, time.process_time() - c0, caster.n_rays, caster.time_s, visible)
-    total, cpu, n_rays, ray_s, visible = figures["loop"]
-    full_total, full_cpu = figures["full"][:2]
+    sensor.render(0.0, pose(0), R_nb, caster, world.objects)  # warm-up
+    caster.time_s, caster.n_rays = 0.0, 0
+    visible = 0
+    t0, c0 = time.perf_counter(), time.process_time()
+    for i in range(n_frames):
+        out = sensor.render(i / 3.0, pose(i), R_nb, caster, world.objects)
+        visible += sum(o.visible for o in out.truth.objects)
+    total = time.perf_counter() - t0
+    cpu = time.process_time() - c0
     g = sensor.geometry
     return {
         "frames_per_s": round(n_frames / total, 2),
         "ms_per_frame": round(1e3 * total / n_frames, 3),
         "cpu_ms_per_frame": round(1e3 * cpu / n_frames, 3),
         "cpu_frames_per_s": round(n_frames / cpu, 2),
-        "full_frames_per_s": round(n_frames / full_total, 2),
-        "full_cpu_frames_per_s": round(n_frames / full_cpu, 2),
-        "loop_image_hw": list(input_hw) if input_hw is not None else None,
-        "rays_per_s": round(n_rays / total),
-        "raw_raycast_fraction": round(ray_s / total, 4),
+        "rays_per_s": round(caster.n_rays / total),
+        "raw_raycast_fraction": round(caster.time_s / total, 4),
         "n_rays": sensor.n_rays,
-        "rays_cast_per_frame": round(n_rays / n_frames),
+        "rays_cast_per_frame": round(caster.n_rays / n_frames),
         "n_beams": g.n_beams,
         "n_bins": g.n_bins,
         "range_window_m": [g.window_near_m, g.window_far_m],

@@ -180,11 +180,12 @@ class FlsSensor(Sensor[FlsRender]):
             mask = mask[self._beam_col]
         intensity = self.echo.realise(mean, self.rng, noise=noise, clutter=mask < 0)
         polar_u8 = self.echo.display(intensity)
+        fan_u8 = self._remap.image(polar_u8)
 
         in_win = (sampled.dist >= g.window_near_m) & (sampled.dist <= g.window_far_m)
         objs = tuple(self._object_truth(o, origin, R_ns, sampled, owner, in_win, extents.get(int(o.id)), caster)
                      for o in objects)
-        frame = FlsFrame(t_s=float(t_s), polar=polar_u8, geometry=self.fan_geometry, resampler=self._remap,
+        frame = FlsFrame(t_s=float(t_s), polar=polar_u8, fan=fan_u8, geometry=self.fan_geometry,
                          mount_pos_body_m=self.mount_pos_body_m.copy(), mount_rpy_rad=self.mount_rpy_rad.copy())
         truth = SonarGroundTruth(t_s=float(t_s), mask_polar=mask, objects=objs, pos_ned=origin.copy(), R_ns=R_ns,
                                  fan_remap=self._remap)

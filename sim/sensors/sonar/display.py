@@ -54,57 +54,14 @@ class FanRemap:
         beam = np.where(inside, np.clip(beam, 0.0, n_beams - 1), -10.0).astype(np.float32)
         rbin = np.where(inside, np.clip(rbin, 0.0, n_bins - 1), -10.0).astype(np.float32)
         self.inside = inside
-        self.n_beams, self.n_bins = n_beams, int(n_bins)
-        self._beam_step_rad = spacing
         self._fixed = cv2.convertMaps(rbin, beam, cv2.CV_16SC2)
         self._nearest = cv2.convertMaps(rbin, beam, cv2.CV_16SC2, nninterpolation=True)
-        self._resized: dict[tuple[int, int], tuple[int, tuple[NDArray, NDArray]]] = {}
 
     def image(self, polar: NDArray) -> NDArray:
         """Bilinear fan image (height_px, width_px) of a (n_beams, n_bins) polar image; zero
         outside the fan."""
         return cv2.remap(polar, self._fixed[0], self._fixed[1], cv2.INTER_LINEAR,
                          borderMode=cv2.BORDER_CONSTANT, borderValue=0)
-
-    def resized(self, polar: NDArray[np.uint8], height_px: int, width_px: int) -> NDArray[np.uint8]:
-        """The fan image shrunk to (height_px, width_px), resampled from the polar image directly.
-
-        Stands in for ``cv2.resize(self.image(polar), (width_px, height_px), INTER_AREA)`` at a
-        fraction of the cost: output pixel ``(x, y)`` samples the fan at the same point,
-        ``((x + 0.5) W / w - 0.5, (y + 0.5) H / h - 0.5)``, bilinearly from the polar image
-        after a ``k``-bin box average in range, ``k`` the odd number nearest to the bins the
-        area-resized fan mixes into one pixel in range (its bilinear fan pixel interpolates
-        two bins, its area resize averages ``H / h`` fan pixels), so mean, spread and speckle
-        grain come out alike (checked in
-        ``tests/sim/sensors/sonar/test_fan_resized.py``); the values are not bit-identical.
-        Maps are built once per size. Returns (height_px, width_px) uint8, zero outside the fan.
-        """
-        key = (int(height_px), int(width_px))
-        entry = self._resized.get(key)
-        if entry is None:
-            entry = self._resized[key] = self._resized_maps(*key)
-        k, (m1, m2) = entry
-        if k > 1:
-            polar = cv2.blur(polar, (k, 1), borderType=cv2.BORDER_REPLICATE)[:, k // 2::k]
-        return cv2.remap(polar, m1, m2, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
-
-    def _resized_maps(self, height_px: int, width_px: int) -> tuple[int, tuple[NDArray, NDArray]]:
-        """Range averaging width ``k`` and the fixed-point remap of :meth:`resized`."""
-        fan = self.fan
-        ys, xs = np.mgrid[0:height_px, 0:width_px].astype(np.float64)
-        sx, sy = fan.width_px / width_px, fan.height_px / height_px
-        r, a = fan.pixel_to_polar((xs + 0.5) * sx - 0.5, (ys + 0.5) * sy - 0.5)
-        # the oracle's fan pixel interpolates 2 bins (fewer where fan pixels are finer than
-        # bins), and its area resize averages sy fan pixels in range
-        bins_averaged = min(fan.m_per_px / self.range_resolution_m, 2.0) * sy
-        k = max(1, 2 * int(round((bins_averaged - 1.0) / 2.0)) + 1)
-        n_groups = len(range(k // 2, self.n_bins, k))
-        beam = (a - self.beam_azimuths_rad[0]) / self._beam_step_rad
-        rbin = ((r - self.window_near_m) / self.range_resolution_m - 0.5 - 0.5 * (k - 1)) / k
-        inside = fan.inside(r, a)
-        beam = np.where(inside, np.clip(beam, 0.0, self.n_beams - 1), -10.0).astype(np.float32)
-        rbin = np.where(inside, np.clip(rbin, 0.0, n_groups - 1), -10.0).astype(np.float32)
-        return k, cv2.convertMaps(rbin, beam, cv2.CV_16SC2)
 
     def labels(self, polar_labels: NDArray[np.int16], fill: int) -> NDArray[np.int16]:
         """Nearest-neighbour fan image of a (n_beams, n_bins) label image; ``fill`` outside the fan."""
