@@ -25,13 +25,14 @@ from typing import Any
 import numpy as np
 
 from autonomy.control.setpoint import Setpoint
-from autonomy.messages import DvlMsg, NavEstimate, UsblMsg
+from autonomy.messages import DvlMsg, NavEstimate, UsblMsg, WrenchCmdMsg
 from scenarios.schema import Scenario
 from sim.mission_build import NAV_SOURCES, MissionParts, build_mission_parts
 from sim.physics import Physics
 from sim.records import MissionInfo, MissionObserver, MissionSummary, StepRecord
 from sim.sensors.base import SceneView
 from sim.stage_timer import NULL_TIMER, StageTimer
+from sim.surface_runner import SurfaceVehicleRunner
 from sim.truth import VehicleTruth
 
 __all__ = ["NAV_SOURCES", "Mission", "MissionSummary"]
@@ -80,6 +81,9 @@ class Mission:
         self.physics.reseed(seed)
         self.parts: MissionParts = build_mission_parts(self.scenario, self.physics, seed, nav_source=self.nav_source,
                                                        perception=self.perception_enabled)
+        #: The extra vehicles' sensors and autonomy (``scenario.vehicles``), ticked each period.
+        self.surface_vehicles: dict[str, SurfaceVehicleRunner] = {
+            name: SurfaceVehicleRunner(self.physics, name, cfg, seed) for name, cfg in self.scenario.vehicles.items()}
 
     # -- read-only views ---------------------------------------------------------------
     @property
@@ -141,6 +145,8 @@ class Mission:
         init_pos = np.asarray(scn.vehicle.initial_pos_ned, dtype=float)
         init_rpy = np.deg2rad(scn.vehicle.initial_rpy_deg)
         self.physics.reset(init_pos, init_rpy)
+        for runner in self.surface_vehicles.values():
+            runner.reset()
         self.thruster_cmd = np.zeros(self.physics.params.n_thrusters)
         self.wrench_body = np.zeros(6)
         parts.scheduler.reset(0.0)
@@ -199,6 +205,12 @@ class Mission:
             with timer.stage("truth"):
                 truth = physics.truth()
         self._truth = truth
+        if self.surface_vehicles:
+            with timer.stage("surface_vehicles"):
+                for runner in self.surface_vehicles.values():
+                    # Follow the AUV's true position for now; the buoy's USBL fixes replace it
+                    # once the acoustic link delivers them.
+                    runner.tick(truth.pos_ned)
         for name, msg in scheduler.pop_ready(physics.t_s):
             self._deliver(name, msg)
         parts = self.parts
@@ -207,7 +219,11 @@ class Mission:
             nav = self.nav_filter.estimate()
         if parts.tracking is not None:
             with timer.stage("tracking"):
-                parts.tracking.on_nav(nav)
+                results = parts.tracking.on_nav(nav)  # frames that waited for this pose
+            with timer.stage("observers"):
+                for res in results:
+                    for obs in self.observers:
+                        obs.on_message(parts.sonar.name, res)
         with timer.stage("guidance"):
             if setpoint is not None:
                 sp = setpoint
@@ -220,6 +236,10 @@ class Mission:
         with timer.stage("control"):
             self.wrench_body = np.zeros(6) if sp is None else parts.autopilot.update(nav, sp, self.autonomy_dt_s)
             self.thruster_cmd = parts.allocator.allocate(self.wrench_body)
+        with timer.stage("nav_filter"):
+            cmd = WrenchCmdMsg(physics.t_s, self.wrench_body.copy())
+            for handler in self._by_type.get(WrenchCmdMsg, ()):
+                handler(cmd)  # the speed model of a DVL-free filter
         rec = self._record(truth, nav, parts.fsm.mode)
         self._wall_s = time.perf_counter() - self._wall_start
         return rec

@@ -115,7 +115,9 @@ class MissionObserver(Protocol):
 
     ``on_message`` receives every message delivered to the autonomy, by sensor name (an
     ``ImuMsg``, an FLS render, ...), and after a sonar frame the :class:`PerceptionResult`
-    made of it under the same name.
+    made of it under the same name (with target tracking, the
+    :class:`autonomy.tracking.onboard.TrackingFrameResult` instead, once the frame is
+    processed: at the first vehicle pose at or after its ping).
     """
 
     def on_start(self, info: MissionInfo) -> None: ...

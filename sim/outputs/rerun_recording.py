@@ -2,6 +2,12 @@
 FLS fan frames with ground-truth boxes and detections, navigation errors, world model, and
 the scanning sonar's scan building up ping by ping with the features of each position fix.
 
+Target tracking (paper 004) on the fan image ``sonar/fan``: ``sonar/fan/roi/<mode>`` the
+polar region of interest of each sonar-using filter (``fused``, ``sonar``) at the ping, as an
+outline (its range and azimuth bounds, :meth:`autonomy.tracking.roi.PolarRoi.outline`);
+``sonar/fan/clusters`` the detector's clusters (green: taken by the fused filter, yellow:
+inside its ROI and of the target's size, grey: refused).
+
 Scanning-sonar entities (``<name>`` the sensor entry's name):
 
 * ``world/msis/<name>/ping``: each ping's samples at or above ``msis_point_threshold`` as
@@ -28,6 +34,9 @@ from autonomy.frames import quat_from_rot, rot_from_euler
 from typing import Any
 
 from autonomy.messages import PositionFixMsg
+from autonomy.sonar_geometry import FanGeometry
+from autonomy.tracking.onboard import TrackingFrameResult
+from autonomy.tracking.roi import PolarRoi
 from sim.records import MissionInfo, MissionSummary, PerceptionResult, StepRecord
 from sim.sensors.fls import FlsRender
 from sim.sensors.msis import MsisRender
@@ -77,6 +86,7 @@ class RerunRecorder:
         self._scans: dict[str, ScanImage] = {}
         self._n_msis: dict[str, int] = {}
         self._msis_depth: dict[str, float] = {}
+        self._fan_geometry: FanGeometry | None = None
 
     # -- observer protocol -----------------------------------------------------------
     def on_start(self, info: MissionInfo) -> None:
@@ -130,6 +140,8 @@ class RerunRecorder:
             self._on_sonar_frame(msg)
         elif isinstance(msg, PerceptionResult):
             self._on_perception(msg)
+        elif isinstance(msg, TrackingFrameResult):
+            self._on_tracking(msg)
         elif isinstance(msg, MsisRender):
             self._on_msis_ping(name, msg)
         elif isinstance(msg, PositionFixMsg):
@@ -203,6 +215,7 @@ class RerunRecorder:
         if not self._frame_logged:
             return
         rec.set_time("sim_time", duration=render.frame.t_s)
+        self._fan_geometry = render.frame.geometry
         fan = render.frame.fan
         s = self.fls_scale
         img = cv2.resize(fan, None, fx=s, fy=s, interpolation=cv2.INTER_AREA) if s != 1.0 else fan
@@ -243,6 +256,30 @@ class RerunRecorder:
             return [[240, 170, 30]] * n
         return [[40, 220, 40] if ok_ else [230, 40, 40] for ok_ in verdict]
 
+    def _on_tracking(self, res: TrackingFrameResult) -> None:
+        """ROI outlines and the clusters of a processed frame, on its fan image."""
+        geo = self._fan_geometry
+        if geo is None:
+            return
+        rr, rec = self._rr, self._rec
+        rec.set_time("sim_time", duration=res.t_s)
+        s = self.fls_scale
+        for mode, colour in ROI_COLOURS.items():
+            roi = res.roi.get(mode)
+            if roi is None:
+                rec.log(f"sonar/fan/roi/{mode}", rr.Clear(recursive=False))
+                continue
+            rec.log(f"sonar/fan/roi/{mode}", rr.LineStrips2D([roi_outline_px(roi, geo, s)], colors=[colour],
+                                                             labels=[f"ROI {mode}"]))
+        if not res.candidates:
+            rec.log("sonar/fan/clusters", rr.Clear(recursive=False))
+            return
+        chosen, acc = res.chosen.get("fused"), res.accepted.get("fused", np.zeros(len(res.candidates), dtype=bool))
+        colours = [[40, 220, 40] if c is chosen else [240, 200, 40] if ok else [150, 150, 150]
+                   for c, ok in zip(res.candidates, acc)]
+        rec.log("sonar/fan/clusters", rr.Boxes2D(array=np.array([c.box_xyxy_px for c in res.candidates]) * s,
+                                                 array_format=rr.Box2DFormat.XYXY, colors=colours))
+
     def on_end(self, summary: MissionSummary) -> None:
         rr, rec = self._rr, self._rec
         if self._true:
@@ -250,6 +287,17 @@ class RerunRecorder:
             rec.log("world/path/estimated", rr.LineStrips3D([np.asarray(self._est)], colors=[[240, 140, 30]]))
         rec.flush()
         rec.disconnect()
+
+
+ROI_COLOURS = {"fused": [60, 200, 255], "sonar": [255, 120, 40]}  # sonar-using filters and their ROI colours
+
+
+def roi_outline_px(roi: PolarRoi, geometry: FanGeometry, scale: float = 1.0) -> np.ndarray:
+    """Outline (k, 2) of a polar ROI in fan-image pixels (x, y), times ``scale`` (the logged
+    image's resize factor)."""
+    rng_az = roi.outline()
+    x, y = geometry.polar_to_pixel(rng_az[:, 0], rng_az[:, 1])
+    return np.c_[x, y] * scale
 
 
 def _xyzw(q_wxyz: np.ndarray) -> list[float]:
