@@ -3,7 +3,9 @@
 Field validation checks each value alone; these checks relate values to each other: the
 vehicle starts in the water, above the seabed, inside the seabed patch and the basin
 walls; each target sits in the water, not above the surface nor buried below the seabed,
-inside the patch and the walls; no two targets overlap. Depths are NED z (m, positive
+inside the patch and the walls; no two targets overlap; an extra vehicle (a surface buoy)
+starts inside the walls, over water deeper than its keel, clear of the AUV, the targets and
+the other vehicles. Depths are NED z (m, positive
 down); the seabed depth is the plane (or slope) through ``seabed.depth_m`` at
 ``seabed.center_ne_m``; rough and ripple seabeds are allowed their relief on top.
 """
@@ -112,6 +114,55 @@ def vehicle_envelope_m(model: str) -> tuple[float, float, float]:
         return 0.0, 0.0, 0.0
 
 
+def surface_hull_span_m(preset: str) -> tuple[float, float, float]:
+    """(horizontal half-diagonal, top depth, bottom depth) of a ``surface_3dof`` preset's hull
+    afloat, m (NED z of its top and keel; from its ``params.yaml``, zeros when unreadable)."""
+    try:
+        data = yaml.safe_load((resources.files("sim") / "assets" / preset / "params.yaml").read_text())
+        size = [float(x) for x in data["hull"]["size_m"]]
+        centre_z = float(data.get("waterline_depth_m", 0.0)) + float(data["hull"].get("center_body_m", [0, 0, 0])[2])
+        return 0.5 * math.hypot(size[0], size[1]), centre_z - 0.5 * size[2], centre_z + 0.5 * size[2]
+    except (OSError, KeyError, TypeError, ValueError, IndexError, AttributeError, yaml.YAMLError):
+        return 0.0, 0.0, 0.0
+
+
+def _extra_vehicle_problems(scenario: Scenario, relief_m: float) -> list[str]:
+    """Each extra vehicle (``vehicles.<name>``) starts inside the patch and the walls, afloat
+    over water deeper than its keel, clear of the AUV, of every target and of the others."""
+    problems: list[str] = []
+    wall_margin = 0.5 * scenario.world.basin.wall_thickness_m
+    an, ae, ad = scenario.vehicle.initial_pos_ned
+    length, width, height = vehicle_envelope_m(scenario.vehicle.model)
+    auv_r, auv_top = 0.5 * math.hypot(length, width), ad - 0.5 * height
+    placed: list[tuple[str, float, float, float]] = []
+    for name, v in scenario.vehicles.items():
+        key = f"vehicles.{name}.initial_pos_ne_m"
+        n, e = v.initial_pos_ne_m
+        r, top, keel = surface_hull_span_m(v.preset)
+        if not _inside_patch(scenario, n, e):
+            problems.append(f"{key}: ({n:g}, {e:g}) m lies outside the seabed patch")
+            continue
+        if not _inside_basin(scenario, n, e, wall_margin + r):
+            problems.append(f"{key}: ({n:g}, {e:g}) m puts the hull ({r:.2f} m from its centre) into the basin "
+                            "walls (world.basin)")
+        bed = seabed_mean_depth_m(scenario, n, e) - relief_m
+        if keel >= bed:
+            problems.append(f"{key}: the keel ({keel:.2f} m deep) touches the seabed ({bed:.2f} m) there")
+        apart = math.hypot(n - an, e - ae)
+        if apart < r + auv_r and auv_top < keel:
+            problems.append(f"{key}: overlaps the AUV at its start (vehicle.initial_pos_ned, {apart:.2f} m apart, "
+                            f"at least {r + auv_r:.2f} m needed)")
+        for i, t in enumerate(scenario.world.targets):
+            tn, te, tz = t.pos_ned
+            if math.hypot(tn - n, te - e) < _inscribed_radius_m(t) + r and tz - _target_height_m(t) < keel:
+                problems.append(f"{key}: overlaps world.targets.{i} ({t.name})")
+        for other, on, oe, orad in placed:
+            if math.hypot(on - n, oe - e) < r + orad:
+                problems.append(f"{key}: overlaps vehicles.{other}")
+        placed.append((name, n, e, r))
+    return problems
+
+
 def vehicle_half_height_m(model: str) -> float:
     """Half the vertical envelope of a vehicle preset, m."""
     return 0.5 * vehicle_envelope_m(model)[2]
@@ -211,6 +262,7 @@ def placement_problems(scenario: Scenario) -> list[str]:
         if apart_m < inscribed + hull_r and hull_bottom > tz - _target_height_m(t):
             problems.append(f"world.targets.{i} ({t.name}): overlaps the vehicle at its start "
                             f"(vehicle.initial_pos_ned, {apart_m:.2f} m apart)")
+    problems += _extra_vehicle_problems(scenario, relief)
     polys = [_inscribed_footprint(t) for t in targets]
     for i in range(len(targets)):
         for j in range(i + 1, len(targets)):

@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 from typing import Annotated, Any, Literal, Union
 
-from pydantic import Field, RootModel, TypeAdapter, ValidationError, model_validator
+from pydantic import Field, RootModel, TypeAdapter, ValidationError, field_validator, model_validator
 from pydantic_core import InitErrorDetails, PydanticUndefined
 
 from autonomy.atr.config import AtrConfig
@@ -20,8 +20,13 @@ from scenarios.config.base import StrictModel
 from scenarios.config.comms import CommsConfig
 from scenarios.config.outputs import OutputsConfig
 from scenarios.config.sensor import SensorConfig, fill_sensor_entries, sensor_config_kinds
-from scenarios.config.vehicle import VehicleConfig
+from scenarios.config.vehicle import SurfaceVehicleConfig, VehicleConfig
 from scenarios.config.world import WorldConfig
+
+
+#: Names an extra vehicle may not take: the AUV's name in ``Physics.vehicles`` and its
+#: hull's attach prefix.
+RESERVED_VEHICLE_NAMES = ("auv", "hull")
 
 
 class PhysicsConfig(StrictModel):
@@ -139,7 +144,18 @@ class Scenario(StrictModel):
     physics: PhysicsConfig = PhysicsConfig()
     world: WorldConfig = WorldConfig()
     vehicle: VehicleConfig = VehicleConfig()
+    #: Further vehicles by name (the AUV is ``vehicle``); names ``auv`` and ``hull`` are taken.
+    vehicles: dict[Annotated[str, Field(pattern=r"^[a-z][a-z0-9_]{0,31}$")], SurfaceVehicleConfig] = {}
     sensors: SensorsConfig = SensorsConfig()
     autonomy: AutonomyConfig = AutonomyConfig()
     comms: CommsConfig = Field(CommsConfig(), description="channels between vehicles (acoustic modem link)")
     outputs: OutputsConfig = OutputsConfig()
+
+    @field_validator("vehicles")
+    @classmethod
+    def _free_vehicle_names(cls, value: dict[str, SurfaceVehicleConfig]) -> dict[str, SurfaceVehicleConfig]:
+        taken = sorted(set(value) & set(RESERVED_VEHICLE_NAMES))
+        if taken:
+            raise ValueError(f"vehicle name {taken[0]!r} is taken (the AUV is 'vehicle'; reserved: "
+                             f"{', '.join(RESERVED_VEHICLE_NAMES)})")
+        return value

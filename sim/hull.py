@@ -1,10 +1,12 @@
 """Build a vehicle hull as a ``mujoco.MjSpec`` from its :class:`VehicleParams`.
 
 The spec's worldbody holds one body ``"vehicle"`` (origin at the centre of origin CO, FRD
-axes) with a free joint, an explicit inertial (mass ``m``, CoM at ``r_bg``, inertia
+axes) with a free joint (a ``surface_3dof`` preset: north/east slides and a yaw hinge at
+its waterline depth), an explicit inertial (mass ``m``, CoM at ``r_bg``, inertia
 ``I_g``: the *rigid body only*; added mass, damping, weight and buoyancy act through
 :mod:`sim.vehicle`), a collision geom of the hull envelope, an optional visual mesh that
-never collides, and sites ``fls``, ``dvl``, ``imu``, ``altimeter``, ``depth``, ``gps`` and
+never collides, and sites for its sensor mounts (``fls``, ``dvl``, ``imu``, ``altimeter``,
+``depth``, ``gps``, those it has) and
 ``thruster_<name>`` (site x axis along the thrust direction). All hull geoms are in
 :data:`HULL_GROUP` so ray-cast sensors can leave them out. The scene builder attaches the
 body with ``MjSpec`` attach.
@@ -51,7 +53,15 @@ def build_hull_spec(params: VehicleParams, *, mesh_from_file: bool = False) -> m
     spec.modelname = params.name
     spec.option.gravity = [0.0, 0.0, 0.0]
     body = spec.worldbody.add_body(name=VEHICLE_BODY)
-    body.add_freejoint(name="vehicle_free")
+    if params.motion == "surface_3dof":
+        # North and east slides and a yaw hinge (NED z down: +angle turns x towards y);
+        # the body origin rides at the waterline depth (Fossen's horizontal-plane model).
+        body.pos = [0.0, 0.0, params.waterline_depth_m]
+        body.add_joint(name="vehicle_north", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1.0, 0.0, 0.0])
+        body.add_joint(name="vehicle_east", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0.0, 1.0, 0.0])
+        body.add_joint(name="vehicle_yaw", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0.0, 0.0, 1.0])
+    else:
+        body.add_freejoint(name="vehicle_free")
     body.explicitinertial = True
     body.mass = params.mass_kg
     body.ipos = params.r_bg_m.tolist()
@@ -84,7 +94,7 @@ def build_hull_spec(params: VehicleParams, *, mesh_from_file: bool = False) -> m
         body.add_geom(name="hull_visual", type=mujoco.mjtGeom.mjGEOM_MESH, meshname=VISUAL_MESH,
                       contype=0, conaffinity=0, group=HULL_GROUP, rgba=[0.95, 0.8, 0.1, 1.0])
 
-    for name in SENSOR_NAMES:
+    for name in (n for n in SENSOR_NAMES if n in params.sensors):
         mount = params.sensors[name]
         body.add_site(name=name, pos=mount.pos_body_m.tolist(),
                       quat=quat_from_euler(*mount.rpy_rad).tolist(), size=[0.02, 0.02, 0.02],

@@ -25,13 +25,15 @@ from typing import Any
 import numpy as np
 
 from autonomy.control.setpoint import Setpoint
-from autonomy.messages import DvlMsg, NavEstimate, UsblMsg
+from autonomy.messages import DvlMsg, NavEstimate, UsblMsg, WrenchCmdMsg
 from scenarios.schema import Scenario
 from sim.mission_build import NAV_SOURCES, MissionParts, build_mission_parts
 from sim.physics import Physics
 from sim.records import MissionInfo, MissionObserver, MissionSummary, StepRecord
-from sim.sensors.base import SceneView
+from sim.sensors.base import SceneView, Sensor
+from sim.sonar_pipeline import FrameTicket, SonarPipeline
 from sim.stage_timer import NULL_TIMER, StageTimer
+from sim.surface_runner import SurfaceVehicleRunner
 from sim.truth import VehicleTruth
 
 __all__ = ["NAV_SOURCES", "Mission", "MissionSummary"]
@@ -49,9 +51,14 @@ class Mission:
             are still rendered at their rate when the sonar is enabled, but not processed).
         timer: a :class:`sim.stage_timer.StageTimer` to time the loop's stages (benchmarks);
             default: none.
+        workers: threads the loop may use. 1: the serial loop. 2 or more: the sonar's frames
+            and their perception run on worker threads (:mod:`sim.sonar_pipeline`) when nothing
+            in the loop reads perception back (survey perception; not target tracking), with
+            the serial loop's results bit for bit; observers get frames and perception results
+            once ready, in order.
 
     Raises:
-        ValueError: unknown ``nav_source``; a sensor mount site missing on the hull.
+        ValueError: unknown ``nav_source``; ``workers`` < 1; a sensor mount site missing on the hull.
     """
 
     def __init__(
@@ -62,9 +69,14 @@ class Mission:
         observers: Sequence[MissionObserver] = (),
         perception: bool = True,
         timer: StageTimer | None = None,
+        workers: int = 1,
     ) -> None:
         if nav_source not in NAV_SOURCES:
             raise ValueError(f"nav_source must be one of {NAV_SOURCES}, got {nav_source!r}")
+        if int(workers) < 1:
+            raise ValueError(f"workers must be >= 1, got {workers}")
+        self.workers = int(workers)
+        self._pipeline: SonarPipeline | None = None
         self.scenario = scenario
         self.nav_source = nav_source
         self.observers = list(observers)
@@ -80,6 +92,9 @@ class Mission:
         self.physics.reseed(seed)
         self.parts: MissionParts = build_mission_parts(self.scenario, self.physics, seed, nav_source=self.nav_source,
                                                        perception=self.perception_enabled)
+        #: The extra vehicles' sensors and autonomy (``scenario.vehicles``), ticked each period.
+        self.surface_vehicles: dict[str, SurfaceVehicleRunner] = {
+            name: SurfaceVehicleRunner(self.physics, name, cfg, seed) for name, cfg in self.scenario.vehicles.items()}
 
     # -- read-only views ---------------------------------------------------------------
     @property
@@ -105,6 +120,8 @@ class Mission:
 
     @property
     def perception(self):
+        """The perception chain (None without one); pipelined frames are finished first."""
+        self.flush()
         return self.parts.perception
 
     @property
@@ -135,12 +152,15 @@ class Mission:
     # -- stepping API ----------------------------------------------------------------
     def reset(self, seed: int | None = None) -> StepRecord:
         """Restart the mission; a given ``seed`` reseeds every component (same seed, same run)."""
+        self.close()
         if seed is not None:
             self._build(int(seed))
         scn, parts = self.scenario, self.parts
         init_pos = np.asarray(scn.vehicle.initial_pos_ned, dtype=float)
         init_rpy = np.deg2rad(scn.vehicle.initial_rpy_deg)
         self.physics.reset(init_pos, init_rpy)
+        for runner in self.surface_vehicles.values():
+            runner.reset()
         self.thruster_cmd = np.zeros(self.physics.params.n_thrusters)
         self.wrench_body = np.zeros(6)
         parts.scheduler.reset(0.0)
@@ -164,6 +184,11 @@ class Mission:
         parts.autopilot.reset()
         if parts.perception is not None:
             parts.perception.reset()
+        # pipelined only where perception is a sink and the sonar's latency is fixed (the
+        # scheduler gets a ticket, not the frame, to time the delivery by)
+        if (self.workers > 1 and parts.perception is not None and parts.tracking is None
+                and type(parts.sonar).latency_s is Sensor.latency_s):
+            self._pipeline = SonarPipeline(self.physics, parts.sonar, parts.perception.process, self.workers)
         self.last_dvl_lock = True
         self._setpoint: Setpoint | None = None
         self._wall_start = time.perf_counter()
@@ -199,6 +224,12 @@ class Mission:
             with timer.stage("truth"):
                 truth = physics.truth()
         self._truth = truth
+        if self.surface_vehicles:
+            with timer.stage("surface_vehicles"):
+                for runner in self.surface_vehicles.values():
+                    # Follow the AUV's true position for now; the buoy's USBL fixes replace it
+                    # once the acoustic link delivers them.
+                    runner.tick(truth.pos_ned)
         for name, msg in scheduler.pop_ready(physics.t_s):
             self._deliver(name, msg)
         parts = self.parts
@@ -207,7 +238,11 @@ class Mission:
             nav = self.nav_filter.estimate()
         if parts.tracking is not None:
             with timer.stage("tracking"):
-                parts.tracking.on_nav(nav)
+                results = parts.tracking.on_nav(nav)  # frames that waited for this pose
+            with timer.stage("observers"):
+                for res in results:
+                    for obs in self.observers:
+                        obs.on_message(parts.sonar.name, res)
         with timer.stage("guidance"):
             if setpoint is not None:
                 sp = setpoint
@@ -220,9 +255,29 @@ class Mission:
         with timer.stage("control"):
             self.wrench_body = np.zeros(6) if sp is None else parts.autopilot.update(nav, sp, self.autonomy_dt_s)
             self.thruster_cmd = parts.allocator.allocate(self.wrench_body)
+        with timer.stage("nav_filter"):
+            cmd = WrenchCmdMsg(physics.t_s, self.wrench_body.copy())
+            for handler in self._by_type.get(WrenchCmdMsg, ()):
+                handler(cmd)  # the speed model of a DVL-free filter
         rec = self._record(truth, nav, parts.fsm.mode)
+        if self._pipeline is not None and self._pipeline.busy:
+            self._to_observers(self._pipeline.ready())
         self._wall_s = time.perf_counter() - self._wall_start
         return rec
+
+    def flush(self) -> None:
+        """Wait for the pipelined sonar frames delivered so far and hand them to the observers
+        (nothing to do in the serial loop)."""
+        if self._pipeline is not None and self._pipeline.busy:
+            with self.timer.stage("pipeline_wait"):
+                self._to_observers(self._pipeline.ready(wait=True))
+            self._wall_s = time.perf_counter() - self._wall_start
+
+    def close(self) -> None:
+        """Stop the pipeline's worker threads, if any (frames not yet delivered are dropped)."""
+        if self._pipeline is not None:
+            self._pipeline.close()
+            self._pipeline = None
 
     def run(self, progress: bool = True) -> MissionSummary:
         """Run until the mission ends or the scenario's duration is reached."""
@@ -240,6 +295,7 @@ class Mission:
                     bar.update(self.t_s - last)
                     bar.set_postfix_str(self.fsm.mode)
                     last = self.t_s
+        self.flush()
         summary = self.summary()
         for obs in self.observers:
             obs.on_end(summary)
@@ -252,7 +308,12 @@ class Mission:
 
     # -- internals -------------------------------------------------------------------
     def _fire(self, name: str, truth: VehicleTruth, scene: SceneView) -> None:
-        self.parts.scheduler.push(name, truth.t_s, self.parts.sensors[name].measure(truth, scene))
+        pipeline = self._pipeline
+        if pipeline is not None and name == self.parts.sonar.name:
+            msg = pipeline.capture(truth)  # rendered on a worker from a copy of the scene now
+        else:
+            msg = self.parts.sensors[name].measure(truth, scene)
+        self.parts.scheduler.push(name, truth.t_s, msg)
 
     def _note_bottom_lock(self, msg: DvlMsg) -> None:
         self.last_dvl_lock = bool(msg.valid)
@@ -260,6 +321,9 @@ class Mission:
     def _deliver(self, name: str, msg: Any) -> None:
         self._delivered[name] += 1
         timer = self.timer
+        if isinstance(msg, FrameTicket):  # pipelined: perception with the estimate of now, on a worker
+            self._pipeline.deliver(name, msg, self.nav_filter.estimate())
+            return
         with timer.stage("nav_filter"):
             for handler in self._by_type.get(type(msg), ()):
                 handler(msg)
@@ -269,11 +333,16 @@ class Mission:
         with timer.stage("nav_filter"):
             for handler in self._by_type.get(type(result), ()) if result is not None else ():
                 handler(result)  # onboard results the filter fuses (position fixes)
-        with timer.stage("observers"):
-            for obs in self.observers:
-                obs.on_message(name, msg)
-                if result is not None:
-                    obs.on_message(name, result)
+        self._to_observers(((name, msg, result),))
+
+    def _to_observers(self, ready) -> None:
+        """Hand ``(name, message, result or None)`` triples to every observer, in order."""
+        with self.timer.stage("observers"):
+            for name, msg, result in ready:
+                for obs in self.observers:
+                    obs.on_message(name, msg)
+                    if result is not None:
+                        obs.on_message(name, result)
 
     def _record(self, truth: VehicleTruth, nav: NavEstimate, mode: str) -> StepRecord:
         sp = self._setpoint

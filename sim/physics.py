@@ -4,6 +4,13 @@
 the scene tests step. Per physics step (:meth:`Physics.step`): the thrusters and the
 hydrodynamic wrench are updated with the present current (:meth:`VehicleDynamics.step_inputs`),
 MuJoCo integrates one step, the clock advances and the current evolves.
+
+More than one vehicle: the scenario's ``vehicle`` is the AUV (``physics.vehicle``, the
+default of every readout); ``scenario.vehicles`` adds surface vessels
+(:class:`sim.surface_vessel.SurfaceVesselDynamics`) stepped on the same clock in the same
+current, each holding the thruster command last given with :meth:`Physics.set_command`;
+their forces are updated at :data:`EXTRA_WRENCH_RATE_HZ` and held in between.
+``physics.vehicles`` maps ``"auv"`` and each extra name to its dynamics.
 """
 
 from __future__ import annotations
@@ -23,10 +30,13 @@ from sim.sensors.raycast import MujocoRayCaster
 from sim.truth import VehicleTruth
 from sim.vehicle import VehicleDynamics
 from sim.movers import MovingBodies
-from sim.vehicle_params import VehicleParams, load_vehicle_params
+from sim.surface_vessel import SurfaceVesselDynamics
+from sim.vehicle_params import VehicleParams, load_params_file, load_vehicle_params, params_path
 from sim.world import SceneObject, World, build_world
 
 FloatArray = NDArray[np.float64]
+#: Rate at which surface vessels' hydrodynamic and thruster forces are updated, Hz.
+EXTRA_WRENCH_RATE_HZ = 50.0
 
 
 class Physics:
@@ -40,7 +50,9 @@ class Physics:
         world: compiled scene and its tables (objects, seabed, hull sites).
         model, data: the MuJoCo model and data.
         params: the vehicle's parameters.
-        vehicle: the vehicle dynamics bound to ``model`` / ``data``.
+        vehicle: the AUV's dynamics bound to ``model`` / ``data``.
+        extras: name -> dynamics of each extra vehicle (``scenario.vehicles``), in order.
+        vehicles: ``{"auv": vehicle, **extras}``.
         current: the water current acting on the vehicle.
         movers: the moving targets (mocap bodies) and their seeded trajectories.
         caster: ray caster over the acoustic geoms (the hull excluded).
@@ -57,6 +69,18 @@ class Physics:
         self.caster = MujocoRayCaster(self.model, self.data, self.world.geom_object_id,
                                       self.world.geom_reflectivity, self.world.vehicle_body_id)
         self.vehicle = VehicleDynamics(self.model, self.data, self.params, None, body_id=self.world.vehicle_body_id)
+        self.extras: dict[str, SurfaceVesselDynamics] = {
+            name: SurfaceVesselDynamics(self.model, self.data, load_params_file(params_path(cfg.preset)),
+                                        self.world.extra_body_ids[name])
+            for name, cfg in scenario.vehicles.items()}
+        self.vehicles: dict[str, VehicleDynamics | SurfaceVesselDynamics] = {"auv": self.vehicle, **self.extras}
+        self._extra_list = tuple(self.extras.values())
+        # Surface vessels' wrench: updated every `_extra_every` physics steps (at about
+        # EXTRA_WRENCH_RATE_HZ) and held in between; their fastest mode (rotor lag 0.2 s,
+        # damping time constants ~1 s) is well resolved at that rate.
+        self._extra_every = max(1, int(round(1.0 / (self.dt_s * EXTRA_WRENCH_RATE_HZ))))
+        self._extra_dt_s = self._extra_every * self.dt_s
+        self._extra_count = 0
         self.current: OceanCurrent
         self.reseed(scenario.seed if seed is None else seed)
         self._moving = self._moving_objects()
@@ -77,14 +101,21 @@ class Physics:
         """
         self.current = OceanCurrent(cfg, rng)
         self.vehicle.set_current(self.current)
+        for extra in self._extra_list:
+            extra.set_current(self.current)
         return self.current
 
     def reset(self, pos_ned: ArrayLike, rpy_rad: ArrayLike) -> None:
         """Clock to 0, MuJoCo state cleared, vehicle at rest at ``pos_ned`` (m, NED) with
-        attitude ``rpy_rad``, current back to its mean."""
+        attitude ``rpy_rad``, current back to its mean; extra vehicles at rest at their
+        configured starts (``initial_pos_ne_m``, ``initial_heading_deg``), commands zero."""
         mujoco.mj_resetData(self.model, self.data)
         self.current.reset()
         self.vehicle.reset(pos_ned, rpy_rad)
+        for name, extra in self.extras.items():
+            cfg = self.scenario.vehicles[name]
+            extra.reset(cfg.initial_pos_ne_m, np.deg2rad(cfg.initial_heading_deg))
+        self._extra_count = 0
         if self.movers:
             self.movers.apply(self.data, 0.0)
         mujoco.mj_forward(self.model, self.data)
@@ -92,8 +123,11 @@ class Physics:
 
     # ------------------------------------------------------------------ stepping
     def step(self, thruster_cmd: ArrayLike) -> None:
-        """One physics step with normalised thruster commands (n_thr,) in [-1, 1]."""
+        """One physics step with the AUV's normalised thruster commands (n_thr,) in [-1, 1]
+        (extra vehicles: their held commands)."""
         self.vehicle.step_inputs(thruster_cmd, self.dt_s)
+        if self._extra_list:
+            self._step_extras()
         if self.movers:
             self.movers.apply(self.data, self.t_s)
         mujoco.mj_step(self.model, self.data)
@@ -101,14 +135,17 @@ class Physics:
         self.current.step(self.dt_s)
 
     def advance(self, thruster_cmd: ArrayLike, n_steps: int) -> bool:
-        """``n_steps`` physics steps holding ``thruster_cmd``; True if the vehicle touched
-        anything on any of them."""
+        """``n_steps`` physics steps holding the AUV's ``thruster_cmd`` (extra vehicles: their
+        held commands); True if the AUV touched anything on any of them."""
         step_inputs, mj_step, current_step = self.vehicle.step_inputs, mujoco.mj_step, self.current.step
         model, data, dt = self.model, self.data, self.dt_s
         contact = False
         movers = self.movers if self.movers else None
+        step_extras = self._step_extras if self._extra_list else None
         for _ in range(n_steps):
             step_inputs(thruster_cmd, dt)
+            if step_extras is not None:
+                step_extras()
             if movers is not None:
                 movers.apply(data, self.t_s)
             mj_step(model, data)
@@ -118,10 +155,39 @@ class Physics:
                 contact = self.vehicle_in_contact()
         return contact
 
+    def _step_extras(self) -> None:
+        """Update the extra vehicles' joint forces on every ``_extra_every``-th step (held
+        by MuJoCo in ``qfrc_applied`` in between), their rotors advanced by the whole hold."""
+        if self._extra_count == 0:
+            for extra in self._extra_list:
+                extra.step_inputs(self._extra_dt_s)
+        self._extra_count = (self._extra_count + 1) % self._extra_every
+
     # ------------------------------------------------------------------ readouts
-    def truth(self) -> VehicleTruth:
-        """True vehicle state now."""
-        return self.vehicle.truth(self.t_s)
+    def set_command(self, name: str, thruster_cmd: ArrayLike) -> None:
+        """Hold normalised thruster commands for extra vehicle ``name`` from the next step on.
+
+        Raises:
+            KeyError: no extra vehicle of that name (the AUV's commands go to :meth:`step`).
+            ValueError: wrong number of commands.
+        """
+        self._extra(name).set_command(thruster_cmd)
+
+    def truth(self, name: str = "auv") -> VehicleTruth:
+        """True state now of the AUV (default) or of the extra vehicle ``name``.
+
+        Raises:
+            KeyError: unknown vehicle name.
+        """
+        if name == "auv":
+            return self.vehicle.truth(self.t_s)
+        return self._extra(name).truth(self.t_s)
+
+    def _extra(self, name: str) -> SurfaceVesselDynamics:
+        try:
+            return self.extras[name]
+        except KeyError:
+            raise KeyError(f"no vehicle {name!r}; vehicles: {', '.join(self.vehicles)}") from None
 
     def scene(self) -> SceneView:
         """What sensors see now: the ray caster and the scene objects at their present poses
@@ -144,7 +210,7 @@ class Physics:
         return tuple(objs)
 
     def vehicle_in_contact(self) -> bool:
-        """True when a contact involves the vehicle body."""
+        """True when a contact involves the AUV's body."""
         body = self.model.geom_bodyid
         vb = self.world.vehicle_body_id
         for i in range(self.data.ncon):
@@ -152,6 +218,19 @@ class Physics:
             if body[c.geom1] == vb or body[c.geom2] == vb:
                 return True
         return False
+
+    def vehicles_in_contact(self) -> list[tuple[str, str]]:
+        """Pairs of vehicle names (``"auv"`` and the extras) whose hulls touch now."""
+        body_name = {self.world.vehicle_body_id: "auv"}
+        body_name.update({bid: name for name, bid in self.world.extra_body_ids.items()})
+        body = self.model.geom_bodyid
+        pairs = set()
+        for i in range(self.data.ncon):
+            c = self.data.contact[i]
+            a, b = body_name.get(int(body[c.geom1])), body_name.get(int(body[c.geom2]))
+            if a is not None and b is not None and a != b:
+                pairs.add(tuple(sorted((a, b))))
+        return sorted(pairs)
 
     def site_pos_body(self, name: str) -> FloatArray:
         """(3,) FRD offset of hull site ``name`` from the body origin, m. Raises ``KeyError``."""

@@ -27,6 +27,13 @@ from scenarios.config.vehicle import VehicleConfig
 FloatArray = NDArray[np.float64]
 ASSETS_DIR = Path(__file__).resolve().parent / "assets"
 SENSOR_NAMES = ("fls", "dvl", "imu", "altimeter", "depth", "gps")
+#: Sensor mounts a preset must have, by its motion model (a surface vessel carries no sonar,
+#: DVL or depth cell: GNSS and a compass/AHRS only).
+REQUIRED_SENSORS = {"free_6dof": SENSOR_NAMES, "surface_3dof": ("imu", "gps")}
+#: Motion models: ``free_6dof`` (a free body, Fossen's 6-DOF model, :mod:`sim.vehicle`) or
+#: ``surface_3dof`` (a surface vessel held at its waterline, level, moving in surge, sway
+#: and yaw only: Fossen's horizontal-plane model, :mod:`sim.surface_vessel`).
+MOTION_MODELS = tuple(REQUIRED_SENSORS)
 GRAVITY_MPS2 = 9.81
 
 
@@ -65,6 +72,8 @@ class _HullFile(StrictModel):
 class _ParamsFile(StrictModel):
     name: str
     description: str = ""
+    motion: str = Field("free_6dof", pattern=r"^(free_6dof|surface_3dof)$")
+    waterline_depth_m: float = Field(0.0, ge=-5.0, le=5.0)  # surface_3dof: NED z of CO when afloat
     mass_kg: PositiveFloat
     inertia_cg_kgm2: Vec3 | tuple[Vec3, Vec3, Vec3]
     r_bg_m: Vec3
@@ -124,7 +133,9 @@ class VehicleParams:
         layout: thruster geometry and command curves.
         envelope_m: (3,) overall length, width, height.
         hull: collision shape and visual mesh.
-        sensors: name -> mount, for fls, dvl, imu, altimeter, depth, gps.
+        sensors: name -> mount (:data:`REQUIRED_SENSORS` of its motion model).
+        motion: ``free_6dof`` or ``surface_3dof`` (see :data:`MOTION_MODELS`).
+        waterline_depth_m: surface_3dof only: NED z of CO while afloat (level, at rest), m.
     """
 
     name: str
@@ -147,6 +158,8 @@ class VehicleParams:
     sensors: Mapping[str, SensorMount] = field(default_factory=dict)
     description: str = ""
     munk_moments: bool = True
+    motion: str = "free_6dof"
+    waterline_depth_m: float = 0.0
 
     @property
     def volume_m3(self) -> float:
@@ -235,9 +248,10 @@ def load_params_file(path: str | Path) -> VehicleParams:
     M_A = _mat6(f.added_mass, "added_mass", path)
     if not np.allclose(M_A, M_A.T, atol=1e-9) or np.any(np.linalg.eigvalsh(M_A) < 0):
         raise VehicleParamsError(f"{path}: 'added_mass' must be symmetric positive semi-definite")
-    missing = [s for s in SENSOR_NAMES if s not in f.sensors]
+    required = REQUIRED_SENSORS[f.motion]
+    missing = [s for s in required if s not in f.sensors]
     if missing:
-        raise VehicleParamsError(f"{path}: 'sensors' lacks {missing}; required: {list(SENSOR_NAMES)}")
+        raise VehicleParamsError(f"{path}: 'sensors' lacks {missing}; required: {list(required)}")
     names = [t.name for t in f.thrusters]
     if len(set(names)) != len(names):
         raise VehicleParamsError(f"{path}: 'thrusters' names must be unique, got {names}")
@@ -269,6 +283,8 @@ def load_params_file(path: str | Path) -> VehicleParams:
         damping_quadratic=_ro(_mat6(f.damping_quadratic, "damping_quadratic", path)),
         damping_linear_decay_spm=_ro(f.damping_linear_decay_spm),
         munk_moments=f.munk_moments,
+        motion=f.motion,
+        waterline_depth_m=float(f.waterline_depth_m),
         thruster_time_constant_s=_ro([t.time_constant_s for t in f.thrusters]),
         layout=layout,
         envelope_m=_ro(f.envelope_m),

@@ -4,7 +4,9 @@ The MuJoCo world frame is NED (z down) and MuJoCo gravity is off: weight and buo
 act through the hydrodynamic wrench (:mod:`sim.vehicle`). Geom groups:
 
 * ``ACOUSTIC_GROUP`` (0): what sonars and ray-cast sensors see (seabed, walls, targets);
-* ``HULL_GROUP`` (1, :mod:`sim.hull`): the vehicle's geoms;
+* ``HULL_GROUP`` (1, :mod:`sim.hull`): the vehicles' geoms (the AUV's and those of the
+  extra vehicles of ``scenario.vehicles``, e.g. a surface buoy): no sonar sees them and
+  they are no scene object;
 * ``COLLISION_PROXY_GROUP`` (3): invisible collision stand-ins (a plane under a terrain
   mesh, since MuJoCo collides meshes through their convex hulls).
 """
@@ -82,6 +84,8 @@ class World:
     geom_reflectivity: NDArray[np.float64]
     vehicle_body_id: int
     site_ids: dict[str, int] = field(default_factory=dict)
+    #: body id of each extra vehicle (``scenario.vehicles``), attached under ``<name>/``.
+    extra_body_ids: dict[str, int] = field(default_factory=dict)
 
     def site_pos_body(self, name: str) -> NDArray[np.float64]:
         """Offset (FRD, m) of a hull site from the vehicle body origin."""
@@ -240,6 +244,11 @@ def build_world(scenario: Scenario, *, with_vehicle: bool = True) -> World:
         hull = build_hull_spec(load_vehicle_params(scenario.vehicle))
         frame = spec.worldbody.add_frame()
         frame.attach_body(hull.body(VEHICLE_BODY), HULL_PREFIX, "")
+    from sim.vehicle_params import load_params_file, params_path
+
+    for name, vcfg in scenario.vehicles.items():  # after the AUV: its ids stay those of a single-vehicle scene
+        extra = build_hull_spec(load_params_file(params_path(vcfg.preset)))
+        spec.worldbody.add_frame().attach_body(extra.body(VEHICLE_BODY), f"{name}/", "")
 
     model = spec.compile()
     data = mujoco.MjData(model)
@@ -268,6 +277,8 @@ def build_world(scenario: Scenario, *, with_vehicle: bool = True) -> World:
             name = model.site(sid).name
             if name.startswith(HULL_PREFIX):
                 site_ids[name[len(HULL_PREFIX):]] = sid
+    extra_body_ids = {name: mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f"{name}/{VEHICLE_BODY}")
+                      for name in scenario.vehicles}
     mujoco.mj_forward(model, data)
     return World(spec, model, data, seabed, tuple(final_objects), geom_object_id, geom_reflectivity,
-                 vehicle_body_id, site_ids)
+                 vehicle_body_id, site_ids, extra_body_ids)

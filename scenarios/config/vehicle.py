@@ -6,7 +6,9 @@ from typing import Literal
 
 from pydantic import Field
 
-from scenarios.config.base import StrictModel, Vec3
+from autonomy.surface.config import SurfaceAutonomyConfig
+from scenarios.config.base import StrictModel, Vec2, Vec3
+from scenarios.config.nav_sensors import GpsConfig, ImuConfig
 
 
 class ThrusterOverrides(StrictModel):
@@ -35,3 +37,24 @@ class VehicleConfig(StrictModel):
     thrusters: ThrusterOverrides = ThrusterOverrides()
     initial_pos_ned: Vec3 = (0.0, 0.0, 0.5)
     initial_rpy_deg: Vec3 = (0.0, 0.0, 0.0)
+
+
+class SurfaceVehicleConfig(StrictModel):
+    """A second vehicle in the scene: a surface vessel (``preset``, a ``surface_3dof``
+    parameter file in ``sim/assets``) with its GNSS, compass and autonomy.
+
+    ``behaviour``: ``station_keep`` holds ``station_ne_m`` (default: the start point);
+    ``follow`` holds the AUV's position plus ``offset_m``: (along, across) the AUV's course
+    with ``offset_frame: track`` ((-5, 0): 5 m behind it), (north, east) with ``ned``.
+    """
+
+    preset: Literal["surface_buoy"] = "surface_buoy"
+    initial_pos_ne_m: Vec2 = (0.0, 0.0)
+    initial_heading_deg: float = Field(0.0, ge=-360.0, le=360.0)
+    behaviour: Literal["station_keep", "follow"] = "station_keep"
+    station_ne_m: Vec2 | None = None
+    offset_m: Vec2 = (-5.0, 0.0)
+    offset_frame: Literal["track", "ned"] = "track"
+    gnss: GpsConfig = GpsConfig(noise_m=0.7, dropout_prob=0.0)
+    compass: ImuConfig = ImuConfig(rate_hz=10.0, heading_source="ahrs")
+    autonomy: SurfaceAutonomyConfig = SurfaceAutonomyConfig()
