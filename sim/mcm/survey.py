@@ -171,9 +171,9 @@ def run_survey(cfg: McmSurveyConfig, run_index: int, thresholds: FloatArray | No
         gos, card, err = [], [], []
         k_nav = 0
         for t_tile, (ell, pi1) in zip(t_tiles, tiles):
-            while k_nav < len(t_nav) and t_nav[k_nav] <= t_tile + 1e-9:
-                mapper.nav_update(float(t_nav[k_nav]), g[k_nav])
-                k_nav += 1
+            k_end = int(np.searchsorted(t_nav, t_tile + 1e-9, side="right"))  # INS outputs up to the tile
+            mapper.nav_updates(t_nav[k_nav:k_end], g[k_nav:k_end])
+            k_nav = max(k_nav, k_end)
             true_state = path.state(np.array([t_tile]))[0]
             mapper.set_true_state(true_state)
             mapper.tile_update(ell, pi1)
