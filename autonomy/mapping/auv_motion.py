@@ -43,15 +43,30 @@ def nct_predict(states: FloatArray, dt_s: float, sigma_lin_mps2: float, sigma_an
 
 def _ct_move(states: FloatArray, turn_rate: FloatArray, dt_s: float) -> FloatArray:
     """Noise-free coordinated turn of states (N, 5) over ``dt_s`` at ``turn_rate`` (N,) rad/s."""
-    n, e, vn, ve, _ = states.T
-    wt = turn_rate * dt_s
+    return _ct_move_columns(states[:, 0], states[:, 1], states[:, 2], states[:, 3], turn_rate, dt_s).T
+
+
+def _ct_move_columns(north: FloatArray, east: FloatArray, v_n: FloatArray, v_e: FloatArray, turn: FloatArray,
+                     dt_s: float) -> FloatArray:
+    """Noise-free coordinated turn (Li and Jilkov eq. 6) of states given by component (each
+    (N,)) over ``dt_s`` at ``turn`` (N,) rad/s; returns the new states (5, N)."""
+    wt = turn * dt_s
+    sin_wt, cos_wt = np.sin(wt), np.cos(wt)
     small = np.abs(wt) < 1e-6
-    safe_w = np.where(small, 1.0, turn_rate)
-    s_w = np.where(small, dt_s, np.sin(wt) / safe_w)
-    c_w = np.where(small, 0.5 * turn_rate * dt_s ** 2, (1.0 - np.cos(wt)) / safe_w)
-    c, s = np.cos(wt), np.sin(wt)
-    return np.column_stack([n + s_w * vn - c_w * ve, e + c_w * vn + s_w * ve, c * vn - s * ve, s * vn + c * ve,
-                            turn_rate])
+    if small.any():
+        safe = np.where(small, 1.0, turn)
+        s_w = np.where(small, dt_s, sin_wt / safe)
+        c_w = np.where(small, 0.5 * turn * dt_s ** 2, (1.0 - cos_wt) / safe)
+    else:
+        s_w = sin_wt / turn
+        c_w = (1.0 - cos_wt) / turn
+    new = np.empty((5, len(north)))
+    new[0] = north + s_w * v_n - c_w * v_e
+    new[1] = east + c_w * v_n + s_w * v_e
+    new[2] = cos_wt * v_n - sin_wt * v_e
+    new[3] = sin_wt * v_n + cos_wt * v_e
+    new[4] = turn
+    return new
 
 
 def nct_predict_ins_proposal(states: FloatArray, dt_s: float, sigma_lin_mps2: float, sigma_ang_radps2: float,
@@ -114,23 +129,7 @@ def ins_proposal_columns(cols: FloatArray, dt_s: float, sigma_lin_mps2: float, s
     turn += (sa2 * d2 / s_h) * e_h
     turn *= dt_s
     turn += rate  # the turn rate over the step, omega + dt u_ang
-    # noise-free coordinated turn at that rate (Li and Jilkov eq. 6)
-    wt = turn * dt_s
-    sin_wt, cos_wt = np.sin(wt), np.cos(wt)
-    small = np.abs(wt) < 1e-6
-    if small.any():
-        safe = np.where(small, 1.0, turn)
-        s_w = np.where(small, dt_s, sin_wt / safe)
-        c_w = np.where(small, 0.5 * turn * d2, (1.0 - cos_wt) / safe)
-    else:
-        s_w = sin_wt / turn
-        c_w = (1.0 - cos_wt) / turn
-    new = np.empty((5, len(north)))
-    new[0] = north + s_w * v_n - c_w * v_e
-    new[1] = east + c_w * v_n + s_w * v_e
-    new[2] = cos_wt * v_n - sin_wt * v_e
-    new[3] = sin_wt * v_n + cos_wt * v_e
-    new[4] = turn
+    new = _ct_move_columns(north, east, v_n, v_e, turn, dt_s)  # noise-free turn at that rate
     # linear noise along the new heading h: p_t = p0 + dt^2/2 h u_lin, v_t = v0 + dt h u_lin
     speed = np.hypot(new[2], new[3])
     moving = speed > 0.0
