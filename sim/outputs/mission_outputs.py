@@ -18,6 +18,7 @@ import numpy as np
 from scenarios.schema import Scenario
 from sim.outputs.map_plot import plot_map
 from sim.mission import Mission
+from sim.movers import BUBBLE_CLASS
 from sim.outputs.progress import MissionProgress
 from sim.outputs.run_dir import StagedOutput, check_output_dir
 from sim.outputs.trajectory_log import TrajectoryLog
@@ -55,9 +56,12 @@ def write_json(path: Path, data: Any, decimals: int | None = None) -> None:
 def planned_length_s(mission: Mission) -> float:
     """Planned mission length, s: start delay plus the survey path at the survey speed.
 
-    Used as the 100 % of the progress display; capped by the scenario's duration.
+    Used as the 100 % of the progress display; capped by the scenario's duration (a buddy
+    mission, which flies no survey: the duration).
     """
     scn = mission.scenario
+    if scn.autonomy.guidance.buddy.enabled:  # no survey plan: the mission runs to duration_s
+        return float(scn.duration_s)
     survey = scn.autonomy.guidance.survey
     wps = np.asarray(mission.waypoints_ne, dtype=float).reshape(-1, 2)
     start = np.asarray(scn.vehicle.initial_pos_ned[:2], dtype=float)
@@ -186,6 +190,19 @@ def run_mission(
             overlay = msis_overlay(msis_obs, scenario.world.basin, msis.localizer)
             extent = basin_outline_ne(scenario.world.basin)
         log.write_csv(partial / "trajectory.csv")
+        waypoints = mission.waypoints_ne
+        movers = {m.name for m in scenario.world.movers}
+        objects = [(o.name, o.centroid_ned, o.is_target) for o in mission.world.objects
+                   if o.name not in movers and o.class_name != BUBBLE_CLASS]  # movers: drawn as paths
+        if movers:
+            from sim.outputs.tracking_overlay import extent_points_ne, mover_paths_ned, tracking_overlay
+
+            paths = mover_paths_ned(mission.physics.movers, metrics["sim_time_s"])
+            est = (np.array(tracking.primary_est_ned)[:, 1:].reshape(-1, 3) if tracking is not None else None)
+            overlay = tracking_overlay(paths, est, f"tracker estimate ({scenario.autonomy.tracking.mode})")
+            extent = extent_points_ne(paths, est)
+        if scenario.autonomy.guidance.buddy.enabled:
+            waypoints = None  # the buddy observer follows the target, not the survey plan
         estimates, rejected = [], []
         if mission.perception is not None:
             write_json(partial / "world_model.json", mission.perception.world_model_json())
@@ -195,8 +212,8 @@ def run_mission(
             rejected = [o.pos_ned for o in mission.perception.world_objects() if o.id not in target_ids]
         plot_map(
             partial / "map.png",
-            true_pos_ned=log.true_pos_ned, est_pos_ned=log.est_pos_ned, waypoints_ne=mission.waypoints_ne,
-            targets=[(o.name, o.centroid_ned, o.is_target) for o in mission.world.objects],
+            true_pos_ned=log.true_pos_ned, est_pos_ned=log.est_pos_ned, waypoints_ne=waypoints,
+            targets=objects,
             estimates=estimates, rejected_ned=rejected,
             title=f"{scenario.name} seed {mission.seed} (nav: {nav_source})" + _outcome_suffix(metrics),
             overlay=overlay, extent_points_ne=extent,
