@@ -111,6 +111,41 @@ def _outcome_suffix(metrics: dict[str, Any]) -> str:
     return ""
 
 
+def map_layers(mission: Mission, tracking: Any, sim_time_s: float, overlay=None,
+               extent: np.ndarray | None = None) -> dict[str, Any]:
+    """The scene layers of ``map.png`` (keyword arguments of :func:`sim.outputs.map_plot.plot_map`):
+    ``waypoints_ne`` (None for a buddy mission, which does not fly the survey plan),
+    ``targets`` (fixed objects; movers are drawn as their true paths over ``sim_time_s`` with
+    the tracker's estimate, :mod:`sim.outputs.tracking_overlay`, and bubble scatterers not at
+    all), ``overlay`` (``overlay`` given, e.g. a scanning sonar's, then the movers') and
+    ``extent_points_ne``.
+
+    Args:
+        mission: the finished mission; tracking: its :class:`TrackingEvaluation` or None.
+    """
+    scenario = mission.scenario
+    movers = {m.name for m in scenario.world.movers}
+    objects = [(o.name, o.centroid_ned, o.is_target) for o in mission.world.objects
+               if o.name not in movers and o.class_name != BUBBLE_CLASS]
+    draws, extents = [overlay] if overlay is not None else [], [extent] if extent is not None else []
+    if movers:
+        from sim.outputs.tracking_overlay import extent_points_ne, mover_paths_ned, tracking_overlay
+
+        paths = mover_paths_ned(mission.physics.movers, sim_time_s)
+        est = np.array(tracking.primary_est_ned, dtype=float).reshape(-1, 4)[:, 1:] if tracking is not None else None
+        draws.append(tracking_overlay(paths, est, f"tracker estimate ({scenario.autonomy.tracking.mode})"))
+        extents.append(extent_points_ne(paths, est))
+
+    def draw_all(ax) -> None:
+        for draw in draws:
+            draw(ax)
+
+    return {"waypoints_ne": None if scenario.autonomy.guidance.buddy.enabled else mission.waypoints_ne,
+            "targets": objects, "overlay": draw_all if draws else None,
+            "extent_points_ne": np.concatenate([np.asarray(e, dtype=float).reshape(-1, 2) for e in extents])
+            if extents else None}
+
+
 class _ProgressObserver:
     """Feeds the mission's step records to a :class:`MissionProgress`."""
 
@@ -190,19 +225,7 @@ def run_mission(
             overlay = msis_overlay(msis_obs, scenario.world.basin, msis.localizer)
             extent = basin_outline_ne(scenario.world.basin)
         log.write_csv(partial / "trajectory.csv")
-        waypoints = mission.waypoints_ne
-        movers = {m.name for m in scenario.world.movers}
-        objects = [(o.name, o.centroid_ned, o.is_target) for o in mission.world.objects
-                   if o.name not in movers and o.class_name != BUBBLE_CLASS]  # movers: drawn as paths
-        if movers:
-            from sim.outputs.tracking_overlay import extent_points_ne, mover_paths_ned, tracking_overlay
-
-            paths = mover_paths_ned(mission.physics.movers, metrics["sim_time_s"])
-            est = (np.array(tracking.primary_est_ned)[:, 1:].reshape(-1, 3) if tracking is not None else None)
-            overlay = tracking_overlay(paths, est, f"tracker estimate ({scenario.autonomy.tracking.mode})")
-            extent = extent_points_ne(paths, est)
-        if scenario.autonomy.guidance.buddy.enabled:
-            waypoints = None  # the buddy observer follows the target, not the survey plan
+        layers = map_layers(mission, tracking, metrics["sim_time_s"], overlay, extent)
         estimates, rejected = [], []
         if mission.perception is not None:
             write_json(partial / "world_model.json", mission.perception.world_model_json())
@@ -212,11 +235,8 @@ def run_mission(
             rejected = [o.pos_ned for o in mission.perception.world_objects() if o.id not in target_ids]
         plot_map(
             partial / "map.png",
-            true_pos_ned=log.true_pos_ned, est_pos_ned=log.est_pos_ned, waypoints_ne=waypoints,
-            targets=objects,
-            estimates=estimates, rejected_ned=rejected,
-            title=f"{scenario.name} seed {mission.seed} (nav: {nav_source})" + _outcome_suffix(metrics),
-            overlay=overlay, extent_points_ne=extent,
+            true_pos_ned=log.true_pos_ned, est_pos_ned=log.est_pos_ned, estimates=estimates, rejected_ned=rejected,
+            title=f"{scenario.name} seed {mission.seed} (nav: {nav_source})" + _outcome_suffix(metrics), **layers,
         )
         if tracking is not None:
             metrics["tracking"] = tracking.metrics()
