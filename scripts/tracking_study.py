@@ -111,7 +111,7 @@ def study(args) -> int:
         if args.png:
             stem = Path(name).stem
             error_boxplot_png({k: np.concatenate(v) for k, v in pooled.items()}, args.png / f"tracking_study_{stem}.png",
-                              f"{stem}: {args.seeds} seeds, horizontal error")
+                              f"{stem}: {args.seeds} seeds", ylabel="horizontal position error (m)")
         print(json.dumps({name: report[name]["summary"]}, indent=1), flush=True)
     if args.json:
         args.json.write_text(json.dumps(report, indent=1, default=float))

@@ -207,17 +207,18 @@ class TrackingEvaluation:
         ax.plot(a[avail, 0], a[avail, 1], ".", ms=2, color="tab:red", label="sonar when available")
         ax.axvline(self.warmup_s, color="0.6", ls=":", lw=0.8, label=f"scored from {self.warmup_s:g} s")
         ax.set_xlabel("time (s)")
-        ax.set_ylabel("position error (m)")
+        ax.set_ylabel("3-D position error (m)")
         ax.set_title(title or "target position error")
         ax.legend(loc="upper right", fontsize=8)
         ax.grid(alpha=0.3)
         fig.tight_layout()
         fig.savefig(error_png, dpi=110)
-        error_boxplot_png(self.error_sets(), box_png, title or "error sets")
+        error_boxplot_png(self.error_sets(), box_png, title or "error sets", ylabel="3-D position error (m)")
 
 
-def error_boxplot_png(sets: dict[str, FloatArray], path: Path, title: str) -> None:
-    """Box plot (PNG) of the four error sets (m), as paper 004 fig. 8 (whiskers 1.5 IQR, no fliers)."""
+def error_boxplot_png(sets: dict[str, FloatArray], path: Path, title: str, ylabel: str = "position error (m)") -> None:
+    """Box plot (PNG) of the four error sets (m), as paper 004 fig. 8 (whiskers 1.5 IQR, no fliers);
+    ``ylabel`` says which error (3-D or horizontal)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -226,7 +227,7 @@ def error_boxplot_png(sets: dict[str, FloatArray], path: Path, title: str) -> No
     ax = fig.add_subplot()
     ax.boxplot([sets[k] if sets[k].size else [np.nan] for k in ERROR_SETS], showfliers=False)
     ax.set_xticks(range(1, 5), ["sonar", "sonar when\navailable", "USBL", "fused"])
-    ax.set_ylabel("position error (m)")
+    ax.set_ylabel(ylabel)
     ax.set_title(title)
     ax.grid(alpha=0.3, axis="y")
     fig.tight_layout()

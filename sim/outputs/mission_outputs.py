@@ -102,11 +102,13 @@ def collect_metrics(mission: Mission, log: TrajectoryLog) -> dict[str, Any]:
     return metrics
 
 
-def _outcome_suffix(metrics: dict[str, Any]) -> str:
+def _outcome_suffix(metrics: dict[str, Any], runs_to_duration: bool = False) -> str:
+    """Second title line: aborted, or not finished (not for a mission that runs to
+    ``duration_s`` by design, such as target tracking)."""
     m = metrics["mission"]
     if m["aborted"]:
         return f"\nABORTED at {metrics['sim_time_s']:.0f} s: {m['abort_reason']}"
-    if not m["finished"]:
+    if not m["finished"] and not runs_to_duration:
         return f"\nnot finished: stopped at duration_s ({metrics['sim_time_s']:.0f} s)"
     return ""
 
@@ -236,7 +238,8 @@ def run_mission(
         plot_map(
             partial / "map.png",
             true_pos_ned=log.true_pos_ned, est_pos_ned=log.est_pos_ned, estimates=estimates, rejected_ned=rejected,
-            title=f"{scenario.name} seed {mission.seed} (nav: {nav_source})" + _outcome_suffix(metrics), **layers,
+            title=f"{scenario.name} seed {mission.seed} (nav: {nav_source})" + _outcome_suffix(metrics, tracking is not None),
+            **layers,
         )
         if tracking is not None:
             metrics["tracking"] = tracking.metrics()
