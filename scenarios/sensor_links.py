@@ -1,5 +1,6 @@
 """Checks that the names a scenario's sensors and trackers refer to resolve: hull sites of
-sensor mounts, the USBL's transponder, and the sensors and mover the target tracker uses.
+sensor mounts, the USBL's transponder, the sensors and mover the target tracker uses, and the
+scanning sonar and basin the pool / tank localisation needs.
 
 Run at load (:func:`scenarios.load.check_scenario`), so ``auvsim validate`` and ``auvsim run``
 report a dangling name as one line naming the key and what is allowed, instead of failing
@@ -92,7 +93,31 @@ def tracking_problems(scenario: Scenario) -> list[str]:
     return problems
 
 
+#: The basin wall shape each scanning-sonar localisation method fits (paper 002).
+MSIS_METHOD_BASIN = {"circle": "circular", "walls": "rectangular"}
+
+
+def msis_localization_problems(scenario: Scenario) -> list[str]:
+    """``autonomy.msis_localization.method`` other than ``none`` needs an enabled msis sensor
+    and walls of the shape it fits (``circle``: a circular basin, ``walls``: a rectangular one)."""
+    method = scenario.autonomy.msis_localization.method
+    if method == "none":
+        return []
+    problems = []
+    if not any(c.kind == "msis" for c in scenario.sensors.enabled().values()):
+        problems.append(f"autonomy.msis_localization.method: {method!r} needs an enabled msis sensor "
+                        "(sensors: {msis: {...}}), or method: none")
+    shape = scenario.world.basin.shape
+    if shape != MSIS_METHOD_BASIN[method]:
+        fits = next(m for m, b in MSIS_METHOD_BASIN.items() if b == shape) if shape in MSIS_METHOD_BASIN.values() else None
+        problems.append(f"autonomy.msis_localization.method: {method!r} fits a {MSIS_METHOD_BASIN[method]} basin but "
+                        f"world.basin.shape is {shape!r}; allowed here: "
+                        + (f"{fits!r} or 'none'" if fits else "'none'"))
+    return problems
+
+
 def sensor_link_problems(scenario: Scenario) -> list[str]:
-    """Every problem of :func:`mount_problems`, :func:`transponder_problems` and
-    :func:`tracking_problems`, one line each."""
-    return mount_problems(scenario) + transponder_problems(scenario) + tracking_problems(scenario)
+    """Every problem of :func:`mount_problems`, :func:`transponder_problems`,
+    :func:`tracking_problems` and :func:`msis_localization_problems`, one line each."""
+    return (mount_problems(scenario) + transponder_problems(scenario) + tracking_problems(scenario)
+            + msis_localization_problems(scenario))

@@ -91,3 +91,13 @@ def test_yaml_tab_and_path_form_hints(tmp_path):
     assert msg == f"{bad}: not valid YAML at line 3, column 1: a tab character; indent with spaces"
     msg = _error(str(tmp_path / "scenarios" / "pool_circular.yaml"))
     assert "scenario file not found (the shipped scenario of that name runs as: pool_circular)" in msg
+
+
+def test_msis_localization_needs_its_sonar_and_basin():
+    msg = _error("pool_circular", "sensors.msis=null")
+    assert "autonomy.msis_localization.method: 'circle' needs an enabled msis sensor" in msg
+    msg = _error("pool_circular", "autonomy.msis_localization.method=walls")
+    assert "'walls' fits a rectangular basin but world.basin.shape is 'circular'; allowed here: 'circle' or 'none'" in msg
+    msg = _error("tank_rectangular", "autonomy.msis_localization.method=circle")
+    assert "allowed here: 'walls' or 'none'" in msg
+    assert load_scenario("pool_circular", ["sensors.msis=null", "autonomy.msis_localization.method=none"])
