@@ -257,7 +257,8 @@ def run_mission(
         plot_map(
             partial / "map.png",
             true_pos_ned=log.true_pos_ned, est_pos_ned=log.est_pos_ned, estimates=estimates, rejected_ned=rejected,
-            title=f"{scenario.name} seed {mission.seed} (nav: {nav_source})" + _outcome_suffix(metrics, tracking is not None),
+            title=(f"{scenario.name} seed {mission.seed} (nav: {nav_source})"
+                   + _outcome_suffix(metrics, runs_to_duration=tracking is not None)),
             **layers,
         )
         if tracking is not None:
