@@ -357,6 +357,8 @@ class RayFan:
                iters: int) -> tuple[RayTable, RayTable]:
         """Shrink each (ia, ib) elevation interval onto the edge between ia's surface and the next.
 
+        One cast per level for all intervals still open.
+
         An interval stops once both its ends lie beyond ``window_far_m`` (as base pairs beyond
         it are not refined): what is left of it cannot put energy into the image.
 
@@ -368,7 +370,7 @@ class RayFan:
         # end) and, per end, the row of the ray it holds in a pool of every ray met (the two end
         # tables, then each level's casts); the full rows are gathered once at the end.
         lo_t, hi_t = rays.take(ia), rays.take(ib)
-        lo_d, lo_n, lo_o, lo_v, lo_p = lo_t.dist.copy(), lo_t.normal.copy(), lo_t.obj.copy(), lo_t.dirs.copy(), lo_t.phi.copy()
+        lo_d, lo_n, lo_o, lo_v, lo_p = (a.copy() for a in (lo_t.dist, lo_t.normal, lo_t.obj, lo_t.dirs, lo_t.phi))
         hi_d, hi_p = hi_t.dist.copy(), hi_t.phi.copy()
         lo_row, hi_row = np.arange(n), np.arange(n, 2 * n)
         pool, n_pool = [lo_t, hi_t], 2 * n
