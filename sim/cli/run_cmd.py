@@ -58,7 +58,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     fls_every = args.rosbag_fls_every if args.rosbag_fls_every is not None else scenario.outputs.rosbag_fls_every
     metrics = run_mission(scenario, args.out, nav_source=args.nav, rerun=not args.no_rerun,
                           overwrite=args.overwrite, progress=not args.quiet, rosbag=rosbag,
-                          rosbag_fls_every=fls_every, score_detections=not args.no_scoring)
+                          rosbag_fls_every=fls_every, score_detections=not args.no_scoring,
+                          workers=args.workers)
     print_summary(metrics, args.out)
     mission = metrics["mission"]
     if mission["aborted"]:
@@ -91,5 +92,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="pose used for target geolocalisation (default: estimate)")
     p.add_argument("--detector", choices=["cnn", "classical", "none"], default=None,
                    help="override autonomy.atr.detector")
+    p.add_argument("--workers", type=positive_int, default=1, metavar="N",
+                   help="threads for the loop (default 1: serial); 2 or more render the sonar and run "
+                        "perception on worker threads while physics and navigation advance (same results)")
     p.add_argument("--quiet", action="store_true", help="no progress display")
     p.set_defaults(func=_cmd_run)

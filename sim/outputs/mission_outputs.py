@@ -132,7 +132,7 @@ class _ProgressObserver:
 def run_mission(
     scenario: Scenario, out: str | Path, *, nav_source: str = "estimate", rerun: bool = True,
     progress: bool = True, overwrite: bool = False, rosbag: bool | None = None, rosbag_fls_every: int | None = None,
-    score_detections: bool = True,
+    score_detections: bool = True, workers: int = 1,
 ) -> dict[str, Any]:
     """Run ``scenario`` and write metrics.json, trajectory.csv, world_model.json, map.png
     (with target tracking also tracking_error.png and tracking_boxplot.png, and the
@@ -141,7 +141,8 @@ def run_mission(
     every ``rosbag_fls_every``-th sonar frame; None takes the scenario's ``outputs.rosbag`` /
     ``outputs.rosbag_fls_every``) into ``out``. ``score_detections``: score the ATR against the
     frames' ground truth (:class:`sim.evaluation.detection_scoring.DetectionScorer`; its figures
-    go under ``perception`` in metrics.json). Returns the metrics.
+    go under ``perception`` in metrics.json). ``workers`` > 1 pipelines the sonar and its
+    perception on worker threads (:class:`sim.mission.Mission`; same outputs). Returns the metrics.
 
     Raises:
         OutputDirError: ``out`` is protected, a file, not creatable, or holds files that
@@ -168,7 +169,7 @@ def run_mission(
             from sim.ros2bag.recorder import RosbagRecorder
 
             observers.append(RosbagRecorder(partial / "rosbag", fls_every=rosbag_fls_every))
-        mission = Mission(scenario, nav_source=nav_source, observers=observers)
+        mission = Mission(scenario, nav_source=nav_source, observers=observers, workers=workers)
         if scorer is not None:
             if mission.perception is None:
                 mission.observers.remove(scorer)
@@ -190,7 +191,10 @@ def run_mission(
             tracking = evaluation_for(mission)
             mission.observers.append(tracking)
         mission.reset()
-        mission.run(progress=False)
+        try:
+            mission.run(progress=False)
+        finally:
+            mission.close()
 
         metrics = collect_metrics(mission, log, scorer)
         overlay = extent = None
