@@ -196,7 +196,8 @@ class SpaMapper:
 
     def _roughening(self, particles: FloatArray) -> FloatArray:
         n, d = particles.shape
-        span = np.percentile(particles, 99.0, axis=0) - np.percentile(particles, 1.0, axis=0)
+        lo, hi = np.percentile(particles, [1.0, 99.0], axis=0)
+        span = hi - lo
         return self.rng.standard_normal(particles.shape) * (self.cfg.roughening_k * span * n ** (-1.0 / d))
 
     def vehicle_estimate(self) -> FloatArray:
