@@ -188,7 +188,7 @@ def _mcm_full_config(spec: SweepSpec):
     try:
         scenario = load_scenario(spec.scenario, items)
     except ScenarioError as exc:
-        raise SweepError(str(exc)) from None
+        raise SweepError(f"sweep: {exc} (sweepable: mcm_survey and scenarios with mcm.mode: full)") from None
     if scenario.mcm.mode != "full":
         raise SweepError(f"sweep: scenario {spec.scenario!r} has no Monte Carlo runner (mcm.mode is "
                          f"{scenario.mcm.mode!r}; sweepable: mcm_survey and scenarios with mcm.mode: full)")

@@ -3,8 +3,6 @@ rendered by the analytic caster (a box on a flat seabed: its true position is kn
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 import pytest
 
@@ -16,6 +14,7 @@ from autonomy.sidescan.tile_assembler import SssTileAssembler
 from scenarios.config.sss import SssConfig
 from sim.sensors.analytic_caster import AnalyticBox, AnalyticCaster
 from sim.sensors.sss import SideScanSonar
+from tests.sim.sensors.test_sss_geometry import Obj
 
 
 def nav(t: float, n: float, e: float, psi: float) -> NavEstimate:
@@ -60,15 +59,6 @@ def test_tile_geometry_heading_east():
     ell = tile.to_tile_frame(ned)
     along = e4 - 1.5 * tile.ping_t_s[-1]
     np.testing.assert_allclose(ell, [[along, 4.75], [along, -4.75]], atol=1e-12)
-
-
-@dataclass(frozen=True)
-class Obj:
-    id: int
-    name: str
-    class_name: str
-    is_target: bool
-    centroid_ned: np.ndarray
 
 
 SEABED_M, DEPTH_M, SPEED, RATE = 20.0, 12.0, 1.0, 10.0

@@ -68,3 +68,14 @@ def test_run_full_is_deterministic_in_its_seed(short_run):
     assert a["spa"]["gospa"] == b["spa"]["gospa"] and a["lambda0_rad"] == b["lambda0_rad"]
     with pytest.raises(ValueError, match="no side-scan tile"):
         McmFullObserver(scn).results(0)
+
+
+def test_sweep_takes_full_mode_scenarios_only():
+    from sim.sweep.runner import SweepError, SweepSpec, sweep_parts
+
+    build = sweep_parts("mcm_survey_full")[0]
+    assert build(SweepSpec("mcm_survey_full", 1, 4, {"duration_s": 60})).seed == 4
+    with pytest.raises(SweepError, match="mcm.mode is 'off'"):
+        sweep_parts("cssn_lawnmower")[0](SweepSpec("cssn_lawnmower", 1, 0, {}))
+    with pytest.raises(SweepError, match="tile_period_s"):
+        build(SweepSpec("mcm_survey_full", 1, 0, {"mcm.tile.tile_period_s": -1}))
