@@ -2,8 +2,9 @@
 
 A proud object on the seabed returns more than the seabed on its facing side and hides the
 seabed behind it; the pair (highlight, then shadow further out in range) is the classical
-cue of side-scan mine detection (Reed, Petillot and Bell, IEEE JOE 2003, Section II; the
-shadow length follows from similar triangles, ``L = g h_o / (h - h_o)``). Steps per side of
+cue of side-scan mine detection ([Reed2003] in docs/references.md; the shadow length follows
+from similar triangles, ``L = g h_o / (h - h_o)`` for an object of height ``h_o`` at ground
+range ``g`` under altitude ``h``). Steps per side of
 a ground-range tile (:class:`autonomy.sidescan.tile_assembler.SssTileImage`):
 
 1. normalise each range column by its median over the tile's pings (the seabed level at that
