@@ -79,3 +79,12 @@ def test_sweep_takes_full_mode_scenarios_only():
         sweep_parts("cssn_lawnmower")[0](SweepSpec("cssn_lawnmower", 1, 0, {}))
     with pytest.raises(SweepError, match="tile_period_s"):
         build(SweepSpec("mcm_survey_full", 1, 0, {"mcm.tile.tile_period_s": -1}))
+
+
+def test_full_mode_needs_its_side_scan():
+    from scenarios.load import ScenarioError
+
+    with pytest.raises(ScenarioError, match="mcm.sensor"):
+        load_scenario("mcm_survey_full", ["sensors.sss.enabled=false"])
+    with pytest.raises(ScenarioError, match="mcm.sensor"):
+        load_scenario("mcm_survey_full", ["mcm.sensor=imu"])
