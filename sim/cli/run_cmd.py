@@ -34,7 +34,8 @@ def print_summary(metrics: dict, out: str) -> None:
         tr = metrics["tracking"]
         errs = ", ".join(f"{k} {_fmt(v.get('mean_m'), '.2f')} +- {_fmt(v.get('std_m'), '.2f')} m"
                          for k, v in tr["errors"].items())
-        print(f"tracking ({tr['mode']}): {errs}; sonar used in {_fmt(100 * tr['fused_sonar_step_fraction'], '.0f')} % "
+        print(f"tracking ({tr['mode']}; 3-D error, horizontal in metrics.json): {errs}; sonar used in "
+              f"{_fmt(100 * tr['fused_sonar_step_fraction'], '.0f')} % "
               f"of steps; target in view {_fmt(100 * tr['target_in_fov_fraction'], '.0f')} %")
     if "mcm" in metrics:
         mcm, det = metrics["mcm"], metrics["mcm"]["detector"]
@@ -42,6 +43,11 @@ def print_summary(metrics: dict, out: str) -> None:
                          for k, v in mcm.items() if isinstance(v, dict) and "final_gospa_mean" in v)
         print(f"mcm: {det['tiles']} tiles, detector pd {_fmt(det['pd'], '.2f')}, "
               f"{det['clutter_per_tile']:.2f} false per tile; {maps}")
+    if "msis_localization" in metrics:
+        ml = metrics["msis_localization"]
+        print(f"msis localisation: {ml['n_fixes']} sonar position fixes, horizontal RMS error "
+              f"{_fmt(ml.get('rms_fused_m'), '.2f', ' m')} (dead reckoning alone "
+              f"{_fmt(ml.get('rms_dead_reckoning_m'), '.2f', ' m')})")
     print(f"results in {out}")
 
 
