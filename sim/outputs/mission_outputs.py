@@ -231,6 +231,12 @@ def run_mission(
 
             tracking = evaluation_for(mission)
             mission.observers.append(tracking)
+        mcm_obs = None
+        if scenario.mcm.mode == "full":
+            from sim.mcm.full_mode import McmFullObserver
+
+            mcm_obs = McmFullObserver(scenario)
+            mission.observers.append(mcm_obs)
         mission.reset()
         try:
             mission.run(progress=False)
@@ -265,6 +271,13 @@ def run_mission(
             metrics["tracking"] = tracking.metrics()
             tracking.plot(partial / "tracking_error.png", partial / "tracking_boxplot.png",
                           title=f"{scenario.name} seed {mission.seed}")
+        if mcm_obs is not None:
+            from sim.mcm.figures import summarise, write_figures
+
+            mcm_result = mcm_obs.results(mission.seed)
+            write_json(partial / "mcm.json", mcm_result)
+            write_figures(partial, [mcm_result])
+            metrics["mcm"] = {**summarise([mcm_result]), "detector": mcm_result["detector"]}
         write_json(partial / "metrics.json", metrics, decimals=METRICS_DECIMALS)
         staged.commit()
     return metrics
