@@ -9,6 +9,7 @@ from pydantic import Field
 from autonomy.surface.config import SurfaceAutonomyConfig
 from scenarios.config.base import StrictModel, Vec2, Vec3
 from scenarios.config.nav_sensors import GpsConfig, ImuConfig
+from scenarios.config.usbl import UsblConfig
 
 
 class ThrusterOverrides(StrictModel):
@@ -46,6 +47,11 @@ class SurfaceVehicleConfig(StrictModel):
     ``behaviour``: ``station_keep`` holds ``station_ne_m`` (default: the start point);
     ``follow`` holds the AUV's position plus ``offset_m``: (along, across) the AUV's course
     with ``offset_frame: track`` ((-5, 0): 5 m behind it), (north, east) with ``ned``.
+
+    ``usbl``: a USBL head under the hull (the preset's ``usbl`` mount) whose transponder is
+    the AUV (``transponder: auv``); when given, a following vehicle follows its own USBL fixes
+    of the AUV instead of the AUV's true position, and with ``comms.acoustic`` on the fixes
+    are sent down to the AUV (``comms.surface``).
     """
 
     preset: Literal["surface_buoy"] = "surface_buoy"
@@ -57,4 +63,5 @@ class SurfaceVehicleConfig(StrictModel):
     offset_frame: Literal["track", "ned"] = "track"
     gnss: GpsConfig = GpsConfig(noise_m=0.7, dropout_prob=0.0)
     compass: ImuConfig = ImuConfig(rate_hz=10.0, heading_source="ahrs")
+    usbl: UsblConfig | None = Field(None, description="USBL head fixing the AUV (transponder: auv)")
     autonomy: SurfaceAutonomyConfig = SurfaceAutonomyConfig()
