@@ -159,3 +159,15 @@ class Scenario(StrictModel):
             raise ValueError(f"vehicle name {taken[0]!r} is taken (the AUV is 'vehicle'; reserved: "
                              f"{', '.join(RESERVED_VEHICLE_NAMES)})")
         return value
+
+    @model_validator(mode="after")
+    def _link_has_its_surface_vehicle(self) -> "Scenario":
+        comms = self.comms
+        if comms.acoustic.enabled:
+            name = comms.surface.vehicle
+            if name not in self.vehicles:
+                raise ValueError(f"comms.surface.vehicle {name!r} is not a key of vehicles: "
+                                 f"{sorted(self.vehicles) or 'none'} (comms.acoustic needs the surface vehicle)")
+            if comms.surface.usbl_fixes and self.vehicles[name].usbl is None:
+                raise ValueError(f"comms.surface.usbl_fixes needs vehicles.{name}.usbl (its USBL head)")
+        return self

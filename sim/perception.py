@@ -46,6 +46,9 @@ class Perception:
         self.nav_source = nav_source
         auto = scenario.autonomy
         self.detector = build_detector(auto.atr)
+        #: The ATR's class labels (the class table of the detection messages).
+        self.class_names: tuple[str, ...] = tuple(getattr(self.detector, "class_names", None)
+                                                  or (getattr(self.detector, "class_name", "target"),))
         self.loc_cfg = auto.localization
         self.wm_cfg = auto.world_model
         self.truth_targets = np.array([t.pos_ned for t in scenario.world.targets if t.is_target], dtype=float)
@@ -131,18 +134,29 @@ class Perception:
 
     def target_objects(self) -> list[Any]:
         """World objects the world model classifies as targets (most probable class)."""
-        return [o for o in self.world_objects() if o.class_name == TARGET_CLASS]
+        return target_objects(self.world_objects())
 
     def world_model_metrics(self) -> dict[str, Any]:
-        """Targets of the world model scored against the true targets (optimal assignment
-        within 2 m, GOSPA c = 2 m, p = 1, alpha = 2). Objects the world model itself
-        classifies as not-targets are counted apart, not as false targets."""
-        targets = self.target_objects()
-        est = np.array([o.pos_ned for o in targets], dtype=float).reshape(-1, 3)
-        s = score_world_model(est, self.truth_targets, match_radius_m=2.0, gospa_c_m=2.0, gospa_p=1.0)
-        out = {k: v for k, v in s.items() if k in ("objects", "matched", "missed", "false", "mean_position_error_m",
-                                                     "gospa", "pairs")}
-        out["objects_not_target"] = len(self.world_objects()) - len(targets)
-        for pair in out["pairs"]:
-            pair["estimate_id"] = targets[pair["estimate"]].id
-        return out
+        """The onboard world model scored against the true targets (:func:`world_model_metrics`)."""
+        return world_model_metrics(self.world_objects(), self.truth_targets)
+
+
+def target_objects(objects: list[Any]) -> list[Any]:
+    """The world objects classified as targets (most probable class)."""
+    return [o for o in objects if o.class_name == TARGET_CLASS]
+
+
+def world_model_metrics(objects: list[Any], truth_targets: np.ndarray) -> dict[str, Any]:
+    """Targets of a world model (its :class:`autonomy.world_model.WorldObject` list) scored
+    against the true targets ((k, 3) NED m): optimal assignment within 2 m, GOSPA c = 2 m,
+    p = 1, alpha = 2. Objects the world model itself classifies as not-targets are counted
+    apart, not as false targets."""
+    targets = target_objects(objects)
+    est = np.array([o.pos_ned for o in targets], dtype=float).reshape(-1, 3)
+    s = score_world_model(est, truth_targets, match_radius_m=2.0, gospa_c_m=2.0, gospa_p=1.0)
+    out = {k: v for k, v in s.items() if k in ("objects", "matched", "missed", "false", "mean_position_error_m",
+                                                 "gospa", "pairs")}
+    out["objects_not_target"] = len(objects) - len(targets)
+    for pair in out["pairs"]:
+        pair["estimate_id"] = targets[pair["estimate"]].id
+    return out

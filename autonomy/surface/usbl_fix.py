@@ -74,3 +74,38 @@ def usbl_fix_ned(
     cov += np.outer(j_psi, j_psi) * heading_sigma_rad**2
     cov[:2, :2] += np.asarray(buoy_pos_cov_ne_m2, dtype=float).reshape(2, 2)
     return pos, 0.5 * (cov + cov.T)
+
+
+class UsblFixer:
+    """The surface vehicle's onboard USBL processing: each valid USBL message of the AUV's
+    transponder becomes a fix of the AUV in the mission frame (:func:`usbl_fix_ned`), with
+    the vessel's GNSS-filter position taken back to the measurement time along its velocity.
+
+    Args:
+        mount_pos_body_m, mount_rpy_rad: the head's mount (FRD m, rad).
+        range_sigma_m, range_sigma_frac: range noise ``range_sigma_m + range_sigma_frac * r``, m.
+        angle_sigma_rad, angle_sigma_rad_per_m: angle noise ``angle_sigma_rad + angle_sigma_rad_per_m * r``.
+        heading_sigma_rad: compass heading noise, rad.
+    """
+
+    def __init__(self, mount_pos_body_m: ArrayLike, mount_rpy_rad: ArrayLike, *, range_sigma_m: float,
+                 range_sigma_frac: float, angle_sigma_rad: float, angle_sigma_rad_per_m: float,
+                 heading_sigma_rad: float) -> None:
+        self.mount_pos_body_m = np.asarray(mount_pos_body_m, dtype=float).reshape(3)
+        self.mount_rpy_rad = np.asarray(mount_rpy_rad, dtype=float).reshape(3)
+        self.range_sigma_m, self.range_sigma_frac = float(range_sigma_m), float(range_sigma_frac)
+        self.angle_sigma_rad, self.angle_sigma_rad_per_m = float(angle_sigma_rad), float(angle_sigma_rad_per_m)
+        self.heading_sigma_rad = float(heading_sigma_rad)
+
+    def fix(self, rbe: ArrayLike, t_meas_s: float, t_nav_s: float, pos_ne_m: ArrayLike, vel_ne_mps: ArrayLike,
+            pos_cov_ne_m2: ArrayLike, heading_rad: float) -> tuple[FloatArray, FloatArray]:
+        """``(pos_ned (3,), cov_ned (3, 3))`` of the AUV from a USBL fix ``rbe`` measured at
+        ``t_meas_s``, the vessel's filter position and velocity (2,) at ``t_nav_s`` and its
+        covariance (2, 2), and its heading (rad). Raises ``ValueError`` on a bad range."""
+        r = float(np.asarray(rbe, dtype=float).reshape(3)[0])
+        back = np.asarray(pos_ne_m, dtype=float) - np.asarray(vel_ne_mps, dtype=float) * (t_nav_s - t_meas_s)
+        return usbl_fix_ned(rbe, [back[0], back[1], 0.0], pos_cov_ne_m2, heading_rad,
+                            mount_pos_body_m=self.mount_pos_body_m, mount_rpy_rad=self.mount_rpy_rad,
+                            range_sigma_m=self.range_sigma_m + self.range_sigma_frac * r,
+                            angle_sigma_rad=self.angle_sigma_rad + self.angle_sigma_rad_per_m * r,
+                            heading_sigma_rad=self.heading_sigma_rad)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import Field
+from pydantic import Field, field_validator
 
 from autonomy.surface.config import SurfaceAutonomyConfig
 from scenarios.config.base import StrictModel, Vec2, Vec3
@@ -64,4 +64,11 @@ class SurfaceVehicleConfig(StrictModel):
     gnss: GpsConfig = GpsConfig(noise_m=0.7, dropout_prob=0.0)
     compass: ImuConfig = ImuConfig(rate_hz=10.0, heading_source="ahrs")
     usbl: UsblConfig | None = Field(None, description="USBL head fixing the AUV (transponder: auv)")
+
+    @field_validator("usbl")
+    @classmethod
+    def _usbl_fixes_the_auv(cls, value: UsblConfig | None) -> UsblConfig | None:
+        if value is not None and value.transponder != "auv":
+            raise ValueError(f"usbl.transponder must be 'auv' (the buoy's USBL fixes the AUV), got {value.transponder!r}")
+        return value
     autonomy: SurfaceAutonomyConfig = SurfaceAutonomyConfig()

@@ -15,8 +15,10 @@ from typing import Any
 
 import numpy as np
 
+from autonomy.geodesy import GeodeticOrigin, ned_to_lat_lon_depth
 from scenarios.schema import Scenario
 from sim.outputs.map_plot import plot_map
+from sim.perception import target_objects, world_model_metrics
 from sim.mission import Mission
 from sim.outputs.progress import MissionProgress
 from sim.outputs.run_dir import StagedOutput, check_output_dir
@@ -50,6 +52,20 @@ def write_json(path: Path, data: Any, decimals: int | None = None) -> None:
     """Write ``data`` as indented standard JSON (NaN -> null), floats rounded to ``decimals``."""
     plain = json.loads(json.dumps(data, default=_json_default))
     path.write_text(json.dumps(_clean(plain, decimals), indent=2) + "\n")
+
+
+def with_geodetic(world_model: dict[str, Any], origin: GeodeticOrigin) -> dict[str, Any]:
+    """A world model's JSON (:meth:`autonomy.world_model.PMHA.to_json`) with each object's
+    ``lat_deg``, ``lon_deg`` and ``depth_m`` (below the origin's height) beside its
+    ``pos_ned`` (paper 000 section VII reports objects in latitude / longitude / depth)."""
+    out = dict(world_model)
+    out["origin"] = origin.model_dump()
+    objects = []
+    for obj in world_model.get("objects", []):
+        lat, lon, depth = (float(v) for v in ned_to_lat_lon_depth(obj["pos_ned"], origin))
+        objects.append({**obj, "lat_deg": lat, "lon_deg": lon, "depth_m": depth})
+    out["objects"] = objects
+    return out
 
 
 def planned_length_s(mission: Mission) -> float:
@@ -95,6 +111,19 @@ def collect_metrics(mission: Mission, log: TrajectoryLog) -> dict[str, Any]:
                       f"{n_all - n_targets} it classifies as not targets (rocks, clutter) are listed there "
                       "but not scored")
         metrics["world_model"] = wm
+    if mission.link is not None:
+        metrics["link"] = mission.link.metrics()
+        nav = mission.nav_filter
+        if hasattr(nav, "n_late_fused"):
+            metrics["link"]["usbl_fixes_fused"] = nav.n_late_fused
+            metrics["link"]["usbl_fixes_refused"] = nav.n_late_gated + nav.n_late_too_old
+        surface = mission.link.surface_world_model
+        if surface is not None and mission.perception is not None:
+            sw = world_model_metrics(surface.world_model(), mission.perception.truth_targets)
+            sw["world_model_json_objects"] = len(surface.world_model())
+            sw["note"] = ("the world model on the surface vehicle, from the detections the acoustic link delivered "
+                          "(surface_world_model.json); scored as world_model")
+            metrics["surface_world_model"] = sw
     return metrics
 
 
@@ -130,7 +159,9 @@ def run_mission(
     scenario: Scenario, out: str | Path, *, nav_source: str = "estimate", rerun: bool = True,
     progress: bool = True, overwrite: bool = False, rosbag: bool | None = None, rosbag_fls_every: int | None = None,
 ) -> dict[str, Any]:
-    """Run ``scenario`` and write metrics.json, trajectory.csv, world_model.json, map.png
+    """Run ``scenario`` and write metrics.json, trajectory.csv, world_model.json (objects in NED
+    and latitude / longitude / depth), map.png (with an acoustic link, also
+    surface_world_model.json and the link statistics under ``link`` in metrics.json)
     (with target tracking also tracking_error.png and tracking_boxplot.png, and the
     trackers' figures under ``tracking`` in metrics.json; and recording.rrd; with ``rosbag``, a
     ROS 2 bag folder ``rosbag/`` in MCAP storage, :class:`sim.ros2bag.recorder.RosbagRecorder`,
@@ -187,12 +218,18 @@ def run_mission(
             extent = basin_outline_ne(scenario.world.basin)
         log.write_csv(partial / "trajectory.csv")
         estimates, rejected = [], []
+        origin = scenario.world.origin
+        surface_targets = []
         if mission.perception is not None:
-            write_json(partial / "world_model.json", mission.perception.world_model_json())
+            write_json(partial / "world_model.json", with_geodetic(mission.perception.world_model_json(), origin))
             targets = mission.perception.target_objects()
             estimates = [(f"{o.id}", o.pos_ned, o.cov_ned) for o in targets]
             target_ids = {o.id for o in targets}
             rejected = [o.pos_ned for o in mission.perception.world_objects() if o.id not in target_ids]
+        if mission.link is not None and mission.link.surface_world_model is not None:
+            surface = mission.link.surface_world_model
+            write_json(partial / "surface_world_model.json", with_geodetic(surface.to_json(), origin))
+            surface_targets = [o.pos_ned for o in target_objects(surface.world_model())]
         plot_map(
             partial / "map.png",
             true_pos_ned=log.true_pos_ned, est_pos_ned=log.est_pos_ned, waypoints_ne=mission.waypoints_ne,
@@ -200,6 +237,7 @@ def run_mission(
             estimates=estimates, rejected_ned=rejected,
             title=f"{scenario.name} seed {mission.seed} (nav: {nav_source})" + _outcome_suffix(metrics),
             overlay=overlay, extent_points_ne=extent,
+            other_paths=list(log.other_paths_ned().items()), surface_estimates_ned=surface_targets,
         )
         if tracking is not None:
             metrics["tracking"] = tracking.metrics()

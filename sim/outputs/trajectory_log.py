@@ -30,16 +30,20 @@ class TrajectoryLog:
         self._rows: list[list[float]] = []
         self._modes: list[str] = []
         self._thrusters: list[NDArray] = []
+        self._others: dict[str, list[NDArray]] = {}
 
     def on_start(self, info: MissionInfo) -> None:
         self._rows.clear()
         self._modes.clear()
         self._thrusters.clear()
+        self._others = {}
 
     def on_step(self, r: StepRecord) -> None:
         tr, nav = r.truth, r.nav
         self._modes.append(r.mode)
         self._thrusters.append(np.asarray(r.thruster_cmd, dtype=float))
+        for name, other in r.others.items():
+            self._others.setdefault(name, []).append(other.pos_ned)
         self._rows.append(
             [r.t_s, *tr.pos_ned, *tr.rpy_rad, *tr.nu[:3], tr.nu[5],
              *nav.pos_ned, *nav.rpy_rad, *nav.vel_body_mps,
@@ -75,6 +79,10 @@ class TrajectoryLog:
     @property
     def est_pos_ned(self) -> NDArray[np.float64]:
         return np.c_[self.column("est_n_m"), self.column("est_e_m"), self.column("est_d_m")]
+
+    def other_paths_ned(self) -> dict[str, NDArray[np.float64]]:
+        """Extra vehicle name -> its (n, 3) true NED path, m."""
+        return {name: np.asarray(p, dtype=float).reshape(-1, 3) for name, p in self._others.items()}
 
     def distance_travelled_m(self) -> float:
         p = self.true_pos_ned
