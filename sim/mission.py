@@ -165,7 +165,8 @@ class Mission:
             self.link = VehicleLink(scn, self.surface_vehicles[scn.comms.surface.vehicle],
                                     None if perception is None else perception.pmha,
                                     None if perception is None else perception.region_ned,
-                                    () if perception is None else perception.class_names, self.parts.seed)
+                                    () if perception is None else perception.class_names, self.parts.seed,
+                                    footprint=None if perception is None else perception.sonar_footprint())
         self.thruster_cmd = np.zeros(self.physics.params.n_thrusters)
         self.wrench_body = np.zeros(6)
         parts.scheduler.reset(0.0)
@@ -196,6 +197,8 @@ class Mission:
         self._wall_start = time.perf_counter()
         self._wall_s = 0.0
         self._delivered: Counter[str] = Counter()
+        #: (vehicle, vehicle) -> autonomy periods that ended with their hulls touching.
+        self.vehicle_contacts: Counter[tuple[str, str]] = Counter()
         self._started = True
         info = self.info()
         for obs in self.observers:
@@ -233,6 +236,8 @@ class Mission:
                     # a vessel with a USBL follows its own fixes of the AUV, else the AUV's true position
                     runner.tick(truth.pos_ned, auv_truth=truth)
                 self._others = self._other_truths()
+                for pair in physics.vehicles_in_contact():
+                    self.vehicle_contacts[pair] += 1
         for name, msg in scheduler.pop_ready(physics.t_s):
             self._deliver(name, msg)
         if self.link is not None:

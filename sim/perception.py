@@ -17,6 +17,7 @@ from autonomy.frames import euler_from_rot
 from autonomy.localization import fls_visibility, localize
 from autonomy.messages import NavEstimate
 from autonomy.world_model import CLASS_NAMES, PMHA
+from autonomy.world_model.surface import SonarFootprint
 from scenarios.schema import Scenario
 from sim.evaluation.detection_matching import MISSION_DETECTION_MATCH_IOU, match_frame
 from sim.evaluation.world_model_score import score_world_model
@@ -114,6 +115,13 @@ class Perception:
         return PerceptionResult(t_s=frame.t_s, detections=tuple(detections),
                                 true_detection=tuple(bool(s_ == 1) for s_ in state), localized=tuple(localized),
                                 world_objects=tuple(self.pmha.world_model()))
+
+    def sonar_footprint(self) -> SonarFootprint:
+        """The sonar's mount and field of view, as the surface world model places it."""
+        g = self.fls.geometry
+        return SonarFootprint(tuple(float(v) for v in self.fls.mount_pos_body_m),
+                              tuple(float(v) for v in self.fls.mount_rpy_rad), g.window_near_m, g.window_far_m,
+                              g.fov_rad, g.vertical_beamwidth_rad)
 
     # -- results --------------------------------------------------------------------------
     def world_objects(self) -> list[Any]:

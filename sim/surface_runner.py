@@ -86,6 +86,8 @@ class SurfaceVehicleRunner:
                                                component_rng(seed, f"vehicles.{name}.{entry}"))
         station = cfg.initial_pos_ne_m if cfg.station_ne_m is None else cfg.station_ne_m
         self.usbl_fixer = None
+        self._gnss_mount_body_m = (self.sensors["gnss"].mount.pos_body_m if "gnss" in self.sensors
+                                   else np.zeros(3))
         usbl = self.sensors.get("usbl")
         if usbl is not None:
             ucfg, ccfg = cfg.usbl, cfg.compass
@@ -107,6 +109,7 @@ class SurfaceVehicleRunner:
         self._gnss: list[GpsMsg] = []
         self._compass: ImuMsg | None = None
         self._usbl_in_flight: list[tuple[float, UsblMsg]] = []
+        self._last_gnss: GpsMsg | None = None
         self._new_fix: np.ndarray | None = None
         self.n_gnss_fixes = 0
         #: Fixes of the AUV not yet taken by the acoustic link (:meth:`take_auv_fixes`).
@@ -139,7 +142,10 @@ class SurfaceVehicleRunner:
                         msg = sensor.measure(truth, SceneView(t, None, (_Transponder(auv_truth.pos_ned),)))
                         self._usbl_in_flight.append((t + sensor.latency_s(msg), msg))
                 elif entry == "gnss":
-                    self._gnss.append(sensor.measure(truth))
+                    gnss = sensor.measure(truth)
+                    self._gnss.append(gnss)
+                    if gnss.valid:
+                        self._last_gnss = gnss
                 else:
                     self._compass = sensor.measure(truth)
                 period = 1.0 / sensor.rate_hz
@@ -156,18 +162,32 @@ class SurfaceVehicleRunner:
         self.physics.set_command(self.name, np.asarray(cmd, dtype=float))
 
     def _take_usbl(self, t_s: float) -> np.ndarray | None:
-        """Turn the USBL messages delivered by ``t_s`` into AUV fixes (with a valid GNSS
-        filter and a compass reading); the newest fix position, or None when none is new."""
+        """Turn the USBL messages delivered by ``t_s`` into AUV fixes; the newest fix
+        position, or None when none is new.
+
+        The vessel's position at a fix is its latest raw GNSS fix (antenna lever arm removed
+        with the compass heading) moved to the USBL time with the GNSS filter's velocity, with
+        the receiver's noise as its covariance: as a USBL positioning system combines the
+        fix of the moment, so that the fixes' errors are independent from one fix to the
+        next, as the AUV's filter assumes (the GNSS filter's estimate would hand it errors
+        correlated over the filter's time constant). Needs a GNSS fix, a valid GNSS filter
+        and a compass reading."""
         newest = None
         nav = self.autonomy.nav
+        gnss_var = self.cfg.autonomy.navigation.gnss_noise_m ** 2
         while self._usbl_in_flight and self._usbl_in_flight[0][0] <= t_s + 1e-9:
             _, msg = self._usbl_in_flight.pop(0)
-            if not msg.valid or self._compass is None or not nav.valid(t_s):
+            gnss = self._last_gnss
+            if not msg.valid or self._compass is None or gnss is None or not nav.valid(t_s):
                 continue
-            pos, cov = self.usbl_fixer.fix((msg.range_m, msg.bearing_rad, msg.elevation_rad), msg.t_s, nav.t_s,
-                                           nav.pos_ne_m, nav.vel_ne_mps, nav.P[:2, :2],
-                                           float(self._compass.rpy_rad[2]))
-            vessel = nav.pos_ne_m - nav.vel_ne_mps * (nav.t_s - msg.t_s)
+            heading = float(self._compass.rpy_rad[2])
+            c, s = math.cos(heading), math.sin(heading)
+            lever = self._gnss_mount_body_m
+            vessel = (np.asarray(gnss.pos_ne_m, dtype=float) - np.array([c * lever[0] - s * lever[1],
+                                                                         s * lever[0] + c * lever[1]])
+                      + nav.vel_ne_mps * (msg.t_s - gnss.t_s))
+            pos, cov = self.usbl_fixer.fix((msg.range_m, msg.bearing_rad, msg.elevation_rad), msg.t_s, msg.t_s,
+                                           vessel, np.zeros(2), gnss_var * np.eye(2), heading)
             self.auv_fixes.append(AuvFix(float(msg.t_s), pos, cov, np.array([vessel[0], vessel[1], 0.0])))
             self.n_usbl_fixes += 1
             newest = pos

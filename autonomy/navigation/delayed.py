@@ -10,9 +10,9 @@ processes and keeps copies of the filter's state every ``snapshot_every_s``. A l
 rolls the filter back to the last copy before its measurement time, replays the recorded
 events up to that time, fuses the fix there and replays the rest: the result is the
 estimate the filter would have had with the fix on time (exactly, for the same sequence of
-events), the "re-processing" solution to out-of-sequence measurements (Bar-Shalom, Chen and
-Mallick, "One-step solution for the multistep out-of-sequence-measurement problem in
-tracking", IEEE TAES 40(1), 2004, section I; docs/references.md [OOSM]).
+events): the re-processing solution to out-of-sequence measurements ([BarShalom2001-OOSM]
+section 10.8, docs/references.md), which the target tracker already uses for its late USBL
+fixes.
 
 Fixes older than the history (``horizon_s``) are refused. The wrapper has the filter's
 interface (``predict``, ``estimate``, ``message_handlers``, ``t_s``, ``state``,

@@ -28,7 +28,7 @@ from autonomy.geodesy import ned_to_lat_lon_depth
 from autonomy.localization.geolocate import LocalizedDetection
 from autonomy.messages import PositionFixMsg
 from autonomy.world_model import PMHA
-from autonomy.world_model.surface import SurfaceWorldModel
+from autonomy.world_model.surface import FixTrack, SonarFootprint, SurfaceWorldModel
 from scenarios.schema import Scenario
 from sim.comms.acoustic_link import AcousticLink
 from sim.stage_timer import NULL_TIMER, StageTimer
@@ -51,6 +51,8 @@ class VehicleLink:
             as they are).
         region_ned: the surveyed volume of the surface world model (as the onboard one's).
         class_names: the ATR's class table (the reports' class ids index it on both ends).
+        footprint: the AUV's sonar as the surface knows it (None: the surface world model
+            uses the visibility floor for every anchor).
         seed: root seed (the link draws from ``component_rng(seed, "acoustic_link")``).
 
     Attributes:
@@ -60,7 +62,8 @@ class VehicleLink:
     """
 
     def __init__(self, scenario: Scenario, surface: SurfaceVehicleRunner, onboard_pmha: PMHA | None,
-                 region_ned: tuple[Any, Any] | None, class_names: Sequence[str], seed: int) -> None:
+                 region_ned: tuple[Any, Any] | None, class_names: Sequence[str], seed: int,
+                 footprint: SonarFootprint | None = None) -> None:
         comms = scenario.comms
         self.cfg, self.acoustic = comms.surface, comms.acoustic
         self.origin = scenario.world.origin
@@ -73,9 +76,12 @@ class VehicleLink:
         self._onboard_pmha = onboard_pmha
         self.class_names = tuple(class_names)
         self.surface_world_model = None
+        #: The AUV's track from the surface vehicle's own USBL fixes (places the sonar's fan).
+        self.auv_track = FixTrack()
         if self.cfg.detections and region_ned is not None:
             self.surface_world_model = SurfaceWorldModel(scenario.autonomy.world_model, region_ned, self.origin,
-                                                         self.cfg.epoch_unix_s, self.class_names)
+                                                         self.cfg.epoch_unix_s, self.class_names,
+                                                         footprint=footprint, track=self.auv_track)
         self._det_id = self._fix_id = 0
         self.n_detections_queued = self.n_fixes_queued = self.n_fixes_received = 0
 
@@ -98,8 +104,10 @@ class VehicleLink:
         speeds for the channel); returns the USBL fixes the AUV received, stamped with their
         measurement time (mission s). The surface world model's update is timed as stage
         ``surface_world_model`` of ``timer``."""
+        fixes = self.surface.take_auv_fixes()
+        for f in fixes:
+            self.auv_track.add(f.t_s, f.pos_ned)
         if self.cfg.usbl_fixes:
-            fixes = self.surface.take_auv_fixes()
             if fixes:
                 f = fixes[-1]
                 lat, lon, depth = (float(v) for v in ned_to_lat_lon_depth(f.pos_ned, self.origin))

@@ -111,6 +111,13 @@ def collect_metrics(mission: Mission, log: TrajectoryLog) -> dict[str, Any]:
                       f"{n_all - n_targets} it classifies as not targets (rocks, clutter) are listed there "
                       "but not scored")
         metrics["world_model"] = wm
+    others = log.other_paths_ned()
+    if others:
+        auv = log.true_pos_ned
+        metrics["vehicles"] = {
+            "contact_periods": {"-".join(pair): n for pair, n in mission.vehicle_contacts.items()},
+            "min_separation_m": {name: float(np.min(np.linalg.norm(path - auv, axis=1))) for name, path in others.items()},
+        }
     if mission.link is not None:
         metrics["link"] = mission.link.metrics()
         nav = mission.nav_filter
