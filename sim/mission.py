@@ -172,7 +172,8 @@ class Mission:
         parts.scheduler.reset(0.0)
         self.nav_filter = parts.make_nav_filter(scn)
         if self.link is not None and scn.comms.surface.usbl_fixes and scn.comms.surface.fuse_usbl_fixes:
-            self.nav_filter = DelayedFixFilter(self.nav_filter, gate_chi2=scn.autonomy.navigation.gps_gate_chi2)
+            self.nav_filter = DelayedFixFilter(self.nav_filter, snapshot_every_s=0.25,
+                                               gate_chi2=scn.autonomy.navigation.gps_gate_chi2)
         self._by_type: dict[type, list[Callable[[Any], Any]]] = {}
         for msg_type, handler in self.nav_filter.message_handlers().items():
             self._by_type.setdefault(msg_type, []).append(handler)

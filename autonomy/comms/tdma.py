@@ -19,6 +19,7 @@ from collections import deque
 from dataclasses import dataclass
 
 SURFACE, AUV = "surface", "auv"
+_EPS_S = 1e-9
 
 
 @dataclass(frozen=True, slots=True)
@@ -43,8 +44,9 @@ class TdmaSchedule:
 
     def slot_end_s(self, node: str, t_s: float) -> float:
         """End of ``node``'s slot containing ``t_s`` (s), or -inf when ``t_s`` is outside its slots."""
-        start = math.floor(t_s / self.cycle_s) * self.cycle_s
-        phase = t_s - start
+        # a tick meant to fall on a slot's start may land a rounding error before it
+        start = math.floor((t_s + _EPS_S) / self.cycle_s) * self.cycle_s
+        phase = max(t_s - start, 0.0)
         if node == SURFACE:
             return start + self.surface_slot_s if phase < self.surface_slot_s else -math.inf
         if node == AUV:
