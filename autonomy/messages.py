@@ -38,6 +38,14 @@ class DvlMsg:
 
 
 @dataclass(frozen=True, slots=True)
+class WrenchCmdMsg:
+    """The autopilot's commanded body wrench (what it asks of the thrusters, not what they give)."""
+
+    t_s: float
+    wrench_body: FloatArray  # (6,) X, Y, Z force (N), K, M, N moment (N m), FRD
+
+
+@dataclass(frozen=True, slots=True)
 class DepthMsg:
     t_s: float
     depth_m: float
@@ -166,6 +174,10 @@ class PositionFixMsg:
     circle_ne_m: FloatArray | None = None  # (3,) fitted circle: centre north, east, radius, m
     segments_ne_m: FloatArray | None = None  # (k, 2, 2) segment end points (north, east), m
     segments_rho95_m: FloatArray | None = None  # (k,) 95 % rho half-width of each segment, m
+    # heading error of the estimate the features were placed with (estimate - true, rad, e.g.
+    # from walls of known direction) and its variance; NaN: none
+    heading_err_rad: float = float("nan")
+    heading_var_rad2: float = float("nan")
 
 
 @dataclass(frozen=True, slots=True)

@@ -3,9 +3,11 @@
 Runs each tracking scenario over N seeds (no output files) and reports, per scenario, the
 mean over seeds of each error set's mean and spread (m), the fraction of filter steps with a
 sonar detection in the fused filter, and the ROI gating of bubble clusters; with
-``--json`` also every run's figures.
+``--json`` also every run's figures; with ``--png DIR`` the box plot of the four error sets
+pooled over the seeds, horizontal error as in paper 004 fig. 8
+(``DIR/tracking_study_<scenario>.png``).
 
-    python scripts/tracking_study.py --seeds 20 --duration 150 \
+    python scripts/tracking_study.py --seeds 20 --duration 150 --png runs/study \
         --scenarios track_static_vehicle track_moving_vehicle diver_follow
 """
 
@@ -24,11 +26,11 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from scenarios.load import load_scenario  # noqa: E402
-from sim.evaluation.tracking_eval import ERROR_SETS, evaluation_for  # noqa: E402
+from sim.evaluation.tracking_eval import ERROR_SETS, error_boxplot_png, evaluation_for  # noqa: E402
 from sim.mission import Mission  # noqa: E402
 
 
-def run_one(scenario_path: Path, seed: int, duration_s: float | None) -> dict:
+def run_one(scenario_path: Path, seed: int, duration_s: float | None) -> tuple[dict, dict[str, np.ndarray]]:
     overrides = [f"seed={seed}"] + ([f"duration_s={duration_s}"] if duration_s else [])
     mission = Mission(load_scenario(str(scenario_path), overrides), perception=True)
     ev = evaluation_for(mission)
@@ -36,16 +38,17 @@ def run_one(scenario_path: Path, seed: int, duration_s: float | None) -> dict:
     mission.reset()
     while not mission.done:
         mission.step()
-    return ev.metrics()
+    return ev.metrics(), ev.error_sets(horizontal=True)
 
 
 def summarise(runs: list[dict]) -> dict:
     out: dict = {"runs": len(runs)}
-    for k in ERROR_SETS:
-        means = np.array([r["errors"][k].get("mean_m", math.nan) for r in runs], dtype=float)
-        stds = np.array([r["errors"][k].get("std_m", math.nan) for r in runs], dtype=float)
-        out[k] = {"mean_m": float(np.nanmean(means)), "spread_m": float(np.nanmean(stds)),
-                  "mean_of_means_sd_m": float(np.nanstd(means))}
+    for key, prefix in (("errors", ""), ("errors_horizontal", "horizontal_")):
+        for k in ERROR_SETS:
+            means = np.array([r[key][k].get("mean_m", math.nan) for r in runs], dtype=float)
+            stds = np.array([r[key][k].get("std_m", math.nan) for r in runs], dtype=float)
+            out[prefix + k] = {"mean_m": float(np.nanmean(means)), "spread_m": float(np.nanmean(stds)),
+                               "mean_of_means_sd_m": float(np.nanstd(means))}
     for key in ("fused_sonar_step_fraction", "target_in_fov_fraction", "min_distance_m"):
         v = np.array([r[key] for r in runs], dtype=float)
         out[key] = {"mean": float(np.nanmean(v)), "min": float(np.nanmin(v)), "max": float(np.nanmax(v))}
@@ -58,8 +61,10 @@ def summarise(runs: list[dict]) -> dict:
         ok = np.isfinite(v) & (w > 0)
         roi[frac] = float(np.sum(v[ok] * w[ok]) / np.sum(w[ok])) if ok.any() else math.nan
     out["roi"] = roi
-    out["fused_beats_both"] = bool(out["fused"]["mean_m"] < min(out["sonar"]["mean_m"], out["usbl"]["mean_m"]) and
-                                   out["fused"]["spread_m"] < min(out["sonar"]["spread_m"], out["usbl"]["spread_m"]))
+    for prefix in ("", "horizontal_"):
+        f, so, us = out[prefix + "fused"], out[prefix + "sonar"], out[prefix + "usbl"]
+        out[prefix + "fused_beats_both"] = bool(f["mean_m"] < min(so["mean_m"], us["mean_m"]) and
+                                                f["spread_m"] < min(so["spread_m"], us["spread_m"]))
     return out
 
 
@@ -69,18 +74,26 @@ def main() -> int:
     p.add_argument("--duration", type=float, default=None, help="override duration_s (s)")
     p.add_argument("--scenarios", nargs="+", default=["track_static_vehicle", "track_moving_vehicle"])
     p.add_argument("--json", type=Path, default=None, help="write every run and the summary here")
+    p.add_argument("--png", type=Path, default=None, help="folder for the pooled box plots")
     args = p.parse_args()
     logging.getLogger("autonomy.tracking.tracker").setLevel(logging.ERROR)
     report = {}
     for name in args.scenarios:
         path = ROOT / "scenarios" / f"{name}.yaml"
-        runs = []
+        runs, pooled = [], {k: [] for k in ERROR_SETS}
         for seed in range(args.seeds):
-            runs.append(run_one(path, seed, args.duration))
-            e = runs[-1]["errors"]
-            print(f"{name} seed {seed}: " + ", ".join(f"{k} {e[k].get('mean_m', math.nan):.2f}" for k in ERROR_SETS)
+            metrics, sets = run_one(path, seed, args.duration)
+            runs.append(metrics)
+            for k in ERROR_SETS:
+                pooled[k].append(sets[k])
+            e = runs[-1]["errors_horizontal"]
+            print(f"{name} seed {seed} (horizontal): " + ", ".join(f"{k} {e[k].get('mean_m', math.nan):.2f}" for k in ERROR_SETS)
                   + f"; sonar steps {runs[-1]['fused_sonar_step_fraction']:.2f}", flush=True)
         report[name] = {"summary": summarise(runs), "runs": runs}
+        if args.png:
+            args.png.mkdir(parents=True, exist_ok=True)
+            error_boxplot_png({k: np.concatenate(v) for k, v in pooled.items()}, args.png / f"tracking_study_{name}.png",
+                              f"{name}: {args.seeds} seeds, horizontal error")
         print(json.dumps({name: report[name]["summary"]}, indent=1), flush=True)
     if args.json:
         args.json.write_text(json.dumps(report, indent=1, default=float))

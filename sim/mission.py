@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from autonomy.control.setpoint import Setpoint
-from autonomy.messages import DvlMsg, NavEstimate, UsblMsg
+from autonomy.messages import DvlMsg, NavEstimate, UsblMsg, WrenchCmdMsg
 from autonomy.navigation.delayed import DelayedFixFilter
 from scenarios.schema import Scenario
 from sim.mission_build import NAV_SOURCES, MissionParts, build_mission_parts
@@ -258,7 +258,11 @@ class Mission:
             nav = self.nav_filter.estimate()
         if parts.tracking is not None:
             with timer.stage("tracking"):
-                parts.tracking.on_nav(nav)
+                results = parts.tracking.on_nav(nav)  # frames that waited for this pose
+            with timer.stage("observers"):
+                for res in results:
+                    for obs in self.observers:
+                        obs.on_message(parts.sonar.name, res)
         with timer.stage("guidance"):
             if setpoint is not None:
                 sp = setpoint
@@ -271,6 +275,10 @@ class Mission:
         with timer.stage("control"):
             self.wrench_body = np.zeros(6) if sp is None else parts.autopilot.update(nav, sp, self.autonomy_dt_s)
             self.thruster_cmd = parts.allocator.allocate(self.wrench_body)
+        with timer.stage("nav_filter"):
+            cmd = WrenchCmdMsg(physics.t_s, self.wrench_body.copy())
+            for handler in self._by_type.get(WrenchCmdMsg, ()):
+                handler(cmd)  # the speed model of a DVL-free filter
         rec = self._record(truth, nav, parts.fsm.mode)
         self._wall_s = time.perf_counter() - self._wall_start
         return rec

@@ -53,14 +53,12 @@ class PerceptionResult:
     Attributes:
         t_s: capture time of the frame, s.
         detections: ATR detections in the frame.
-        true_detection: per detection, whether it matched a visible target's box.
         localized: per detection, its geolocalised position (onboard estimate).
         world_objects: the world model after fusing the frame.
     """
 
     t_s: float
     detections: tuple[Detection, ...] = ()
-    true_detection: tuple[bool, ...] = ()
     localized: tuple[Any, ...] = ()
     world_objects: tuple[Any, ...] = ()
 
@@ -121,7 +119,9 @@ class MissionObserver(Protocol):
 
     ``on_message`` receives every message delivered to the autonomy, by sensor name (an
     ``ImuMsg``, an FLS render, ...), and after a sonar frame the :class:`PerceptionResult`
-    made of it under the same name.
+    made of it under the same name (with target tracking, the
+    :class:`autonomy.tracking.onboard.TrackingFrameResult` instead, once the frame is
+    processed: at the first vehicle pose at or after its ping).
     """
 
     def on_start(self, info: MissionInfo) -> None: ...

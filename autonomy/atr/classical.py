@@ -20,8 +20,18 @@ from autonomy.atr.config import ClassicalAtrConfig
 from autonomy.atr.detector import check_frame, to_detections
 from autonomy.atr.union_find import UnionFind
 from autonomy.messages import Detection, FlsFrame
+from autonomy.sonar_geometry import FanGeometry
 
-_FEATURES = ("extent_m", "minor_m", "area_m2", "fill", "n_contours")
+_FEATURES = ("extent_m", "minor_m", "area_m2", "fill", "n_contours", "edge_gap_m")
+
+
+def fan_edge_gap_m(geometry: FanGeometry, x_px: NDArray, y_px: NDArray) -> NDArray[np.float64]:
+    """Distance (m) of fan pixels (x, y) (k,) to the nearest boundary of the fan: its two
+    side edges (``r sin(fov / 2 - |azimuth|)``) and its near and far range arcs; negative
+    outside the fan."""
+    r, a = geometry.pixel_to_polar(x_px, y_px)
+    side = r * np.sin(0.5 * geometry.fov_rad - np.abs(a))
+    return np.minimum(side, np.minimum(r - geometry.range_min_m, geometry.range_max_m - r))
 
 
 def _box_gaps_px(boxes: NDArray) -> NDArray[np.float64]:
@@ -49,13 +59,16 @@ class ClassicalDetector:
         return boxes, scores
 
     def clusters(self, fan: NDArray[np.uint8], m_per_px: float,
-                 roi_centre_px: tuple[float, float] | None = None
+                 roi_centre_px: tuple[float, float] | None = None, geometry: FanGeometry | None = None
                  ) -> tuple[NDArray[np.float64], NDArray[np.float64], dict[str, NDArray[np.float64]]]:
         """All scored clusters with their shape cues (paper 004: a cluster is compared with the
         target's known size and shape): boxes (N, 4) fan px xyxy, scores (N,) in [0, 1], and
         (N,) arrays ``extent_m`` (longer box side), ``minor_m`` (shorter box side),
-        ``area_m2`` (foreground area of its contours), ``fill`` (foreground fraction of the box)
-        and ``n_contours`` (contours merged into it)."""
+        ``area_m2`` (foreground area of its contours), ``fill`` (foreground fraction of the box),
+        ``n_contours`` (contours merged into it) and ``edge_gap_m`` (smallest distance of its
+        contours to the fan's boundary, :func:`fan_edge_gap_m`, with the fan ``geometry``;
+        inf without): a cluster at the boundary may be a target cut by the edge of the view,
+        whose extent and area are then only lower bounds."""
         cfg = self.cfg
         empty = (np.zeros((0, 4)), np.zeros(0), {k: np.zeros(0) for k in _FEATURES})
         sigma_px = max(cfg.blur_sigma_m / m_per_px, 0.3)
@@ -74,6 +87,14 @@ class ClassicalDetector:
         min_px = cfg.min_size_m / m_per_px
         big = np.maximum(rects[:, 2], rects[:, 3]) >= 0.25 * min_px
         boxes = boxes[big]
+        if geometry is not None and boxes.shape[0]:
+            kept = [c.reshape(-1, 2) for c, b in zip(contours, big) if b]
+            pts = np.concatenate(kept).astype(np.float64)
+            owner = np.repeat(np.arange(len(kept)), [len(c) for c in kept])
+            gap_contour = np.full(len(kept), np.inf)
+            np.minimum.at(gap_contour, owner, fan_edge_gap_m(geometry, pts[:, 0], pts[:, 1]))
+        else:
+            gap_contour = np.full(boxes.shape[0], np.inf)
         areas = np.array([float(np.count_nonzero(binary[int(y0):int(y1) + 1, int(x0):int(x1) + 1]))
                           for x0, y0, x1, y1 in boxes]) if boxes.shape[0] else np.zeros(0)
         if boxes.shape[0] == 0:
@@ -91,6 +112,8 @@ class ClassicalDetector:
             cboxes[k] = [sel[:, 0].min(), sel[:, 1].min(), sel[:, 2].max(), sel[:, 3].max()]
         n_contours = np.bincount(lab, minlength=n).astype(float)
         area_px = np.bincount(lab, weights=areas, minlength=n)  # (overlapping boxes may count twice)
+        edge_gap_m = np.full(n, np.inf)
+        np.minimum.at(edge_gap_m, lab, gap_contour)
         w_px, h_px = cboxes[:, 2] - cboxes[:, 0] + 1, cboxes[:, 3] - cboxes[:, 1] + 1
         extent_m = np.maximum(w_px, h_px) * m_per_px
         ok = (extent_m >= cfg.min_size_m) & (extent_m <= cfg.max_size_m)
@@ -98,7 +121,8 @@ class ClassicalDetector:
             return empty
         feats = {"extent_m": extent_m[ok], "minor_m": np.minimum(w_px, h_px)[ok] * m_per_px,
                  "area_m2": area_px[ok] * m_per_px**2,
-                 "fill": np.minimum(area_px[ok] / (w_px[ok] * h_px[ok]), 1.0), "n_contours": n_contours[ok]}
+                 "fill": np.minimum(area_px[ok] / (w_px[ok] * h_px[ok]), 1.0), "n_contours": n_contours[ok],
+                 "edge_gap_m": edge_gap_m[ok]}
         cboxes, extent_m = cboxes[ok], extent_m[ok]
         scores = self._score(blurred, binary, cboxes, extent_m, m_per_px, roi_centre_px)
         return cboxes, scores, feats

@@ -38,6 +38,10 @@ class SurveyConfig(StrictModel):
     altitude_m: float = Field(2.0, gt=0.0, le=100.0, description="survey altitude above seabed")
     depth_m: float = Field(2.0, gt=0.0, le=6000.0, description="survey depth (depth mode)")
     speed_mps: float = Field(0.5, gt=0.0, le=3.0)
+    heading_deg: float | None = Field(
+        None, ge=-360.0, le=360.0,
+        description="hold this heading (NED deg) and move along the path by surge and sway: an omnidirectional "
+                    "vehicle (BlueROV2 Heavy) looking one way while it moves; None: head along the path")
 
 
 class LosConfig(StrictModel):

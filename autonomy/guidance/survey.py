@@ -53,6 +53,10 @@ class SurveyGuidance:
     speed drops linearly with heading error, to ``min_speed_fraction`` at
     ``slow_down_heading_error_deg``, so turns stay tight.
 
+    With ``heading_rad`` (NED, rad) an omnidirectional vehicle holds that heading and moves
+    along the LOS course by surge ``V cos(course - yaw)`` and sway ``V sin(course - yaw)``
+    (body frame, starboard > 0), no sideslip compensation or slow-down.
+
     Call :meth:`start` once with the current position, then :meth:`update` at the
     autonomy rate. After the last waypoint :attr:`finished` is True and the setpoint holds
     heading with zero speed.
@@ -65,6 +69,7 @@ class SurveyGuidance:
         los: LosConfig = LosConfig(),
         depth_m: float | None = None,
         altitude_m: float | None = None,
+        heading_rad: float | None = None,
     ) -> None:
         if not speed_mps > 0.0:
             raise ValueError(f"speed_mps must be > 0, got {speed_mps}")
@@ -82,6 +87,7 @@ class SurveyGuidance:
         self.plan: LawnmowerPlan | None = None
         self._last_t_s: float | None = None
         self._hold_heading_rad = 0.0
+        self.fixed_heading_rad = None if heading_rad is None else float(heading_rad)
 
     @classmethod
     def from_config(
@@ -96,6 +102,7 @@ class SurveyGuidance:
             los_cfg,
             depth_m=None if altitude_mode else survey_cfg.depth_m,
             altitude_m=survey_cfg.altitude_m if altitude_mode else None,
+            heading_rad=None if survey_cfg.heading_deg is None else math.radians(survey_cfg.heading_deg),
         )
         guidance.plan = plan
         return guidance
@@ -129,6 +136,11 @@ class SurveyGuidance:
             return Setpoint(0.0, self._hold_heading_rad, **self.vertical_setpoint())
 
         course = los_course_rad(self.errors, self.los.lookahead_m)
+        if self.fixed_heading_rad is not None:  # omnidirectional: along the course by surge and sway
+            rel = course - yaw
+            self._hold_heading_rad = self.fixed_heading_rad
+            return Setpoint(self.speed_mps * math.cos(rel), self.fixed_heading_rad, sway_mps=self.speed_mps * math.sin(rel),
+                            **self.vertical_setpoint())
         comp = self.sideslip_rad if self.los.sideslip_compensation else 0.0
         heading = float(wrap_angle(course - comp))
         self._hold_heading_rad = heading

@@ -23,13 +23,16 @@ set on its ``rho``.
   not average out in a fusion; :attr:`FuzzySegment.sigma_theta_total_rad` adds both) and widens
   the rho cuts by ``z sigma_psi L`` (``L`` the farthest end's distance from ``p`` along the
   segment, ``z`` = 1 and 1.96 for the 68 % and 95 % cuts), bounded sum (eq. 12).
-* A segment whose trapezoid area ``rho0 + rho1`` exceeds a threshold is dropped.
+* The local map (:class:`FuzzySegmentMap`) keeps the segments from sweep to sweep in a
+  vehicle-centred frame: moved with the vehicle's motion estimate, grown with that motion and
+  with age (bounded sum, eq. 12), fused with new collinear segments (eqs. 16-19), and dropped
+  once their trapezoid area ``rho0 + rho1`` exceeds a threshold.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -133,15 +136,45 @@ class FuzzySegment:
         return FuzzySegment(self.theta_rad, self.rho_m, self.sigma_theta_rad, self.rho1_m + extra_rho1_m,
                             self.rho0_m + extra_rho0_m, self.end_a, self.end_b, self.t_s, self.sigma_heading_rad)
 
+    def shifted(self, offset_ne_m: FloatArray) -> "FuzzySegment":
+        """The segment moved by ``offset_ne_m`` (2,): ``rho + n . offset``, ends moved; the normal
+        turned by pi when rho would fall below 0 (so ``rho >= 0``)."""
+        off = np.asarray(offset_ne_m, dtype=float).reshape(2)
+        rho, theta = self.rho_m + float(self.normal @ off), self.theta_rad
+        if rho < 0.0:
+            rho, theta = -rho, float(wrap_angle(theta + math.pi))
+        return replace(self, theta_rad=theta, rho_m=rho, end_a=self.end_a + off, end_b=self.end_b + off)
+
+    def rotated(self, angle_rad: float) -> "FuzzySegment":
+        """The segment turned by ``angle_rad`` about its frame's origin (north towards east):
+        ``theta + angle``, rho unchanged, ends rotated."""
+        c, s_ = math.cos(angle_rad), math.sin(angle_rad)
+        R = np.array([[c, -s_], [s_, c]])
+        return replace(self, theta_rad=float(wrap_angle(self.theta_rad + angle_rad)), end_a=R @ self.end_a,
+                       end_b=R @ self.end_b)
+
+    def oriented_like(self, other: "FuzzySegment") -> "FuzzySegment":
+        """The same line with its normal on ``other``'s side (``theta + pi``, ``-rho`` if needed)."""
+        if self.normal @ other.normal >= 0.0:
+            return self
+        return replace(self, theta_rad=float(wrap_angle(self.theta_rad + math.pi)), rho_m=-self.rho_m)
+
+    def matching_degree(self, other: "FuzzySegment", max_angle_rad: float) -> float:
+        """Matching degree (eq. 17) of the rho trapezoids, ``other`` turned to this normal's side;
+        0 when the normals differ by more than ``max_angle_rad``."""
+        o = other.oriented_like(self)
+        if abs(float(wrap_angle(self.theta_rad - o.theta_rad))) > max_angle_rad:
+            return 0.0
+        return matching_degree(self.rho_m, self.rho1_m, self.rho0_m, o.rho_m, o.rho1_m, o.rho0_m)
+
     def matches(self, other: "FuzzySegment", max_angle_rad: float, min_match: float) -> bool:
         """Collinearity test (eq. 16)."""
-        if abs(float(wrap_angle(self.theta_rad - other.theta_rad))) > max_angle_rad:
-            return False
-        return matching_degree(self.rho_m, self.rho1_m, self.rho0_m, other.rho_m, other.rho1_m,
-                               other.rho0_m) >= min_match
+        return self.matching_degree(other, max_angle_rad) >= min_match
 
     def fused(self, other: "FuzzySegment") -> "FuzzySegment":
-        """The fusion of two collinear segments (eqs. 18-19, module docstring)."""
+        """The fusion of two collinear segments (eqs. 18-19, module docstring), in this one's
+        normal orientation."""
+        other = other.oriented_like(self)
         va, vb = max(self.rho0_m, 1e-9) ** 2, max(other.rho0_m, 1e-9) ** 2
         wa, wb = 1.0 / va, 1.0 / vb
         dth = float(wrap_angle(other.theta_rad - self.theta_rad))
@@ -162,13 +195,27 @@ class FuzzySegment:
 
 
 class FuzzySegmentMap:
-    """The local map of fuzzy segments ([P002] Fig. 10): new segments fuse with collinear ones
-    or join; all grow with vehicle motion and age; too uncertain ones are removed.
+    """The persistent local map of fuzzy segments around the vehicle ([P002] Fig. 10).
+
+    Segments live in a vehicle-centred frame (north, east axes, origin at the vehicle's body
+    origin), so a correction of the vehicle's absolute position leaves them in place. Then:
+
+    * :meth:`move`: the vehicle moved by ``delta_ne_m`` (its motion estimate) over ``dt_s``:
+      every segment shifts by ``-delta`` (``rho' = rho - n . delta``, kept ``>= 0`` by turning
+      the normal) and its rho trapezoid takes the bounded sum (eq. 12) of a motion trapezoid
+      ``(-m0, -m1, m1, m0)``, ``m0 = motion_growth |delta|``, and an age trapezoid
+      ``(-a0, -a1, a1, a0)``, ``a0 = age_growth_mps dt``, with ``x1 = x0 / 1.96`` (the 68 % and
+      95 % cuts of a Gaussian); segments whose trapezoid area ``rho0 + rho1`` then exceeds
+      ``max_area_m`` are removed.
+    * :meth:`add`: a new segment fuses (eqs. 18-19) with the stored segment it is collinear
+      with (eq. 16: normals within ``max_angle_rad``, matching degree at least ``min_match``)
+      with the highest matching degree, and the result again with any other it is now
+      collinear with; otherwise it joins the map.
 
     Args:
         max_angle_rad: collinearity angle limit; min_match: matching-degree limit (eq. 16).
-        motion_growth: rho cut growth per metre travelled (m/m); age_growth_mps: per second.
-        max_area_m: removal threshold on the trapezoid area.
+        motion_growth: 95 % rho-cut growth per metre travelled (m/m); age_growth_mps: per second.
+        max_area_m: removal threshold on the trapezoid area, m.
     """
 
     def __init__(self, max_angle_rad: float = math.radians(5.0), min_match: float = 0.3, motion_growth: float = 0.02,
@@ -180,17 +227,42 @@ class FuzzySegmentMap:
         self.max_area_m = max_area_m
         self.segments: list[FuzzySegment] = []
 
-    def grow(self, travelled_m: float, dt_s: float) -> None:
-        """Add motion and age uncertainty to every segment, then drop those above the area limit."""
-        g = self.motion_growth * travelled_m + self.age_growth_mps * dt_s
-        self.segments = [s.grown(0.5 * g, g) for s in self.segments]
+    def clear(self) -> None:
+        self.segments = []
+
+    def move(self, delta_ne_m: FloatArray, dt_s: float) -> None:
+        """The vehicle moved by ``delta_ne_m`` (2,) m in ``dt_s`` s: shift, grow, remove (class docstring)."""
+        delta = np.asarray(delta_ne_m, dtype=float).reshape(2)
+        g0 = self.motion_growth * float(np.hypot(*delta)) + self.age_growth_mps * max(float(dt_s), 0.0)
+        self.segments = [s.shifted(-delta).grown(g0 / 1.96, g0) for s in self.segments]
         self.segments = [s for s in self.segments if s.area_m <= self.max_area_m]
 
-    def add(self, seg: FuzzySegment) -> FuzzySegment:
-        """Fuse ``seg`` with the first collinear segment, or add it. Returns the stored segment."""
+    def rotate(self, angle_rad: float) -> None:
+        """Turn every segment by ``angle_rad`` about the vehicle (a correction of the heading the
+        map was built with)."""
+        self.segments = [s.rotated(angle_rad) for s in self.segments]
+
+    def _best_match(self, seg: FuzzySegment, skip: int = -1) -> int:
+        best, best_deg = -1, -1.0
         for i, s in enumerate(self.segments):
-            if s.matches(seg, self.max_angle_rad, self.min_match):
-                self.segments[i] = s.fused(seg)
-                return self.segments[i]
-        self.segments.append(seg)
-        return seg
+            if i == skip:
+                continue
+            deg = s.matching_degree(seg, self.max_angle_rad)
+            if deg >= self.min_match and deg > best_deg:
+                best, best_deg = i, deg
+        return best
+
+    def add(self, seg: FuzzySegment) -> FuzzySegment:
+        """Fuse ``seg`` into the map or add it (class docstring). Returns the stored segment."""
+        i = self._best_match(seg)
+        if i < 0:
+            self.segments.append(seg)
+            return seg
+        self.segments[i] = self.segments[i].fused(seg)
+        while (j := self._best_match(self.segments[i], skip=i)) >= 0:  # the fusion may now join another
+            merged = self.segments[i].fused(self.segments[j])
+            keep = min(i, j)
+            self.segments = [s for k, s in enumerate(self.segments) if k not in (i, j)]
+            self.segments.insert(keep, merged)
+            i = keep
+        return self.segments[i]

@@ -13,17 +13,27 @@ in the navigation frame. Then:
 * rectangular tank (``walls``): IEPF runs on the ordered points, each run's eigenvector fit
   of at least ``min_segment_length_m`` becomes a fuzzy segment, its rho cuts widened by the
   heading uncertainty about the vehicle (``max(sqrt(cov_yaw), heading_sigma_deg)``,
-  :meth:`~autonomy.msis.fuzzy_segments.FuzzySegment.with_heading_uncertainty`), and collinear
-  segments fuse (:class:`autonomy.msis.fuzzy_segments.FuzzySegmentMap`). Each segment that
-  matches a known wall (normal within ``wall_match_angle_deg``, rho within
+  :meth:`~autonomy.msis.fuzzy_segments.FuzzySegment.with_heading_uncertainty`), and joins the
+  persistent local map (:class:`autonomy.msis.fuzzy_segments.FuzzySegmentMap`, vehicle-centred,
+  ``map_*`` settings): fused with the collinear map segment or added. Between fixes the map
+  moves with the motion estimate of every ping (``R(rpy) v_body dt``, horizontal), growing the
+  segments' uncertainty with that motion and with age and removing those too uncertain. Each
+  map segment that matches a known wall (normal within ``wall_match_angle_deg``, rho within
   ``wall_match_distance_m``) is assigned to it; the segments of one wall then fuse into one
-  estimate per wall and sweep (eqs. 18-19, :func:`fuse_wall_segments`), kept when its
-  extent reaches ``min_wall_support_m``. Each wall estimate gives the offset of the estimate
-  along that wall's normal from the vehicle's distance to the wall, which a heading error
-  (a rotation of the sweep about the vehicle) leaves unchanged: with ``r = rho - n_s . p``,
-  ``n_w . d = c_w - r - n_w . p``. With walls of both directions, the weighted least-squares
+  estimate per wall (eqs. 18-19, :func:`fuse_wall_segments`), kept when its extent reaches
+  ``min_wall_support_m``. Each wall estimate gives the offset of the estimate along that
+  wall's normal from the vehicle's distance to the wall, which a heading error (a rotation of
+  the sweep about the vehicle) leaves unchanged: with ``r`` the estimate's rho in the
+  vehicle-centred frame (normal along the wall's), ``n_w . d = c_w - r - n_w . p``. With walls of both directions, the weighted least-squares
   offset ``d`` (weights ``1 / sigma^2``, sigma from the estimate's 68 % cut) makes the fix
-  ``p_hat + d`` with covariance ``(H^T W H)^-1``.
+  ``p_hat + d`` with covariance ``(H^T W H)^-1``. The walls' known directions also give the
+  heading error of the estimate the sweep was placed with (``wall_heading_fix``): the mean of
+  the wall estimates' signed angles from their walls' normals, weights ``1 / sigma_theta^2``
+  (the fits' own angle sigmas), variance ``1 / sum(w)`` plus ``wall_heading_sigma_floor_deg``
+  squared (the map's segments are not independent from fix to fix). The navigation filter
+  then turns its heading by the scalar Kalman gain ``g = P_psi / (P_psi + var)`` times that
+  error (``P_psi`` the estimate's heading variance), so the map is turned by ``-g`` times it
+  about the vehicle to stay in the corrected heading.
 """
 
 from __future__ import annotations
@@ -34,7 +44,7 @@ from dataclasses import replace
 import numpy as np
 from numpy.typing import NDArray
 
-from autonomy.frames import wrap_angle
+from autonomy.frames import rot_from_euler, wrap_angle
 from autonomy.messages import MsisPing, NavEstimate, PositionFixMsg
 from autonomy.msis.circle_fit import mlesac_circle
 from autonomy.msis.config import MsisLocalizationConfig
@@ -95,11 +105,16 @@ class MsisLocalizer:
     def __init__(self, cfg: MsisLocalizationConfig, rng: np.random.Generator) -> None:
         self.cfg = cfg
         self.rng = rng
-        self.buffer = SonarBuffer(cfg.threshold_u8, cfg.min_range_m, max_age_s=2.0 * cfg.fix_interval_s)
+        self.buffer = SonarBuffer(cfg.threshold_u8, cfg.min_range_m, max_age_s=2.0 * cfg.fix_interval_s, mode=cfg.echo_mode)
+        self.map = FuzzySegmentMap(max_angle_rad=math.radians(cfg.map_match_angle_deg), min_match=cfg.map_min_match,
+                                   motion_growth=cfg.map_motion_growth, age_growth_mps=cfg.map_age_growth_mps,
+                                   max_area_m=cfg.map_max_area_m)
         self.reset()
 
     def reset(self) -> None:
         self.buffer.clear()
+        self.map.clear()
+        self._t_map_s = math.nan
         self._t_last_fix = -math.inf
         self._t_first = math.nan
         self.last_circle = None
@@ -111,6 +126,8 @@ class MsisLocalizer:
         if self.cfg.method == "none":
             return None
         self.buffer.add_ping(ping, nav)
+        if self.cfg.method == "walls":
+            self._move_map(ping.t_s, nav)
         if math.isnan(self._t_first):
             self._t_first = ping.t_s
         if ping.t_s - max(self._t_last_fix, self._t_first) < self.cfg.fix_interval_s or \
@@ -122,7 +139,7 @@ class MsisLocalizer:
         self.buffer.clear()
         if fix is None:
             return None
-        pos, cov = fix
+        pos, cov, heading = fix
         cov = cov + self.cfg.fix_sigma_floor_m ** 2 * np.eye(2)
         feats: dict[str, FloatArray] = {}
         if self.cfg.method == "circle" and self.last_circle is not None:
@@ -132,7 +149,15 @@ class MsisLocalizer:
             feats["segments_ne_m"] = np.array([[s.end_a, s.end_b] for s in self.last_segments], dtype=float)
             feats["segments_rho95_m"] = np.array([s.rho0_m for s in self.last_segments], dtype=float)
         return PositionFixMsg(t_s=float(ping.t_s), pos_ne_m=pos, cov_ne_m2=cov, source=self.cfg.method,
-                              points_ne_m=pts, **feats)
+                              points_ne_m=pts, heading_err_rad=heading[0], heading_var_rad2=heading[1], **feats)
+
+    def _move_map(self, t_s: float, nav: NavEstimate) -> None:
+        """Move the local map by the motion estimate since the last ping: ``R(rpy) v_body dt``."""
+        dt = 0.0 if math.isnan(self._t_map_s) else float(t_s) - self._t_map_s
+        self._t_map_s = float(t_s)
+        if dt > 0.0 and self.map.segments:
+            v_ned = rot_from_euler(*nav.rpy_rad) @ np.asarray(nav.vel_body_mps, dtype=float)
+            self.map.move(v_ned[:2] * dt, dt)
 
     def _circle_fix(self, pts: FloatArray, nav: NavEstimate) -> tuple[FloatArray, FloatArray] | None:
         cfg = self.cfg
@@ -145,53 +170,58 @@ class MsisLocalizer:
         self.last_circle = circle
         cov = circle_centre_covariance(pts[circle.inliers], circle.centre, circle.radius_m)
         pos = np.asarray(nav.pos_ned[:2], dtype=float) + (np.asarray(cfg.centre_ne_m) - circle.centre)
-        return pos, cov
+        return pos, cov, (math.nan, math.nan)
 
     def segments(self, pts: FloatArray, t_s: float, pivot_ne: FloatArray | None = None,
                  sigma_heading_rad: float = 0.0) -> list[FuzzySegment]:
-        """Fuzzy segments of ordered points (IEPF, eigenvector fits, heading uncertainty about the
-        vehicle at ``pivot_ne``, collinear fusion)."""
+        """Fuzzy segments of ordered points, in their frame (IEPF, eigenvector fits of at least
+        ``min_segment_length_m``, heading uncertainty about the vehicle at ``pivot_ne``)."""
         cfg = self.cfg
         pivot = np.zeros(2) if pivot_ne is None else np.asarray(pivot_ne, dtype=float)
-        fmap = FuzzySegmentMap(max_angle_rad=math.radians(3.0), min_match=0.2)
+        out = []
         for a, b in iepf_split(pts, cfg.iepf_k_min, cfg.iepf_rho_max_m):
             try:
                 fit = fit_line(pts[a:b])
             except ValueError:
                 continue
             if fit.length_m >= cfg.min_segment_length_m:
-                fmap.add(FuzzySegment.from_fit(fit, t_s).with_heading_uncertainty(pivot, sigma_heading_rad))
-        return fmap.segments
+                out.append(FuzzySegment.from_fit(fit, t_s).with_heading_uncertainty(pivot, sigma_heading_rad))
+        return out
 
-    def _walls_fix(self, pts: FloatArray, nav: NavEstimate) -> tuple[FloatArray, FloatArray] | None:
+    def _walls_fix(self, pts: FloatArray, nav: NavEstimate) -> tuple[FloatArray, FloatArray, tuple[float, float]] | None:
+        """Position fix (2,), its covariance (2, 2) and (heading error, its variance) (rad, rad^2;
+        NaN when ``wall_heading_fix`` is off) from the walls (module docstring), or None."""
         cfg = self.cfg
         p = np.asarray(nav.pos_ned[:2], dtype=float)
         sigma_psi = max(math.sqrt(max(float(nav.cov_yaw_rad2), 0.0)), math.radians(cfg.heading_sigma_deg))
-        segs = self.segments(pts, nav.t_s, p, sigma_psi)
-        self.last_segments = segs
+        for s in self.segments(pts, nav.t_s, p, sigma_psi):
+            self.map.add(s.shifted(-p))  # into the vehicle-centred map
+        self.last_segments = [s.shifted(p) for s in self.map.segments]
         walls = tank_walls(np.asarray(cfg.centre_ne_m, float), np.asarray(cfg.tank_size_ne_m, float))
         cos_max = math.cos(math.radians(cfg.wall_match_angle_deg))
         assigned: dict[int, list[FuzzySegment]] = {}
-        for s in segs:
+        for s in self.map.segments:
             for i, (n_w, c_w) in enumerate(walls):
                 n_s, rho = s.normal, s.rho_m
                 if n_s @ n_w < 0.0:  # the same line with the opposite normal
                     n_s, rho = -n_s, -rho
-                if n_s @ n_w >= cos_max and abs(rho - c_w) <= cfg.wall_match_distance_m:
+                if n_s @ n_w >= cos_max and abs(rho - (c_w - float(n_w @ p))) <= cfg.wall_match_distance_m:
                     assigned.setdefault(i, []).append(s)
                     break
         self.last_walls = {}
-        H, z, w = [], [], []
+        H, z, w, ang, w_ang = [], [], [], [], []
         for i, group in sorted(assigned.items()):
             n_w, c_w = walls[i]
             est = fuse_wall_segments(group, n_w)
             if est.length_m < cfg.min_wall_support_m:
                 continue
-            self.last_walls[i] = est
-            r = est.rho_m - float(est.normal @ p)  # the vehicle's distance to the wall seen
+            self.last_walls[i] = est.shifted(p)  # in the navigation frame
+            r = est.rho_m  # the vehicle's distance to the wall seen, along n_w
             H.append(n_w)
             z.append(c_w - r - float(n_w @ p))
             w.append(1.0 / max(est.rho1_m, 1e-3) ** 2)
+            ang.append(math.atan2(n_w[0] * est.normal[1] - n_w[1] * est.normal[0], float(n_w @ est.normal)))
+            w_ang.append(1.0 / max(est.sigma_theta_rad, 1e-6) ** 2)
         if len(H) < 2:
             return None
         H, z, W = np.array(H), np.array(z), np.diag(w)
@@ -200,4 +230,10 @@ class MsisLocalizer:
             return None  # walls of one direction only
         cov = np.linalg.inv(info)
         d = cov @ H.T @ W @ z
-        return p + d, cov
+        heading = (math.nan, math.nan)
+        if cfg.wall_heading_fix:
+            heading = (float(np.average(ang, weights=w_ang)),
+                       1.0 / float(np.sum(w_ang)) + math.radians(cfg.wall_heading_sigma_floor_deg) ** 2)
+            p_psi = max(float(nav.cov_yaw_rad2), 0.0)
+            self.map.rotate(-heading[0] * p_psi / (p_psi + heading[1]))
+        return p + d, cov, heading

@@ -13,6 +13,16 @@ beam-geometry covariance, so the held error integrates into position exactly as 
 the sensor. Depth, GPS (at the surface) and USBL fixes are EKF updates (Joseph form).
 In ``dead_reckoning`` mode GPS and USBL are ignored.
 
+Without a DVL (``velocity_source='speed_model'``) the held velocity is the surge/sway of the
+vehicle's speed model (:class:`autonomy.navigation.speed_model.SpeedModel`) driven by the
+commanded force (:class:`autonomy.messages.WrenchCmdMsg`), heave 0; ``n`` is then the model's
+velocity error, a random walk (``speed_model.noise_mps_per_sqrt_s``, heave
+``heave_noise_mps_per_sqrt_s``) never reset, and ``s`` its
+speed scale error (prior ``speed_model.scale_sigma``): position fixes estimate both. The model
+velocity is turned into NED by the heading alone (``p_dot = Rz(psi) v``: the model's surge and
+sway are horizontal, its heave error vertical), so the depth sensor, which follows the heave,
+does not feed back into the horizontal velocity through the roll and pitch.
+
 The altitude of the body origin above the seabed is a separate scalar Kalman filter. It is
 propagated with the dead-reckoned NED velocity over the local seabed plane,
 ``a_dot = g . v_ne - v_down`` (``g`` the seabed depth gradient d depth / d(north, east) from
@@ -30,9 +40,11 @@ from numpy.typing import ArrayLike, NDArray
 
 from autonomy.estimation.measurement import PositionFix, RangeBearingElevation
 from autonomy.frames import cross3, euler_rate_matrix, rot_from_euler, rot_x, rot_y, rot_z, wrap_angle
-from autonomy.messages import AltimeterMsg, DepthMsg, DvlMsg, GpsMsg, ImuMsg, NavEstimate, PositionFixMsg, UsblMsg
+from autonomy.messages import (AltimeterMsg, DepthMsg, DvlMsg, GpsMsg, ImuMsg, NavEstimate, PositionFixMsg, UsblMsg,
+                               WrenchCmdMsg)
 from autonomy.navigation.config import NavigationConfig
 from autonomy.navigation.noise_model import NavNoiseModel
+from autonomy.navigation.speed_model import SpeedModel
 
 FloatArray = NDArray[np.float64]
 
@@ -104,7 +116,8 @@ class NavigationFilter:
         p0 = np.zeros(N_STATES)
         p0[POS] = [cfg.initial_pos_sigma_m**2] * 2 + [cfg.initial_depth_sigma_m**2]
         p0[ATT] = self.noise.attitude_bias_sigma_rad**2
-        p0[SCALE] = self.noise.dvl_scale_sigma**2
+        self._speed_model = SpeedModel(cfg.speed_model) if cfg.velocity_source == "speed_model" else None
+        p0[SCALE] = (self.noise.dvl_scale_sigma if self._speed_model is None else cfg.speed_model.scale_sigma) ** 2
         p0[DVEL] = cfg.initial_vel_sigma_mps**2
         self._P = np.diag(p0)
         self._rpy_meas = np.array([0.0, 0.0, float(initial_yaw_rad)])
@@ -141,9 +154,15 @@ class NavigationFilter:
             rpy = rpy + euler_rate_matrix(rpy[0], rpy[1]) @ self._rate_meas * tau
         return rpy - self._x[ATT]
 
+    def _scaled_axes(self) -> FloatArray:
+        """(3,) 1 for the velocity axes the scale error divides: the DVL's three, the speed
+        model's surge and sway."""
+        return np.ones(3) if self._speed_model is None else np.array([1.0, 1.0, 0.0])
+
     def _vel_body(self) -> FloatArray:
+        scaled = self._scaled_axes()
         v_m = self._vel_dvl_meas - self._x[DVEL]
-        return v_m / (1.0 + self._x[SCALE]) - cross3(self._omega_at_dvl, self._r_dvl)
+        return v_m * (scaled / (1.0 + self._x[SCALE]) + 1.0 - scaled) - cross3(self._omega_at_dvl, self._r_dvl)
 
     # ------------------------------------------------------------------ propagation
     def predict(self, t_s: float) -> None:
@@ -152,17 +171,25 @@ class NavigationFilter:
         if dt <= 0.0:
             return
         x, noise = self._x, self.noise
+        if self._speed_model is not None:
+            self._vel_dvl_meas = np.array([*self._speed_model.step(dt), 0.0])
         att = self._attitude(self._t_s + 0.5 * dt)  # midpoint attitude of the step
-        R = rot_from_euler(*att)
         one_s = 1.0 + x[SCALE]
+        scaled = self._scaled_axes()
+        inv_scale = scaled / one_s + (1.0 - scaled)
         v_m = self._vel_dvl_meas - x[DVEL]
-        v_body = v_m / one_s - cross3(self._omega_at_dvl, self._r_dvl)
-        J_att = rotated_vector_jacobian(att, v_body)
+        v_body = v_m * inv_scale - cross3(self._omega_at_dvl, self._r_dvl)
+        if self._speed_model is None:
+            R = rot_from_euler(*att)
+            J_att = rotated_vector_jacobian(att, v_body)
+        else:  # the model's surge/sway along the heading only: depth says nothing of them
+            R = rot_z(att[2])
+            J_att = np.column_stack([np.zeros(3), np.zeros(3), cross3(_E[2], R @ v_body)])
 
         F = np.eye(N_STATES)
         F[POS, ATT] = -J_att * dt
-        F[POS, SCALE] = -(R @ v_m) / one_s**2 * dt
-        F[POS, DVEL] = -R / one_s * dt
+        F[POS, SCALE] = -(R @ (v_m * scaled)) / one_s**2 * dt
+        F[POS, DVEL] = -R * inv_scale[None, :] * dt
         Q = np.zeros((N_STATES, N_STATES))
         Q[POS, POS] = J_att @ np.diag(noise.attitude_noise_rad**2) @ J_att.T * dt**2
         Q[5, 5] = noise.heading_rw_rad_per_sqrt_s**2 * dt
@@ -170,15 +197,19 @@ class NavigationFilter:
         # age tau of the ping gives var(a tau) = sigma_a^2 tau^2; after lock loss, a random walk
         age = min(self._t_s - self._t_dvl_valid_s, self.cfg.dvl_timeout_s)
         q_vel = self.cfg.hold_accel_sigma_mps2**2 * (2.0 * age * dt + dt * dt)
-        if self._t_s - self._t_dvl_valid_s > self.cfg.dvl_timeout_s:
+        if self._speed_model is not None:  # the model's error: a random walk (heave: its own)
+            sm = self.cfg.speed_model
+            q_vel = np.array([sm.noise_mps_per_sqrt_s, sm.noise_mps_per_sqrt_s, sm.heave_noise_mps_per_sqrt_s]) ** 2 * dt
+        elif self._t_s - self._t_dvl_valid_s > self.cfg.dvl_timeout_s:
             q_vel += self.cfg.dvl_lost_noise_mps_per_sqrt_s**2 * dt
-        Q[DVEL, DVEL] = q_vel * _E
+        Q[DVEL, DVEL] = np.diag(np.broadcast_to(q_vel, (3,)))
 
         v_ned = R @ v_body
         if np.isfinite(self._altitude_m):
             # altitude over the local seabed plane: a_dot = g . v_ne - v_down
             h = np.array([self._seabed_grad_ne[0], self._seabed_grad_ne[1], -1.0])
-            var_rate = float(h @ R @ self._P[DVEL, DVEL] @ R.T @ h) / one_s**2
+            Rs = R * inv_scale[None, :]
+            var_rate = float(h @ Rs @ self._P[DVEL, DVEL] @ Rs.T @ h)
             self._altitude_m += float(h @ v_ned) * dt
             self._altitude_var_m2 += (var_rate * dt * dt
                                       + SEABED_RELIEF_M_PER_SQRT_M**2 * float(np.hypot(v_ned[0], v_ned[1])) * dt)
@@ -207,10 +238,17 @@ class NavigationFilter:
         self._t_imu_s = max(self._t_s, float(msg.t_s))
         self._rate_meas = np.asarray(msg.rate_body_radps, dtype=float).copy()
 
-    def on_dvl(self, msg: DvlMsg) -> None:
-        """Valid bottom-track velocity replaces the held velocity and its error state."""
+    def on_wrench_cmd(self, msg: WrenchCmdMsg) -> None:
+        """The commanded body force drives the speed model (ignored with a DVL)."""
         self.predict(msg.t_s)
-        if not msg.valid:
+        if self._speed_model is not None:
+            self._speed_model.set_force(np.asarray(msg.wrench_body, dtype=float)[:2])
+
+    def on_dvl(self, msg: DvlMsg) -> None:
+        """Valid bottom-track velocity replaces the held velocity and its error state (ignored
+        with the speed model: the vehicle has no DVL velocity then)."""
+        self.predict(msg.t_s)
+        if not msg.valid or self._speed_model is not None:
             return
         vel = np.asarray(msg.vel_body_mps, dtype=float)
         ranges = np.asarray(msg.beam_ranges_m, dtype=float)
@@ -333,22 +371,31 @@ class NavigationFilter:
 
     def on_position_fix(self, msg: PositionFixMsg) -> bool:
         """North/east fix of the body origin with its own covariance (feature-based localisation,
-        e.g. a scanning sonar in a known pool). Returns whether it was applied (EKF mode; no
-        innovation gate: the fixes come out of their own outlier rejection)."""
+        e.g. a scanning sonar in a known pool), and when the message has one, the heading error
+        of the estimate the features were placed with, fused into the heading bias state.
+        Returns whether the position was applied (EKF mode; no innovation gate: the fixes come
+        out of their own outlier rejection)."""
         if self.cfg.mode != "ekf":
             return False
         self.predict(msg.t_s)
         model = PositionFix(3, (0, 1), np.asarray(msg.cov_ne_m2, dtype=float).reshape(2, 2))
         H = np.zeros((2, N_STATES))
         H[:, POS] = model.jacobian()
-        return self._update(model.residual(np.asarray(msg.pos_ne_m, dtype=float), model.function(self._x[POS])), H,
-                            model.covar(), None)
+        applied = self._update(model.residual(np.asarray(msg.pos_ne_m, dtype=float), model.function(self._x[POS])),
+                               H, model.covar(), None)
+        if np.isfinite(msg.heading_err_rad) and np.isfinite(msg.heading_var_rad2) and msg.heading_var_rad2 > 0.0:
+            # the features were placed with heading psi_m - b, rotated by b_true - b from the truth:
+            # the error measures the heading bias state, residual = the error itself
+            H = np.zeros((1, N_STATES))
+            H[0, 5] = 1.0
+            self._update(np.array([float(msg.heading_err_rad)]), H, np.array([[float(msg.heading_var_rad2)]]), None)
+        return applied
 
     def message_handlers(self) -> dict[type, Callable[[Any], Any]]:
         """Message type -> the method that fuses it (what a message bus dispatches on)."""
         return {ImuMsg: self.on_imu, DvlMsg: self.on_dvl, DepthMsg: self.on_depth,
                 AltimeterMsg: self.on_altimeter, GpsMsg: self.on_gps, UsblMsg: self.on_usbl,
-                PositionFixMsg: self.on_position_fix}
+                PositionFixMsg: self.on_position_fix, WrenchCmdMsg: self.on_wrench_cmd}
 
     # ------------------------------------------------------------------ output
     def estimate(self) -> NavEstimate:

@@ -58,15 +58,25 @@ class TrackingFrameResult:
     accepted: dict[str, NDArray[np.bool_]]
 
 
+def cut_by_edge(features: dict[str, FloatArray], edge_tol_m: float) -> NDArray[np.bool_]:
+    """Clusters (N,) that reach the fan's boundary (``edge_gap_m <= edge_tol_m``): a target
+    there may be cut by the edge of the view (its centre outside), so what the image shows of
+    it is only part of it."""
+    return np.asarray(features.get("edge_gap_m", np.full(len(features["extent_m"]), np.inf)), dtype=float) <= edge_tol_m
+
+
 def shape_gate(features: dict[str, FloatArray], target_size_m: float, min_extent_frac: float,
-               min_area_frac: float) -> NDArray[np.bool_]:
+               min_area_frac: float, cut: NDArray[np.bool_] | None = None) -> NDArray[np.bool_]:
     """Clusters (N,) whose size could be the target's (paper 004: candidates compared with the
     target's known size and shape): extent (longer box side) at least ``min_extent_frac x
     target_size_m`` and foreground area at least ``min_area_frac x target_size_m^2``. A breath's
-    bubbles (small, dispersing scatterers) make small, sparse clusters and fail it."""
+    bubbles (small, dispersing scatterers) make small, sparse clusters and fail it. A cluster
+    ``cut`` (N,) by the fan's edge (:func:`cut_by_edge`) shows only part of what made it: its
+    size is a lower bound (censored), so the size test cannot refuse it."""
     ext = np.asarray(features["extent_m"], dtype=float)
     area = np.asarray(features["area_m2"], dtype=float)
-    return (ext >= min_extent_frac * target_size_m) & (area >= min_area_frac * target_size_m**2)
+    ok = (ext >= min_extent_frac * target_size_m) & (area >= min_area_frac * target_size_m**2)
+    return ok if cut is None else ok | np.asarray(cut, dtype=bool)
 
 
 def roi_score(detections: list[Detection] | tuple[Detection, ...], roi: PolarRoi | None,
@@ -121,17 +131,20 @@ class TrackingStack:
     def now_s(self) -> float:
         return self.primary.now_s
 
-    def on_nav(self, nav: NavEstimate) -> None:
+    def on_nav(self, nav: NavEstimate) -> list[TrackingFrameResult]:
         """Record the vehicle pose (navigation estimate) in every filter, then process the
-        inputs that were waiting for a pose at their time."""
+        inputs that were waiting for a pose at their time; returns the results of the frames
+        processed now."""
         for tr in self.trackers.values():
             tr.record_pose(nav.t_s, nav.pos_ned, nav.rpy_rad)
         pending, self._pending = self._pending, []
+        done = []
         for msg in pending:
             if isinstance(msg, UsblMsg):
                 self.on_usbl(msg)
-            else:
-                self.on_frame(msg)
+            elif (res := self.on_frame(msg)) is not None:
+                done.append(res)
+        return done
 
     def on_usbl(self, msg: UsblMsg) -> None:
         """A USBL fix (late: applied at ``msg.t_s``); fixes of other transponders are ignored
@@ -152,10 +165,12 @@ class TrackingStack:
         if frame.t_s > self.now_s:
             self._pending.append(frame)
             return None
-        boxes, scores, feats = self.detector.clusters(frame.fan, frame.geometry.m_per_px)
+        geom = frame.geometry
+        boxes, scores, feats = self.detector.clusters(frame.fan, geom.m_per_px, geometry=geom)
         cands = tuple(self._centre_detections(frame, boxes, scores))
         cfg = self.cfg
-        shape_ok = shape_gate(feats, cfg.target_size_m, cfg.min_extent_frac, cfg.min_area_frac)
+        cut = cut_by_edge(feats, self.detector.cfg.blur_sigma_m + geom.m_per_px)
+        shape_ok = shape_gate(feats, cfg.target_size_m, cfg.min_extent_frac, cfg.min_area_frac, cut)
         rois: dict[str, PolarRoi | None] = {}
         inside: dict[str, NDArray[np.bool_]] = {}
         accepted: dict[str, NDArray[np.bool_]] = {}
@@ -171,7 +186,8 @@ class TrackingStack:
             best = int(np.argmax(s))
             if accepted[m][best] and s[best] >= cfg.detector_score_threshold:
                 chosen[m] = cands[best]
-                tr.on_sonar(frame.t_s, cands[best].range_m, cands[best].azimuth_rad)
+                tr.on_sonar(frame.t_s, cands[best].range_m, cands[best].azimuth_rad,
+                            centre_sigma_m=0.5 * cfg.target_size_m if cut[best] else 0.0)
         result = TrackingFrameResult(float(frame.t_s), cands, rois, inside, chosen, feats, accepted)
         self.results.append(result)
         return result

@@ -45,6 +45,17 @@ class PolarRoi:
         return np.hypot(dr, da) / math.sqrt(2.0)
 
 
+    def outline(self, n_arc: int = 16) -> FloatArray:
+        """Closed outline of the window, (2 n_arc + 1, 2) (range m, azimuth rad): the near arc
+        from port to starboard, the far arc back, and the first point again (the ranges
+        clipped at 0), for drawing it on a fan image."""
+        a = self.azimuth_rad + np.linspace(-self.half_azimuth_rad, self.half_azimuth_rad, max(int(n_arc), 2))
+        near = max(self.range_m - self.half_range_m, 0.0)
+        far = self.range_m + self.half_range_m
+        pts = np.concatenate([np.c_[np.full(a.size, near), a], np.c_[np.full(a.size, far), a[::-1]]])
+        return np.vstack([pts, pts[:1]])
+
+
 def polar_roi(target_ned: ArrayLike, covar_pos_ned: ArrayLike, head_ned: ArrayLike, R_ns: ArrayLike,
               k_sigma: float, size_m: float) -> PolarRoi:
     """ROI of a target estimate (3,) NED with position covariance (3, 3) m^2 seen from a sonar

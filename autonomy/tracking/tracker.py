@@ -207,12 +207,16 @@ class TargetTracker:
         self._insert(_Event(float(msg.t_s), self._next_seq(), USBL, z, np.diag([sig_r**2, sig_a**2, sig_a**2]), model))
         return True
 
-    def on_sonar(self, t_s: float, range_m: float, azimuth_rad: float, elevation_rad: float = 0.0) -> bool:
+    def on_sonar(self, t_s: float, range_m: float, azimuth_rad: float, elevation_rad: float = 0.0, *,
+                 centre_sigma_m: float = 0.0) -> bool:
         """Add a sonar detection (sonar frame range m, azimuth rad, starboard > 0) at ``t_s``.
         An imaging sonar does not measure elevation: the update uses range and azimuth only;
         ``elevation_rad`` (down > 0, default the beam centre) with the variance of a uniform
         over the vertical beam places a track that a sonar detection starts and, in sonar-only
-        mode (no other depth cue), is kept as a pseudo-measurement."""
+        mode (no other depth cue), is kept as a pseudo-measurement. ``centre_sigma_m`` (1
+        sigma, m) adds, in range and across the beam, the uncertainty of where the target's
+        centre lies w.r.t. the detection (a target cut by the edge of the view shows only
+        part of itself)."""
         if self.cfg.mode == "usbl":
             return False
         if not (math.isfinite(range_m) and math.isfinite(azimuth_rad) and range_m > 0.0):
@@ -223,7 +227,11 @@ class TargetTracker:
         pos, R_nb = pose
         cfg = self.cfg
         sig_e2 = math.radians(cfg.sonar_vertical_beam_deg) ** 2 / 12.0
-        R = np.diag([cfg.sonar_range_sigma_m**2, math.radians(cfg.sonar_azimuth_sigma_deg) ** 2, sig_e2])
+        if not (math.isfinite(centre_sigma_m) and centre_sigma_m >= 0.0):
+            return self._refuse(t_s, f"sonar centre sigma not finite or < 0: {centre_sigma_m}")
+        c2 = centre_sigma_m**2
+        R = np.diag([cfg.sonar_range_sigma_m**2 + c2, math.radians(cfg.sonar_azimuth_sigma_deg) ** 2 + c2 / range_m**2,
+                     sig_e2])
         ndim = 3 if cfg.mode == "sonar" else 2  # sonar only: the beam centre is its only depth cue
         model = RelativeSpherical(pos + R_nb @ self._sonar_mount, R_nb @ self._R_b_sonar, ndim=ndim)
         self._insert(_Event(float(t_s), self._next_seq(), SONAR, np.array([range_m, azimuth_rad, elevation_rad]), R,

@@ -67,7 +67,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     fls_every = args.rosbag_fls_every if args.rosbag_fls_every is not None else scenario.outputs.rosbag_fls_every
     metrics = run_mission(scenario, args.out, nav_source=args.nav, rerun=not args.no_rerun,
                           overwrite=args.overwrite, progress=not args.quiet, rosbag=rosbag,
-                          rosbag_fls_every=fls_every)
+                          rosbag_fls_every=fls_every, score_detections=not args.no_scoring)
     print_summary(metrics, args.out)
     mission = metrics["mission"]
     if mission["aborted"]:
@@ -87,6 +87,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", required=True, help="output folder (new, or an earlier run with --overwrite)")
     p.add_argument("--seed", type=non_negative_int, default=None)
     p.add_argument("--no-rerun", action="store_true", help="skip the rerun recording")
+    p.add_argument("--no-scoring", action="store_true",
+                   help="do not score detections against the sonar ground truth (no precision/recall in metrics.json)")
     p.add_argument("--rosbag", action="store_true",
                    help="also write a ROS 2 bag (rosbag2 folder, MCAP storage) into OUT/rosbag")
     p.add_argument("--rosbag-fls-every", type=positive_int, default=None, metavar="N",

@@ -8,9 +8,11 @@ available", the paper's fourth error set) and whether the fused filter took a so
 detection (the fraction of filter steps with sonar, paper: ~30 %), and whether the target
 truly lies in the sonar's field of view and how far it is from the vehicle.
 
-Each sonar frame's clusters are labelled against truth: a cluster within ``match_m`` of the
-target's true (range, azimuth) in the sonar frame (distance ``hypot(dr, r da)``) is the
-target, else one within ``match_m`` of a live bubble is a bubble, else clutter; the
+Each sonar frame's clusters are labelled against truth in the sonar's (range, azimuth) plane
+(points at ``(r cos a, r sin a)``): a cluster within ``match_m`` of the target's body (the
+segment of its long axis: a diver's echo may be its legs or its head alone, and a diver cut
+by the edge of the view shows only the part inside) is the target, else one within
+``match_m`` of a live bubble is a bubble, else clutter; the
 gating figures are the fraction of bubble clusters the fused filter's gate refuses (outside
 its ROI or failing the size gate; the window alone: ``bubble_outside_roi_fraction``) and of
 target clusters it accepts (kept), and, with the
@@ -29,9 +31,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from autonomy.tracking.onboard import MODES, TrackingStack
+from sim.movers import DIVER_HALF_LENGTH_M, VEHICLE_HALF_SIZE_M
 
 FloatArray = NDArray[np.float64]
 ERROR_SETS = ("sonar", "sonar_when_available", "usbl", "fused")
+_COLS = 11
 
 
 class TrackingEvaluation:
@@ -41,6 +45,8 @@ class TrackingEvaluation:
         stack: the run's tracking stack (read only).
         target_pos_at: t_s -> (3,) true NED position of the tracked mover, m.
         bubbles_at: t_s -> (k, 3) NED positions of its live bubbles (or None: no plume).
+        target_axis_at: t_s -> (2, 3) NED ends of the mover's long body axis, m (None: the
+            position alone).
         sonar_mount_body_m, R_bs: (3,) FRD sonar position, m, and (3, 3) sonar->body rotation.
         fov_rad, window_m, vertical_beam_rad: the sonar's field of view (azimuth, range window
             (near, far) m, vertical beam).
@@ -50,15 +56,16 @@ class TrackingEvaluation:
 
     def __init__(self, stack: TrackingStack, target_pos_at, bubbles_at, sonar_mount_body_m: FloatArray,
                  R_bs: FloatArray, fov_rad: float, window_m: tuple[float, float], vertical_beam_rad: float,
-                 warmup_s: float = 10.0, match_m: float = 0.6) -> None:
+                 warmup_s: float = 10.0, match_m: float = 0.6, target_axis_at=None) -> None:
         self.stack = stack
         self.target_pos_at = target_pos_at
+        self.target_axis_at = target_axis_at or (lambda t: np.repeat(np.atleast_2d(target_pos_at(t)), 2, axis=0))
         self.bubbles_at = bubbles_at
         self.mount = np.asarray(sonar_mount_body_m, dtype=float)
         self.R_bs = np.asarray(R_bs, dtype=float)
         self.fov_rad, self.window_m, self.vbeam_rad = float(fov_rad), tuple(window_m), float(vertical_beam_rad)
         self.warmup_s, self.match_m = float(warmup_s), float(match_m)
-        self.rows: list[tuple[float, ...]] = []  # t, err x3 modes, sonar_avail, fused_sonar, in_fov, distance
+        self.rows: list[tuple[float, ...]] = []  # t, err x3 modes, sonar_avail, fused_sonar, in_fov, distance, horizontal err x3
         self._poses: dict[int, tuple[FloatArray, FloatArray]] = {}
         self._n_results = 0
         self.n_bubble = self.n_bubble_rejected = self.n_target = self.n_target_kept = 0
@@ -91,17 +98,18 @@ class TrackingEvaluation:
         for res in results:
             self._label(res)
         tgt = np.asarray(self.target_pos_at(t), dtype=float)
-        errs = []
+        errs, errs_h = [], []
         for m in MODES:
             est = self.stack.trackers[m].estimate(t)
             errs.append(float(np.linalg.norm(est[0][:3] - tgt)) if est is not None else math.nan)
+            errs_h.append(float(np.linalg.norm(est[0][:2] - tgt[:2])) if est is not None else math.nan)
         sonar_avail = any(r.chosen["sonar"] is not None for r in results)
         fused_sonar = any(r.chosen["fused"] is not None for r in results)
         r, a, e = self._sonar_polar(tgt, truth.pos_ned, truth.R_nb)[0]
         in_fov = (abs(a) <= 0.5 * self.fov_rad and self.window_m[0] <= r <= self.window_m[1]
                   and abs(e) <= 0.5 * self.vbeam_rad)
         self.rows.append((t, *errs, float(sonar_avail), float(fused_sonar), float(in_fov),
-                          float(np.linalg.norm(tgt - truth.pos_ned))))
+                          float(np.linalg.norm(tgt - truth.pos_ned)), *errs_h))
 
     def _label(self, res: Any) -> None:
         if not res.candidates or res.roi["fused"] is None:
@@ -113,14 +121,19 @@ class TrackingEvaluation:
         pos, R_nb = pose
         cr = np.array([c.range_m for c in res.candidates])
         ca = np.array([c.azimuth_rad for c in res.candidates])
+        c_xy = np.c_[cr * np.cos(ca), cr * np.sin(ca)]
 
-        def dist(points: FloatArray) -> FloatArray:  # (n_cand, k) polar distance, m
+        def plane_xy(points: FloatArray) -> FloatArray:  # (k, 2) in the sonar's (range, azimuth) plane
             sp = self._sonar_polar(points, pos, R_nb)
-            return np.hypot(cr[:, None] - sp[None, :, 0], cr[:, None] * np.angle(np.exp(1j * (ca[:, None] - sp[None, :, 1]))))
+            return np.c_[sp[:, 0] * np.cos(sp[:, 1]), sp[:, 0] * np.sin(sp[:, 1])]
 
-        d_tgt = dist(np.asarray(self.target_pos_at(res.t_s), dtype=float))[:, 0]
+        a, b = plane_xy(np.asarray(self.target_axis_at(res.t_s), dtype=float))
+        ab = b - a
+        u = np.clip((c_xy - a) @ ab / max(float(ab @ ab), 1e-12), 0.0, 1.0)
+        d_tgt = np.linalg.norm(c_xy - (a + u[:, None] * ab), axis=1)
         bub = self.bubbles_at(res.t_s) if self.bubbles_at is not None else None
-        d_bub = dist(bub).min(axis=1) if bub is not None and len(bub) else np.full(len(cr), np.inf)
+        d_bub = (np.linalg.norm(c_xy[:, None, :] - plane_xy(bub)[None, :, :], axis=2).min(axis=1)
+                 if bub is not None and len(bub) else np.full(len(cr), np.inf))
         is_tgt = d_tgt <= self.match_m
         is_bub = ~is_tgt & (d_bub <= self.match_m)
         inside = res.accepted["fused"]
@@ -135,26 +148,32 @@ class TrackingEvaluation:
         self.n_target_chosen += int((is_tgt & chosen).any())
 
     # results
-    def error_sets(self) -> dict[str, FloatArray]:
+    def error_sets(self, horizontal: bool = False) -> dict[str, FloatArray]:
         """The four error sets (m) after the warm-up: each filter's error at every tick, and
-        the sonar-only filter's at the ticks it had a detection."""
-        a = np.array(self.rows, dtype=float).reshape(-1, 8)
+        the sonar-only filter's at the ticks it had a detection; 3-D, or ``horizontal`` (north
+        and east only: paper 004's GPS ground truth of a target in the vehicle's plane)."""
+        a = np.array(self.rows, dtype=float).reshape(-1, _COLS)
         a = a[a[:, 0] >= self.warmup_s]
-        out = {"sonar": a[:, 1], "usbl": a[:, 2], "fused": a[:, 3], "sonar_when_available": a[a[:, 4] > 0, 1]}
+        c = 8 if horizontal else 1
+        out = {"sonar": a[:, c], "usbl": a[:, c + 1], "fused": a[:, c + 2], "sonar_when_available": a[a[:, 4] > 0, c]}
         return {k: v[np.isfinite(v)] for k, v in out.items()}
 
     def metrics(self) -> dict[str, Any]:
-        """Statistics of the error sets (m), sonar-step fraction, ROI gating, field of view."""
-        a = np.array(self.rows, dtype=float).reshape(-1, 8)
+        """Statistics of the error sets (m; 3-D under ``errors``, north-east under
+        ``errors_horizontal``), sonar-step fraction, ROI gating, field of view."""
+        a = np.array(self.rows, dtype=float).reshape(-1, _COLS)
         scored = a[a[:, 0] >= self.warmup_s]
-        stats = {}
-        for k, v in self.error_sets().items():
-            stats[k] = ({"n": int(v.size), "mean_m": float(v.mean()), "std_m": float(v.std()),
-                         "median_m": float(np.median(v)), "p95_m": float(np.percentile(v, 95))} if v.size else
-                        {"n": 0})
+        stats: dict[str, dict] = {}
+        stats_h: dict[str, dict] = {}
+        for out, horizontal in ((stats, False), (stats_h, True)):
+            for k, v in self.error_sets(horizontal).items():
+                out[k] = ({"n": int(v.size), "mean_m": float(v.mean()), "std_m": float(v.std()),
+                           "median_m": float(np.median(v)), "p95_m": float(np.percentile(v, 95))} if v.size else
+                          {"n": 0})
         return {
             "mode": self.stack.cfg.mode,
             "errors": stats,
+            "errors_horizontal": stats_h,
             "fused_sonar_step_fraction": float(scored[:, 5].mean()) if len(scored) else math.nan,
             "roi": {"bubble_clusters": self.n_bubble, "bubble_rejected_fraction":
                     self.n_bubble_rejected / self.n_bubble if self.n_bubble else math.nan,
@@ -174,7 +193,7 @@ class TrackingEvaluation:
         from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.figure import Figure
 
-        a = np.array(self.rows, dtype=float).reshape(-1, 8)
+        a = np.array(self.rows, dtype=float).reshape(-1, _COLS)
         fig = Figure(figsize=(9, 4))
         FigureCanvasAgg(fig)
         ax = fig.add_subplot()
@@ -191,17 +210,24 @@ class TrackingEvaluation:
         ax.grid(alpha=0.3)
         fig.tight_layout()
         fig.savefig(error_png, dpi=110)
-        sets = self.error_sets()
-        fig = Figure(figsize=(6, 4))
-        FigureCanvasAgg(fig)
-        ax = fig.add_subplot()
-        ax.boxplot([sets[k] if sets[k].size else [np.nan] for k in ERROR_SETS], showfliers=False)
-        ax.set_xticks(range(1, 5), ["sonar", "sonar when\navailable", "USBL", "fused"])
-        ax.set_ylabel("position error (m)")
-        ax.set_title(title or "error sets")
-        ax.grid(alpha=0.3, axis="y")
-        fig.tight_layout()
-        fig.savefig(box_png, dpi=110)
+        error_boxplot_png(self.error_sets(), box_png, title or "error sets")
+
+
+def error_boxplot_png(sets: dict[str, FloatArray], path: Path, title: str) -> None:
+    """Box plot (PNG) of the four error sets (m), as paper 004 fig. 8 (whiskers 1.5 IQR, no fliers)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(6, 4))
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    ax.boxplot([sets[k] if sets[k].size else [np.nan] for k in ERROR_SETS], showfliers=False)
+    ax.set_xticks(range(1, 5), ["sonar", "sonar when\navailable", "USBL", "fused"])
+    ax.set_ylabel("position error (m)")
+    ax.set_title(title)
+    ax.grid(alpha=0.3, axis="y")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
 
 
 def evaluation_for(mission: Any, warmup_s: float = 10.0) -> TrackingEvaluation:
@@ -220,6 +246,13 @@ def evaluation_for(mission: Any, warmup_s: float = 10.0) -> TrackingEvaluation:
         raise ValueError(f"evaluation_for: no mover named {name!r} carries the transponder")
     traj = movers.trajectories[name]
     plume = movers.plumes.get(name)
+    kind = next(m.kind for m in movers.movers if m.name == name)
+    half_length_m = DIVER_HALF_LENGTH_M if kind == "diver" else VEHICLE_HALF_SIZE_M[0]
+
+    def axis_at(t_s: float) -> FloatArray:
+        pos, course = traj.pose_at(t_s)
+        half = half_length_m * np.array([np.cos(course), np.sin(course), 0.0])
+        return np.stack([pos - half, pos + half])
 
     def bubbles_at(t_s: float) -> FloatArray:
         pos, alive = plume.positions_at(t_s)
@@ -229,4 +262,4 @@ def evaluation_for(mission: Any, warmup_s: float = 10.0) -> TrackingEvaluation:
     g = sonar.geometry
     return TrackingEvaluation(stack, lambda t: traj.pose_at(t)[0], bubbles_at if plume is not None else None,
                               sonar.mount.pos_body_m, sonar.mount.R_bs, g.fov_rad, (g.window_near_m, g.window_far_m),
-                              g.vertical_beamwidth_rad, warmup_s=warmup_s)
+                              g.vertical_beamwidth_rad, warmup_s=warmup_s, target_axis_at=axis_at)

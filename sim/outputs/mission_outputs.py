@@ -18,6 +18,7 @@ import numpy as np
 from autonomy.geodesy import GeodeticOrigin, ned_to_lat_lon_depth
 from scenarios.schema import Scenario
 from sim.outputs.map_plot import plot_map
+from sim.evaluation.detection_scoring import DetectionScorer
 from sim.perception import target_objects, world_model_metrics
 from sim.mission import Mission
 from sim.outputs.progress import MissionProgress
@@ -84,8 +85,9 @@ def planned_length_s(mission: Mission) -> float:
     return float(min(planned, scn.duration_s))
 
 
-def collect_metrics(mission: Mission, log: TrajectoryLog) -> dict[str, Any]:
-    """The figures of a finished mission (navigation, detections, world model)."""
+def collect_metrics(mission: Mission, log: TrajectoryLog, scorer: DetectionScorer | None = None) -> dict[str, Any]:
+    """The figures of a finished mission (navigation, detections as ``scorer`` counted them,
+    world model)."""
     s = mission.summary()
     metrics: dict[str, Any] = {
         "scenario": mission.scenario.name,
@@ -101,7 +103,8 @@ def collect_metrics(mission: Mission, log: TrajectoryLog) -> dict[str, Any]:
         "perception": {"fls_frames": mission.n_fls_frames},
     }
     if mission.perception is not None:
-        metrics["perception"].update(mission.perception.detection_metrics())
+        if scorer is not None:
+            metrics["perception"].update(scorer.metrics())
         wm = mission.perception.world_model_metrics()
         n_all = len(mission.perception.world_objects())
         n_targets = n_all - int(wm.get("objects_not_target", 0))
@@ -165,6 +168,7 @@ class _ProgressObserver:
 def run_mission(
     scenario: Scenario, out: str | Path, *, nav_source: str = "estimate", rerun: bool = True,
     progress: bool = True, overwrite: bool = False, rosbag: bool | None = None, rosbag_fls_every: int | None = None,
+    score_detections: bool = True,
 ) -> dict[str, Any]:
     """Run ``scenario`` and write metrics.json, trajectory.csv, world_model.json (objects in NED
     and latitude / longitude / depth), map.png (with an acoustic link, also
@@ -173,7 +177,9 @@ def run_mission(
     trackers' figures under ``tracking`` in metrics.json; and recording.rrd; with ``rosbag``, a
     ROS 2 bag folder ``rosbag/`` in MCAP storage, :class:`sim.ros2bag.recorder.RosbagRecorder`,
     every ``rosbag_fls_every``-th sonar frame; None takes the scenario's ``outputs.rosbag`` /
-    ``outputs.rosbag_fls_every``) into ``out``. Returns the metrics.
+    ``outputs.rosbag_fls_every``) into ``out``. ``score_detections``: score the ATR against the
+    frames' ground truth (:class:`sim.evaluation.detection_scoring.DetectionScorer`; its figures
+    go under ``perception`` in metrics.json). Returns the metrics.
 
     Raises:
         OutputDirError: ``out`` is protected, a file, not creatable, or holds files that
@@ -185,10 +191,13 @@ def run_mission(
     with staged as partial:
         log = TrajectoryLog()
         observers: list[Any] = [log]
+        scorer = DetectionScorer("", scenario.autonomy.atr.detector) if score_detections else None
+        if scorer is not None:
+            observers.append(scorer)  # before the recorder, which colours detections by it
         if rerun:
             from sim.outputs.rerun_recording import RerunRecorder
 
-            observers.append(RerunRecorder(partial / "recording.rrd"))
+            observers.append(RerunRecorder(partial / "recording.rrd", scorer=scorer))
         if rosbag is None:
             rosbag = scenario.outputs.rosbag
         if rosbag_fls_every is None:
@@ -198,6 +207,12 @@ def run_mission(
 
             observers.append(RosbagRecorder(partial / "rosbag", fls_every=rosbag_fls_every))
         mission = Mission(scenario, nav_source=nav_source, observers=observers)
+        if scorer is not None:
+            if mission.perception is None:
+                mission.observers.remove(scorer)
+                scorer = None
+            else:
+                scorer.sonar_name = mission.fls.name
         msis = next(iter(p for p in mission.parts.processors.values() if hasattr(p, "localizer")), None)
         if msis is not None:
             from sim.msis_evaluation import LocalizationErrorObserver
@@ -215,7 +230,7 @@ def run_mission(
         mission.reset()
         mission.run(progress=False)
 
-        metrics = collect_metrics(mission, log)
+        metrics = collect_metrics(mission, log, scorer)
         overlay = extent = None
         if msis is not None and msis_obs.err_fused_m:
             from sim.outputs.msis_overlay import basin_outline_ne, msis_overlay

@@ -2,6 +2,12 @@
 FLS fan frames with ground-truth boxes and detections, navigation errors, world model, and
 the scanning sonar's scan building up ping by ping with the features of each position fix.
 
+Target tracking (paper 004) on the fan image ``sonar/fan``: ``sonar/fan/roi/<mode>`` the
+polar region of interest of each sonar-using filter (``fused``, ``sonar``) at the ping, as an
+outline (its range and azimuth bounds, :meth:`autonomy.tracking.roi.PolarRoi.outline`);
+``sonar/fan/clusters`` the detector's clusters (green: taken by the fused filter, yellow:
+inside its ROI and of the target's size, grey: refused).
+
 Scanning-sonar entities (``<name>`` the sensor entry's name):
 
 * ``world/msis/<name>/ping``: each ping's samples at or above ``msis_point_threshold`` as
@@ -28,6 +34,9 @@ from autonomy.frames import quat_from_rot, rot_from_euler
 from typing import Any
 
 from autonomy.messages import PositionFixMsg
+from autonomy.sonar_geometry import FanGeometry
+from autonomy.tracking.onboard import TrackingFrameResult
+from autonomy.tracking.roi import PolarRoi
 from sim.records import MissionInfo, MissionSummary, PerceptionResult, StepRecord
 from sim.sensors.fls import FlsRender
 from sim.sensors.msis import MsisRender
@@ -48,13 +57,17 @@ class RerunRecorder:
         msis_max_points: at most this many (max-pooled) bins per ping.
         msis_image_every: re-log the scan image every n-th ping.
         msis_image_px: side of the logged scan image, px.
+        scorer: a :class:`sim.evaluation.detection_scoring.DetectionScorer` placed before this
+            recorder among the observers: detections are coloured true (green) or false (red)
+            by it; without one they are drawn in one neutral colour.
     """
 
     def __init__(self, path: Path, *, fls_every: int = 1, fls_scale: float = 0.5, path_every_s: float = 2.0,
                  msis_point_threshold: int = 80, msis_max_points: int = 200, msis_image_every: int = 10,
-                 msis_image_px: int = 256) -> None:
+                 msis_image_px: int = 256, scorer=None) -> None:
         import rerun as rr
 
+        self.scorer = scorer
         self._rr = rr
         self.path = Path(path)
         self.fls_every = max(int(fls_every), 1)
@@ -74,6 +87,7 @@ class RerunRecorder:
         self._scans: dict[str, ScanImage] = {}
         self._n_msis: dict[str, int] = {}
         self._msis_depth: dict[str, float] = {}
+        self._fan_geometry: FanGeometry | None = None
 
     # -- observer protocol -----------------------------------------------------------
     def on_start(self, info: MissionInfo) -> None:
@@ -136,6 +150,8 @@ class RerunRecorder:
             self._on_sonar_frame(msg)
         elif isinstance(msg, PerceptionResult):
             self._on_perception(msg)
+        elif isinstance(msg, TrackingFrameResult):
+            self._on_tracking(msg)
         elif isinstance(msg, MsisRender):
             self._on_msis_ping(name, msg)
         elif isinstance(msg, PositionFixMsg):
@@ -209,6 +225,7 @@ class RerunRecorder:
         if not self._frame_logged:
             return
         rec.set_time("sim_time", duration=render.frame.t_s)
+        self._fan_geometry = render.frame.geometry
         fan = render.frame.fan
         s = self.fls_scale
         img = cv2.resize(fan, None, fx=s, fy=s, interpolation=cv2.INTER_AREA) if s != 1.0 else fan
@@ -238,9 +255,40 @@ class RerunRecorder:
             rec.log("sonar/fan/detections", rr.Boxes2D(
                 array=np.array([d.box_xyxy_px for d in res.detections]) * s, array_format=rr.Box2DFormat.XYXY,
                 labels=[f"{d.class_name} {d.score:.2f}" for d in res.detections],
-                colors=[[40, 220, 40] if ok_ else [230, 40, 40] for ok_ in res.true_detection]))
+                colors=self._detection_colours(len(res.detections))))
         else:
             rec.log("sonar/fan/detections", rr.Clear(recursive=False))
+
+    def _detection_colours(self, n: int) -> list[list[int]]:
+        """Green/red by the scorer's verdict on the latest frame; amber without a scorer."""
+        verdict = self.scorer.last_true_detection if self.scorer is not None else ()
+        if len(verdict) != n:
+            return [[240, 170, 30]] * n
+        return [[40, 220, 40] if ok_ else [230, 40, 40] for ok_ in verdict]
+
+    def _on_tracking(self, res: TrackingFrameResult) -> None:
+        """ROI outlines and the clusters of a processed frame, on its fan image."""
+        geo = self._fan_geometry
+        if geo is None:
+            return
+        rr, rec = self._rr, self._rec
+        rec.set_time("sim_time", duration=res.t_s)
+        s = self.fls_scale
+        for mode, colour in ROI_COLOURS.items():
+            roi = res.roi.get(mode)
+            if roi is None:
+                rec.log(f"sonar/fan/roi/{mode}", rr.Clear(recursive=False))
+                continue
+            rec.log(f"sonar/fan/roi/{mode}", rr.LineStrips2D([roi_outline_px(roi, geo, s)], colors=[colour],
+                                                             labels=[f"ROI {mode}"]))
+        if not res.candidates:
+            rec.log("sonar/fan/clusters", rr.Clear(recursive=False))
+            return
+        chosen, acc = res.chosen.get("fused"), res.accepted.get("fused", np.zeros(len(res.candidates), dtype=bool))
+        colours = [[40, 220, 40] if c is chosen else [240, 200, 40] if ok else [150, 150, 150]
+                   for c, ok in zip(res.candidates, acc)]
+        rec.log("sonar/fan/clusters", rr.Boxes2D(array=np.array([c.box_xyxy_px for c in res.candidates]) * s,
+                                                 array_format=rr.Box2DFormat.XYXY, colors=colours))
 
     def on_end(self, summary: MissionSummary) -> None:
         rr, rec = self._rr, self._rec
@@ -249,6 +297,17 @@ class RerunRecorder:
             rec.log("world/path/estimated", rr.LineStrips3D([np.asarray(self._est)], colors=[[240, 140, 30]]))
         rec.flush()
         rec.disconnect()
+
+
+ROI_COLOURS = {"fused": [60, 200, 255], "sonar": [255, 120, 40]}  # sonar-using filters and their ROI colours
+
+
+def roi_outline_px(roi: PolarRoi, geometry: FanGeometry, scale: float = 1.0) -> np.ndarray:
+    """Outline (k, 2) of a polar ROI in fan-image pixels (x, y), times ``scale`` (the logged
+    image's resize factor)."""
+    rng_az = roi.outline()
+    x, y = geometry.polar_to_pixel(rng_az[:, 0], rng_az[:, 1])
+    return np.c_[x, y] * scale
 
 
 def _xyzw(q_wxyz: np.ndarray) -> list[float]:

@@ -28,6 +28,18 @@ class FlsPreset:
     absorption_db_per_m: float
     fan_size_px: tuple[int, int]  # (width, height)
     range_window_m: tuple[float, float] | None = None  # default displayed window
+    pings_per_frame: int | None = None  # transmit cycles per image (None: not modelled, no rate limit)
+
+
+SOUND_SPEED_MPS = 1500.0  # nominal, for the two-way listening time of a ping
+
+
+def max_frame_rate_hz(pings_per_frame: int, window_far_m: float, sound_speed_mps: float = SOUND_SPEED_MPS) -> float:
+    """Highest frame rate of a sonar that fires ``pings_per_frame`` transmit cycles per image,
+    each listening for the two-way travel time to the far end of the window:
+    ``c / (2 far pings_per_frame)`` (Sound Metrics ARIS Integration SDK, max frame rate =
+    1 / (cycle period x pings per frame); ``docs/references.md`` [ARISSDK]). Hz."""
+    return float(sound_speed_mps / (2.0 * window_far_m * pings_per_frame))
 
 
 PRESETS: dict[str, FlsPreset] = {
@@ -35,9 +47,10 @@ PRESETS: dict[str, FlsPreset] = {
     # Beam width 1 deg and 0.25 dB/m absorption at 900 kHz are estimates.
     "m900_130": FlsPreset(130.0, 722, 20.0, 1.0, 100.0, 0.0254, 1.0, 0.25, (894, 477)),
     # ARIS 3000, 3 MHz mode: 30 x 14 deg, 128 beams, 5 m. Resolution / beam width / absorption estimates.
-    "aris3000": FlsPreset(30.0, 128, 14.0, 0.7, 5.0, 0.003, 0.25, 0.9, (512, 512)),
-    # ARIS 3000, 1.8 MHz mode: 15 m.
-    "aris3000_lf": FlsPreset(30.0, 128, 14.0, 0.7, 15.0, 0.01, 0.4, 0.45, (512, 512)),
+    # 128 beams are formed in 8 transmit cycles per frame (the SDK's ping mode 9).
+    "aris3000": FlsPreset(30.0, 128, 14.0, 0.7, 5.0, 0.003, 0.25, 0.9, (512, 512), pings_per_frame=8),
+    # ARIS 3000, 1.8 MHz mode: 15 m (at most 6.25 frames/s over the full window).
+    "aris3000_lf": FlsPreset(30.0, 128, 14.0, 0.7, 15.0, 0.01, 0.4, 0.45, (512, 512), pings_per_frame=8),
 }
 
 
@@ -105,6 +118,10 @@ def resolve_geometry(cfg: FlsConfig) -> FlsGeometry:
     if (far - near) / p.range_resolution_m > 20000:
         raise ValueError(f"sensors.fls: window {far - near:g} m at {p.range_resolution_m:g} m bins "
                          "gives more than 20000 bins; coarsen range_resolution_m or narrow the window")
+    if p.pings_per_frame is not None and cfg.rate_hz > (fmax := max_frame_rate_hz(p.pings_per_frame, far)) + 1e-9:
+        raise ValueError(f"sensors.fls.rate_hz: {cfg.rate_hz:g} Hz is above the {cfg.preset}'s {fmax:.2f} frames/s "
+                         f"for a {far:g} m window ({p.pings_per_frame} pings per frame, each listening "
+                         f"2 x {far:g} m / {SOUND_SPEED_MPS:g} m/s); lower rate_hz or shorten range_window_m")
     columns = cfg.azimuth_columns if cfg.azimuth_columns is not None else p.n_beams
     if columns > p.n_beams:
         raise ValueError(f"sensors.fls.azimuth_columns ({columns}) must not exceed n_beams ({p.n_beams})")

@@ -125,13 +125,6 @@ def test_fuzzy_segments_fuse_grow_and_age_out():
     f = a.fused(b)
     assert f.rho_m == pytest.approx(5.005, abs=2e-3) and f.rho0_m == pytest.approx(0.04 / math.sqrt(2))
     assert f.end_a[1] == pytest.approx(-2.0, abs=0.02) and f.end_b[1] == pytest.approx(3.0, abs=0.02)
-    m = FuzzySegmentMap(max_angle_rad=math.radians(2), motion_growth=0.1, age_growth_mps=0.0, max_area_m=0.5)
-    m.add(a), m.add(b), m.add(far)
-    assert len(m.segments) == 2
-    m.grow(travelled_m=1.0, dt_s=1.0)
-    assert m.segments[1].rho0_m == pytest.approx(0.04 + 0.1)
-    m.grow(travelled_m=3.0, dt_s=1.0)
-    assert m.segments == []
 
 
 def _split_wall_pieces(rng):
@@ -187,8 +180,10 @@ def test_wall_fix_is_unaffected_by_a_heading_error_rotating_the_sweep():
     placed = est_p + (pts - true_p) @ R.T
     loc = MsisLocalizer(MsisLocalizationConfig(method="walls", tank_size_ne_m=(20.0, 10.0)), rng)
     nav = NavEstimate(0.0, np.array([*est_p, 2.0]), np.zeros(3), np.zeros(3), np.zeros(3), np.eye(3))
-    pos, cov = loc._walls_fix(placed, nav)
+    pos, cov, (heading_err, heading_var) = loc._walls_fix(placed, nav)
     assert np.linalg.norm(pos - true_p) < 0.05
+    # the walls' known directions give the heading error the sweep was placed with
+    assert math.degrees(heading_err) == pytest.approx(1.5, abs=0.2) and 0 < heading_var < math.radians(0.5) ** 2
     assert sorted(loc.last_walls) == [0, 1, 2, 3]
     for i, s in loc.last_walls.items():  # one fused estimate per wall, turned by the heading error
         assert abs(abs(math.degrees(math.remainder(s.theta_rad - [0, np.pi, np.pi / 2, -np.pi / 2][i], 2 * np.pi))) - 1.5) < 0.5

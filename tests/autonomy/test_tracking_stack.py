@@ -167,3 +167,87 @@ def test_bubble_cluster_loses_to_the_diver_inside_the_roi():
     assert gate[is_diver].all() and not gate[is_bubble].any()
     inside, s = roi_score(dets, roi, gate)
     assert is_diver[np.argmax(s)] and s[is_diver][0] >= cfg.detector_score_threshold
+
+
+def test_diver_cut_by_the_fan_edge_passes_the_size_gate_but_bubbles_do_not():
+    """A diver (1.8 m x 0.45 m, across the beam) whose centre lies 0.4 m outside the fan's port
+    edge shows only a short piece: the size gate alone refuses it, but its contours reach the
+    fan's boundary (``edge_gap_m`` about 0), so it is taken as cut by the edge (censored size)
+    and kept, while a breath's bubbles in the middle of the fan stay refused."""
+    from autonomy.atr.classical import ClassicalDetector, fan_edge_gap_m
+    from autonomy.atr.config import ClassicalAtrConfig
+    from autonomy.sonar_geometry import FanGeometry
+    from autonomy.tracking.onboard import cut_by_edge, shape_gate
+
+    geo = FanGeometry.fit(512, 512, 1.0, 15.0, math.radians(30.0))
+    h, w = geo.height_px, geo.width_px
+    yy, xx = np.mgrid[0:h, 0:w].astype(float)
+    r, a = geo.pixel_to_polar(xx, yy)
+    support = geo.inside(r, a)
+    rng = np.random.default_rng(5)
+    fan = rng.rayleigh(25.0, (h, w))
+    x_m, y_m = r * np.sin(a), r * np.cos(a)  # starboard, ahead of the head
+    edge_x = -8.0 * math.tan(math.radians(15.0))  # port edge at 8 m ahead
+    diver = ((x_m - (edge_x - 0.4)) / 0.9) ** 2 + ((y_m - 8.0) / 0.22) ** 2 <= 1.0
+    fan[diver] = 150.0 + rng.normal(0.0, 20.0, int(diver.sum()))
+    for bx, by in [(0.0, 8.3), (0.3, 8.1), (-0.2, 7.9)]:
+        fan[np.hypot(x_m - bx, y_m - by) <= 0.07] = 230.0
+    fan = np.where(support, np.clip(fan, 0, 255), 0).astype(np.uint8)
+
+    acfg = ClassicalAtrConfig()
+    boxes, _, feats = ClassicalDetector(acfg, score_threshold=0.0).clusters(fan, geo.m_per_px, geometry=geo)
+    cr, ca = geo.pixel_to_polar(0.5 * (boxes[:, 0] + boxes[:, 2]), 0.5 * (boxes[:, 1] + boxes[:, 3]))
+    is_diver = (np.abs(cr - 8.0) < 0.4) & (ca < math.radians(-12.0))
+    is_bubble = np.hypot(cr * np.sin(ca), cr * np.cos(ca) - 8.1) < 0.5
+    assert is_diver.sum() == 1 and is_bubble.any()
+    # the gap: analytic distance to the edge for points on it and inside
+    on_edge = geo.polar_to_pixel(np.array([8.0]), np.array([-0.5 * geo.fov_rad]))
+    assert fan_edge_gap_m(geo, *on_edge)[0] == pytest.approx(0.0, abs=1e-9)
+    mid = geo.polar_to_pixel(np.array([8.0]), np.array([0.0]))
+    assert fan_edge_gap_m(geo, *mid)[0] == pytest.approx(8.0 * math.sin(0.5 * geo.fov_rad), rel=1e-9)
+
+    cfg = TrackingConfig()
+    plain = shape_gate(feats, cfg.target_size_m, cfg.min_extent_frac, cfg.min_area_frac)
+    assert not plain[is_diver].any() and not plain[is_bubble].any()
+    cut = cut_by_edge(feats, acfg.blur_sigma_m + geo.m_per_px)
+    assert cut[is_diver].all() and not cut[is_bubble].any()
+    gate = shape_gate(feats, cfg.target_size_m, cfg.min_extent_frac, cfg.min_area_frac, cut)
+    assert gate[is_diver].all() and not gate[is_bubble].any()
+
+
+def test_polar_roi_outline_follows_its_range_and_azimuth_bounds():
+    roi = PolarRoi(6.0, math.radians(5.0), 1.5, math.radians(4.0), np.eye(2))
+    pts = roi.outline(8)
+    assert pts.shape == (17, 2) and np.array_equal(pts[0], pts[-1])
+    assert set(np.round(pts[:, 0], 12)) == {4.5, 7.5}
+    assert pts[:, 1].min() == pytest.approx(math.radians(1.0)) and pts[:, 1].max() == pytest.approx(math.radians(9.0))
+    assert roi.contains(pts[:, 0] * (1 - 1e-9) + 1e-9 * 6.0, pts[:, 1]).all()
+
+
+def test_sonar_centre_sigma_widens_the_measurement_noise():
+    """A detection whose centre is uncertain by ``centre_sigma_m`` moves the estimate less:
+    the update equals a Kalman update with R + diag(c^2, c^2 / r^2) (independent algebra on
+    the 2-D position), and a huge ``c`` leaves the prior."""
+    cfg = TrackingConfig(mode="fused")
+
+    def run(c):
+        tr = TargetTracker(cfg)
+        tr.record_pose(0.0, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
+        tr.on_usbl(UsblMsg(0.0, 8.0, 0.0, 0.0, "diver", True))
+        prior = tr.estimate(0.0)
+        tr.on_sonar(0.0, 8.3, math.radians(2.0), centre_sigma_m=c)
+        return prior, tr.estimate(0.0)
+
+    (x0, P0), (x1, _) = run(0.0)
+    _, (x2, _) = run(0.5)
+    _, (x3, _) = run(1e4)
+    assert np.linalg.norm(x2[:2] - x0[:2]) < np.linalg.norm(x1[:2] - x0[:2])
+    np.testing.assert_allclose(x3[:2], x0[:2], atol=1e-4)
+    # independent check of the c = 0.5 update: linear KF in (n, e) with the polar Jacobian at the prior
+    r0, a0 = 8.0, 0.0
+    J = np.array([[1.0, 0.0], [0.0, 1.0 / r0]])  # d(range, azimuth)/d(n, e) at (8, 0)
+    R = np.diag([cfg.sonar_range_sigma_m**2 + 0.25, math.radians(cfg.sonar_azimuth_sigma_deg) ** 2 + 0.25 / 8.3**2])
+    P = P0[:2, :2]
+    K = P @ J.T @ np.linalg.inv(J @ P @ J.T + R)
+    expect = x0[:2] + K @ np.array([8.3 - r0, math.radians(2.0) - a0])
+    np.testing.assert_allclose(x2[:2], expect, atol=2e-3)

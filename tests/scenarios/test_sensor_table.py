@@ -16,10 +16,12 @@ DEFAULTS = ["imu", "dvl", "depth", "altimeter", "gps", "fls"]
 def test_shipped_files_load_unchanged_with_the_default_suite(name):
     scn = load_scenario(name)
     if "msis" in scn.sensors:  # the scanning-sonar pool and tank scenarios replace the FLS
-        assert list(scn.sensors) == [d for d in DEFAULTS if d != "fls"] + ["msis"]
+        dvl_free = scn.autonomy.navigation.velocity_source == "speed_model"  # the pool also drops the DVL
+        removed = {"fls", "dvl"} if dvl_free else {"fls"}
+        assert list(scn.sensors) == [d for d in DEFAULTS if d not in removed] + ["msis"]
         dump = scn.model_dump()
-        # a dump lists the entries kept; the removed default needs its null again
-        assert Scenario.model_validate({**dump, "sensors": {**dump["sensors"], "fls": None}}) == scn
+        # a dump lists the entries kept; the removed defaults need their nulls again
+        assert Scenario.model_validate({**dump, "sensors": {**dump["sensors"], **dict.fromkeys(removed)}}) == scn
         return
     tracking = scn.autonomy.tracking.enabled  # the diver-tracking scenarios add a USBL, an ARIS window
     assert list(scn.sensors) == DEFAULTS + (["usbl"] if tracking else [])

@@ -59,7 +59,7 @@ def _crossing_scenario(**fls) -> Scenario:
         name="crossing", duration_s=10.0,
         world={"seabed": {"depth_m": 30.0}, "movers": [diver]},
         vehicle={"model": "bluerov2_heavy", "initial_pos_ned": (0.0, 0.0, 5.0)},
-        sensors={"fls": {"preset": "aris3000_lf", "tilt_deg": 0.0, "rate_hz": 10.0, "mount_pos_body_m": (0.3, 0.0, 0.0),
+        sensors={"fls": {"preset": "aris3000_lf", "tilt_deg": 0.0, "rate_hz": 6.0, "mount_pos_body_m": (0.3, 0.0, 0.0),
                          **fls}},
     )
 

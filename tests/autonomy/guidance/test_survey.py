@@ -59,3 +59,18 @@ def test_from_config_depth_mode_and_bad_arguments():
         SurveyGuidance([[1.0, 1.0]], 0.0, depth_m=1.0)
     with pytest.raises(ValueError):
         SurveyConfig(leg_spacing_m="auto")
+
+
+def test_fixed_heading_moves_along_the_path_by_surge_and_sway():
+    """An omnidirectional vehicle holding north on an eastbound line moves by sway alone
+    (starboard > 0); yawed 30 deg off, the body velocity setpoint still points east in NED."""
+    g = SurveyGuidance([[0.0, 100.0]], 0.3, LosConfig(lookahead_m=2.0), depth_m=5.0, heading_rad=0.0)
+    g.start([0.0, 0.0])
+    sp = g.update(nav(0.0, 0.0, 1.0, 0.0))
+    assert sp.heading_rad == 0.0 and sp.speed_mps == pytest.approx(0.0, abs=1e-12)
+    assert sp.sway_mps == pytest.approx(0.3)
+    yaw = math.radians(30.0)
+    sp = g.update(nav(0.1, 0.0, 1.0, yaw))
+    v_ned = np.array([[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]]) @ [sp.speed_mps, sp.sway_mps]
+    np.testing.assert_allclose(v_ned, [0.0, 0.3], atol=1e-12)
+    assert sp.heading_rad == 0.0

@@ -78,3 +78,17 @@ def test_fewer_ray_columns_interpolate_to_beams():
     ref = full.render(0.0, np.array([0.0, 0.0, 4.0]), np.eye(3), AnalyticCaster(6.0, 0.3), [], noise=False)
     centre = np.s_[100:600, 300:600]
     assert np.allclose(out.mean_intensity[centre], ref.mean_intensity[centre], rtol=0.05)
+
+
+def test_aris_frame_rate_is_bounded_by_its_pings_per_frame():
+    """The ARIS forms its 128 beams in 8 pings, each listening the two-way time to the far
+    end of the window: 1500 / (2 x 15 x 8) = 6.25 frames/s over 15 m, 18.75 over 5 m."""
+    from sim.sensors.fls_presets import max_frame_rate_hz
+
+    assert max_frame_rate_hz(8, 15.0) == pytest.approx(6.25)
+    assert max_frame_rate_hz(8, 5.0) == pytest.approx(18.75)
+    resolve_geometry(FlsConfig(preset="aris3000_lf", rate_hz=6.0))
+    resolve_geometry(FlsConfig(preset="aris3000_lf", rate_hz=10.0, range_window_m=(1.0, 9.0)))  # 10.4 frames/s
+    with pytest.raises(ValueError, match="rate_hz"):
+        resolve_geometry(FlsConfig(preset="aris3000_lf", rate_hz=10.0))
+    resolve_geometry(FlsConfig(preset="m900_130", rate_hz=10.0, range_window_m=(1.0, 100.0)))  # not modelled
