@@ -330,7 +330,8 @@ class Mission:
         with timer.stage("nav_filter"):
             for handler in self._by_type.get(type(result), ()) if result is not None else ():
                 handler(result)  # onboard results the filter fuses (position fixes)
-        if self.link is not None and isinstance(result, PerceptionResult):
+        if (self.link is not None and isinstance(result, PerceptionResult)
+                and (self.parts.fsm.mode != "idle" or self.scenario.comms.surface.send_while_idle)):
             with timer.stage("link"):
                 self.link.send_detections(self.physics.t_s, result.localized)
         with timer.stage("observers"):

@@ -95,6 +95,9 @@ class SurfaceLinkConfig(StrictModel):
 
     vehicle: str = Field("buoy", min_length=1, description="the surface vehicle (a key of vehicles:)")
     detections: bool = Field(True, description="send the AUV's detections up")
+    send_while_idle: bool = Field(
+        False, description="also send the detections taken before the mission starts (at rest at the surface, "
+        "where the surface vehicle cannot tell which way the sonar looks)")
     usbl_fixes: bool = Field(True, description="send the surface vehicle's USBL fixes of the AUV down")
     fuse_usbl_fixes: bool = Field(True, description="the AUV's navigation filter fuses the fixes it receives")
     cycle_s: float = Field(2.0, gt=0.2, le=600.0, description="time-division cycle, s")

@@ -87,7 +87,8 @@ class VehicleLink:
 
     # ------------------------------------------------------------------ AUV side
     def send_detections(self, t_s: float, localized: Sequence[LocalizedDetection]) -> None:
-        """Queue one frame's geolocated detections (mission frame, NED) at the AUV's modem."""
+        """Queue one frame's geolocated detections (mission frame, NED) at the AUV's modem
+        (the mission leaves out those taken idle at the surface, ``comms.surface.send_while_idle``)."""
         if not self.cfg.detections or not localized:
             return
         scan = self._onboard_pmha.cluster_scan(localized) if self._onboard_pmha is not None else list(localized)

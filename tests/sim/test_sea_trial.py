@@ -47,7 +47,7 @@ def test_both_world_models_are_written_in_ned_and_lat_lon(short_run):
     metrics, out = short_run
     assert {"world_model.json", "surface_world_model.json", "map.png", "metrics.json"} <= {p.name for p in out.iterdir()}
     surface = json.loads((out / "surface_world_model.json").read_text())
-    assert surface["objects"], "the surface world model holds the OPIs seen from the start point"
+    assert surface["objects"], "the surface world model holds the OPIs seen on the dive"
     for obj in surface["objects"]:
         assert abs(obj["lat_deg"] - 44.0935) < 0.001 and abs(obj["lon_deg"] - 9.86) < 0.001
         assert obj["depth_m"] == pytest.approx(obj["pos_ned"][2], abs=0.01)
