@@ -21,6 +21,7 @@ from sim.outputs.map_plot import plot_map
 from sim.evaluation.detection_scoring import DetectionScorer
 from sim.perception import target_objects, world_model_metrics
 from sim.mission import Mission
+from sim.movers import BUBBLE_CLASS
 from sim.outputs.progress import MissionProgress
 from sim.outputs.run_dir import StagedOutput, check_output_dir
 from sim.outputs.trajectory_log import TrajectoryLog
@@ -72,9 +73,12 @@ def with_geodetic(world_model: dict[str, Any], origin: GeodeticOrigin) -> dict[s
 def planned_length_s(mission: Mission) -> float:
     """Planned mission length, s: start delay plus the survey path at the survey speed.
 
-    Used as the 100 % of the progress display; capped by the scenario's duration.
+    Used as the 100 % of the progress display; capped by the scenario's duration (a buddy
+    mission, which flies no survey: the duration).
     """
     scn = mission.scenario
+    if scn.autonomy.guidance.buddy.enabled:  # no survey plan: the mission runs to duration_s
+        return float(scn.duration_s)
     survey = scn.autonomy.guidance.survey
     wps = np.asarray(mission.waypoints_ne, dtype=float).reshape(-1, 2)
     start = np.asarray(scn.vehicle.initial_pos_ned[:2], dtype=float)
@@ -116,10 +120,13 @@ def collect_metrics(mission: Mission, log: TrajectoryLog, scorer: DetectionScore
         metrics["world_model"] = wm
     others = log.other_paths_ned()
     if others:
-        auv = log.true_pos_ned
+        t_auv, p_auv, t_others = log.t_s, log.true_pos_ned, log.other_paths_t_s()
+        auv = np.column_stack([np.interp(t_others, t_auv, p_auv[:, k]) for k in range(3)])
         metrics["vehicles"] = {
             "contact_periods": {"-".join(pair): n for pair, n in mission.vehicle_contacts.items()},
             "min_separation_m": {name: float(np.min(np.linalg.norm(path - auv, axis=1))) for name, path in others.items()},
+            "note": "contact periods: autonomy periods ending with hulls touching (every period checked); "
+                    "least separation of the body origins, sampled once a second",
         }
     if mission.link is not None:
         metrics["link"] = mission.link.metrics()
@@ -137,13 +144,50 @@ def collect_metrics(mission: Mission, log: TrajectoryLog, scorer: DetectionScore
     return metrics
 
 
-def _outcome_suffix(metrics: dict[str, Any]) -> str:
+def _outcome_suffix(metrics: dict[str, Any], runs_to_duration: bool = False) -> str:
+    """Second title line: aborted, or not finished (not for a mission that runs to
+    ``duration_s`` by design, such as target tracking)."""
     m = metrics["mission"]
     if m["aborted"]:
         return f"\nABORTED at {metrics['sim_time_s']:.0f} s: {m['abort_reason']}"
-    if not m["finished"]:
+    if not m["finished"] and not runs_to_duration:
         return f"\nnot finished: stopped at duration_s ({metrics['sim_time_s']:.0f} s)"
     return ""
+
+
+def map_layers(mission: Mission, tracking: Any, sim_time_s: float, overlay=None,
+               extent: np.ndarray | None = None) -> dict[str, Any]:
+    """The scene layers of ``map.png`` (keyword arguments of :func:`sim.outputs.map_plot.plot_map`):
+    ``waypoints_ne`` (None for a buddy mission, which does not fly the survey plan),
+    ``targets`` (fixed objects; movers are drawn as their true paths over ``sim_time_s`` with
+    the tracker's estimate, :mod:`sim.outputs.tracking_overlay`, and bubble scatterers not at
+    all), ``overlay`` (``overlay`` given, e.g. a scanning sonar's, then the movers') and
+    ``extent_points_ne``.
+
+    Args:
+        mission: the finished mission; tracking: its :class:`TrackingEvaluation` or None.
+    """
+    scenario = mission.scenario
+    movers = {m.name for m in scenario.world.movers}
+    objects = [(o.name, o.centroid_ned, o.is_target) for o in mission.world.objects
+               if o.name not in movers and o.class_name != BUBBLE_CLASS]
+    draws, extents = [overlay] if overlay is not None else [], [extent] if extent is not None else []
+    if movers:
+        from sim.outputs.tracking_overlay import extent_points_ne, mover_paths_ned, tracking_overlay
+
+        paths = mover_paths_ned(mission.physics.movers, sim_time_s)
+        est = np.array(tracking.primary_est_ned, dtype=float).reshape(-1, 4)[:, 1:] if tracking is not None else None
+        draws.append(tracking_overlay(paths, est, f"tracker estimate ({scenario.autonomy.tracking.mode})"))
+        extents.append(extent_points_ne(paths, est))
+
+    def draw_all(ax) -> None:
+        for draw in draws:
+            draw(ax)
+
+    return {"waypoints_ne": None if scenario.autonomy.guidance.buddy.enabled else mission.waypoints_ne,
+            "targets": objects, "overlay": draw_all if draws else None,
+            "extent_points_ne": np.concatenate([np.asarray(e, dtype=float).reshape(-1, 2) for e in extents])
+            if extents else None}
 
 
 class _ProgressObserver:
@@ -168,7 +212,7 @@ class _ProgressObserver:
 def run_mission(
     scenario: Scenario, out: str | Path, *, nav_source: str = "estimate", rerun: bool = True,
     progress: bool = True, overwrite: bool = False, rosbag: bool | None = None, rosbag_fls_every: int | None = None,
-    score_detections: bool = True,
+    score_detections: bool = True, workers: int = 1,
 ) -> dict[str, Any]:
     """Run ``scenario`` and write metrics.json, trajectory.csv, world_model.json (objects in NED
     and latitude / longitude / depth), map.png (with an acoustic link, also
@@ -179,7 +223,8 @@ def run_mission(
     every ``rosbag_fls_every``-th sonar frame; None takes the scenario's ``outputs.rosbag`` /
     ``outputs.rosbag_fls_every``) into ``out``. ``score_detections``: score the ATR against the
     frames' ground truth (:class:`sim.evaluation.detection_scoring.DetectionScorer`; its figures
-    go under ``perception`` in metrics.json). Returns the metrics.
+    go under ``perception`` in metrics.json). ``workers`` > 1 pipelines the sonar and its
+    perception on worker threads (:class:`sim.mission.Mission`; same outputs). Returns the metrics.
 
     Raises:
         OutputDirError: ``out`` is protected, a file, not creatable, or holds files that
@@ -206,7 +251,7 @@ def run_mission(
             from sim.ros2bag.recorder import RosbagRecorder
 
             observers.append(RosbagRecorder(partial / "rosbag", fls_every=rosbag_fls_every))
-        mission = Mission(scenario, nav_source=nav_source, observers=observers)
+        mission = Mission(scenario, nav_source=nav_source, observers=observers, workers=workers)
         if scorer is not None:
             if mission.perception is None:
                 mission.observers.remove(scorer)
@@ -228,7 +273,10 @@ def run_mission(
             tracking = evaluation_for(mission)
             mission.observers.append(tracking)
         mission.reset()
-        mission.run(progress=False)
+        try:
+            mission.run(progress=False)
+        finally:
+            mission.close()
 
         metrics = collect_metrics(mission, log, scorer)
         overlay = extent = None
@@ -239,6 +287,7 @@ def run_mission(
             overlay = msis_overlay(msis_obs, scenario.world.basin, msis.localizer)
             extent = basin_outline_ne(scenario.world.basin)
         log.write_csv(partial / "trajectory.csv")
+        layers = map_layers(mission, tracking, metrics["sim_time_s"], overlay, extent)
         estimates, rejected = [], []
         origin = scenario.world.origin
         surface_targets = []
@@ -254,12 +303,11 @@ def run_mission(
             surface_targets = [o.pos_ned for o in target_objects(surface.world_model())]
         plot_map(
             partial / "map.png",
-            true_pos_ned=log.true_pos_ned, est_pos_ned=log.est_pos_ned, waypoints_ne=mission.waypoints_ne,
-            targets=[(o.name, o.centroid_ned, o.is_target) for o in mission.world.objects],
-            estimates=estimates, rejected_ned=rejected,
-            title=f"{scenario.name} seed {mission.seed} (nav: {nav_source})" + _outcome_suffix(metrics),
-            overlay=overlay, extent_points_ne=extent,
+            true_pos_ned=log.true_pos_ned, est_pos_ned=log.est_pos_ned, estimates=estimates, rejected_ned=rejected,
+            title=(f"{scenario.name} seed {mission.seed} (nav: {nav_source})"
+                   + _outcome_suffix(metrics, runs_to_duration=tracking is not None)),
             other_paths=list(log.other_paths_ned().items()), surface_estimates_ned=surface_targets,
+            **layers,
         )
         if tracking is not None:
             metrics["tracking"] = tracking.metrics()
