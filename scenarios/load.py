@@ -178,10 +178,11 @@ def _format_validation_error(exc: ValidationError, source: str, overrides: list[
                              data: dict[str, Any] | None = None) -> str:
     lines = [f"{source}: invalid scenario ({exc.error_count()} error{'s' if exc.error_count() != 1 else ''})"]
     for err in exc.errors(include_url=False):
-        loc = ".".join(str(p) for p in err["loc"]) or "(top level)"
-        item = _override_for(loc, overrides)
-        if item is not None:
-            loc = f"{loc} (from --set {item})"
+        loc = ".".join(str(p) for p in err["loc"])
+        # a check across sections (empty loc) names its keys in its message: credit the --set behind one
+        keys = [loc] if loc else re.findall(r"\b[a-z_]+(?:\.[a-z_0-9]+)+\b", err["msg"])
+        item = next((i for k in keys if (i := _override_for(k, overrides)) is not None), None)
+        src = f" (from --set {item})" if item is not None else ""
         kind = err["type"]
         msg = err["msg"]
         if kind == "extra_forbidden":
@@ -195,7 +196,10 @@ def _format_validation_error(exc: ValidationError, source: str, overrides: list[
             msg = msg.removeprefix("Value error, ")
         given = err.get("input")
         given_txt = "" if kind in ("extra_forbidden", "missing") or isinstance(given, dict) else f" (got {given!r})"
-        lines.append(f"  {loc}: {msg}{given_txt}")
+        if loc:
+            lines.append(f"  {loc}{src}: {msg}{given_txt}")
+        else:  # the message starts with the keys it is about
+            lines.append(f"  {msg}{given_txt}{src}" if keys else f"  (top level): {msg}{given_txt}")
     if len(lines) == 2:  # one error: one line, file then key
         return f"{source}: {lines[1].strip()}"
     return "\n".join(lines)

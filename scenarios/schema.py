@@ -176,9 +176,13 @@ class Scenario(StrictModel):
         comms = self.comms
         if comms.acoustic.enabled:
             name = comms.surface.vehicle
+            if not self.vehicles:
+                raise ValueError("comms.acoustic.enabled: the link needs a surface vehicle and vehicles has none "
+                                 "(add vehicles.buoy with preset surface_buoy, as in cssn_sea_trial, or set "
+                                 "comms.acoustic.enabled=false)")
             if name not in self.vehicles:
-                raise ValueError(f"comms.surface.vehicle {name!r} is not a key of vehicles: "
-                                 f"{sorted(self.vehicles) or 'none'} (comms.acoustic needs the surface vehicle)")
+                raise ValueError(f"comms.surface.vehicle {name!r} is not a key of vehicles (allowed: "
+                                 f"{', '.join(repr(k) for k in sorted(self.vehicles))})")
             if comms.surface.usbl_fixes and self.vehicles[name].usbl is None:
                 raise ValueError(f"comms.surface.usbl_fixes needs vehicles.{name}.usbl (its USBL head)")
         return self

@@ -260,6 +260,11 @@ class Mission:
                     self.vehicle_contacts[pair] += 1
         for name, msg in scheduler.pop_ready(physics.t_s):
             self._deliver(name, msg)
+        if self.link is not None and self._pipeline is not None and self._pipeline.busy:
+            # the link queues detections at the time they are handed over: take this step's
+            # frames now, as the serial loop does (rendering still overlaps; same results)
+            with timer.stage("pipeline_wait"):
+                self._to_observers(self._pipeline.ready(wait=True))
         if self.link is not None:
             with timer.stage("link"):
                 fixes = self.link.tick(physics.t_s, truth, self._others[self.link.node], timer)
