@@ -56,5 +56,27 @@ def test_both_world_models_are_written_in_ned_and_lat_lon(short_run):
 
 
 def test_link_without_its_surface_vehicle_is_one_clear_error():
-    with pytest.raises(ScenarioError, match="comms.surface.vehicle 'buoy' is not a key of vehicles"):
+    with pytest.raises(ScenarioError, match="comms.acoustic.enabled: the link needs a surface vehicle and vehicles has none"):
         load_scenario("cssn_lawnmower", ["comms.acoustic.enabled=true"])
+
+
+def test_pipelined_loop_gives_the_serial_link_and_surface_model(short_run, tmp_path):
+    """--workers 2 hands detections to the modem at the step the serial loop does."""
+    metrics, out = short_run
+    piped = run_mission(load_scenario("cssn_sea_trial", ["duration_s=35"]), tmp_path / "run", rerun=False,
+                        progress=False, workers=2)
+    assert metrics["link"]["uplink_detections"]["sent"] > 0
+    assert piped["link"] == metrics["link"]
+    assert piped["surface_world_model"] == metrics["surface_world_model"]
+    assert (tmp_path / "run" / "surface_world_model.json").read_text() == (out / "surface_world_model.json").read_text()
+
+
+def test_link_errors_name_the_key_and_the_set_that_caused_them():
+    with pytest.raises(ScenarioError) as err:
+        load_scenario("cssn_sea_trial", ["comms.surface.vehicle=boat"])
+    assert str(err.value).endswith("comms.surface.vehicle 'boat' is not a key of vehicles (allowed: 'buoy') "
+                                   "(from --set comms.surface.vehicle=boat)")
+    assert "(top level)" not in str(err.value)
+    with pytest.raises(ScenarioError, match=r"comms.acoustic.enabled: the link needs a surface vehicle .* "
+                                            r"\(from --set vehicles=\{\}\)"):
+        load_scenario("cssn_sea_trial", ["vehicles={}"])
