@@ -37,7 +37,8 @@ def print_summary(metrics: dict, out: str) -> None:
     if "link" in metrics:
         up, down = metrics["link"]["uplink_detections"], metrics["link"]["downlink_usbl_fixes"]
         for name, st in (("detections up", up), ("USBL fixes down", down)):
-            print(f"link, {name}: {st['sent']} sent, {st['delivered']} delivered, {st['lost']} lost, latency mean "
+            pending = f", {st['pending']} still queued or in flight at the end" if st.get("pending") else ""
+            print(f"link, {name}: {st['sent']} sent, {st['delivered']} delivered, {st['lost']} lost{pending}, latency mean "
                   f"{_fmt(st.get('mean_latency_s'), '.2f', ' s')}, p95 {_fmt(st.get('p95_latency_s'), '.2f', ' s')}")
     if "tracking" in metrics:
         tr = metrics["tracking"]

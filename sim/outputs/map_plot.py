@@ -36,7 +36,9 @@ STYLES: dict[str, MarkerStyle] = {
     "true_other": MarkerStyle("true non-target objects", "^", "tab:brown", 8.0, 4.0),
     "wm_target": MarkerStyle("world model: target (2-sigma)", "+", "tab:red", 11.0, 5.0),
     "wm_not_target": MarkerStyle("world model: not target", "X", "tab:purple", 8.0, 6.0),
+    "surface_wm_target": MarkerStyle("surface world model: target", "x", "tab:cyan", 9.0, 6.5),
 }
+OTHER_VEHICLE_COLOR = "tab:cyan"  # a surface vehicle's track, and its world model's targets
 
 # Bounds on the size of the data area (inches) and the extra room around it; beyond the bounds the
 # axes box keeps the data aspect and leaves blank space.
@@ -177,12 +179,12 @@ def build_map_figure(
                 zorder=2.6, label="estimated path")
     for name, path in other_paths:
         path = np.asarray(path, dtype=float).reshape(-1, 3)
-        ax.plot(path[:, 1], path[:, 0], "-", color="tab:green", lw=0.9, alpha=0.8, zorder=2.4,
+        ax.plot(path[:, 1], path[:, 0], "-", color=OTHER_VEHICLE_COLOR, lw=0.9, alpha=0.8, zorder=2.4,
                 label=f"{name} track (true)")
     if len(surface_estimates_ned):
         ne = np.array([np.asarray(p, dtype=float)[:2] for p in surface_estimates_ned])
-        ax.plot(ne[:, 1], ne[:, 0], ls="none", marker="+", color="tab:green", ms=9, mew=1.4, zorder=6.5,
-                label="surface world model target")
+        ax.plot(ne[:, 1], ne[:, 0], ls="none", mew=1.4, label=STYLES["surface_wm_target"].label,
+                **style("surface_wm_target"))
     if len(true_pos_ned):
         ax.plot(true_pos_ned[:1, 1], true_pos_ned[:1, 0], ls="none", label=STYLES["start"].label,
                 **style("start"))

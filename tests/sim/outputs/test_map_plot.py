@@ -84,8 +84,15 @@ def test_legend_is_outside_the_data_area(width_m, height_m):
     assert leg.x0 >= fig_bb.x0 and leg.x1 <= fig_bb.x1 and leg.y0 >= fig_bb.y0 and leg.y1 <= fig_bb.y1
 
 
+def two_vehicle_figure():
+    """The survey with a surface vehicle's track and its world model's targets (the sea trial)."""
+    _, path = lawnmower(160.0, 40.0)
+    return survey_figure(160.0, 40.0, other_paths=[("buoy", path + [4.0, 0.0, -10.0])],
+                         surface_estimates_ned=[np.array([12.0, 64.0, 10.0])])
+
+
 def test_each_kind_has_its_own_marker():
-    fig, _ = survey_figure(160.0, 40.0)
+    fig, _ = two_vehicle_figure()
     by_label = {}
     for line in fig.axes[0].get_lines():
         label = line.get_label()
@@ -130,3 +137,14 @@ def test_plot_map_writes_a_png_of_the_figure_size(tmp_path):
     assert w_px / h_px > 2.0
     with pytest.raises(ValueError):
         build_map_figure(true_pos_ned=np.zeros((0, 3)), est_pos_ned=None, waypoints_ne=None, targets=[])
+
+
+def test_surface_vehicle_track_and_model_have_their_own_colour():
+    """The buoy's track and its world model's targets do not take the colours of the AUV's
+    paths, the true targets or the AUV's world model (the sea trial's map)."""
+    fig, _ = two_vehicle_figure()
+    colours = {ln.get_label(): np.array(to_rgb(ln.get_color())) for ln in fig.axes[0].get_lines()}
+    for mine in ("buoy track (true)", STYLES["surface_wm_target"].label):
+        for other in ("true path", "estimated path", "true targets", STYLES["wm_target"].label,
+                      STYLES["wm_not_target"].label, "true non-target objects"):
+            assert np.linalg.norm(colours[mine] - colours[other]) > 0.2, (mine, other)
