@@ -2,7 +2,9 @@
 
 Runs each tracking scenario over N seeds (no output files) and reports, per scenario, the
 mean over seeds of each error set's mean and spread (m), the fraction of filter steps with a
-sonar detection in the fused filter, and the ROI gating of bubble clusters; with
+sonar detection in the fused filter, the ROI gating of bubble clusters, and what the sonar
+could see of the diver's bubble plume (breaths in its view, and apart from the diver's body
+in its plane: ``TrackingEvaluation.plume_metrics``); with
 ``--json`` also every run's figures; with ``--png DIR`` the box plot of the four error sets
 pooled over the seeds, horizontal error as in paper 004 fig. 8
 (``DIR/tracking_study_<scenario>.png``).
@@ -61,6 +63,22 @@ def summarise(runs: list[dict]) -> dict:
         ok = np.isfinite(v) & (w > 0)
         roi[frac] = float(np.sum(v[ok] * w[ok]) / np.sum(w[ok])) if ok.any() else math.nan
     out["roi"] = roi
+    plumes = [r["plume"] for r in runs if r.get("plume", {}).get("frames")]
+    if plumes:
+        tot = {k: sum(p[k] for p in plumes) for k in ("frames", "breath_frames_in_view", "breath_frames_apart",
+                                                      "breaths_seen")}
+        seen = np.array([p["breaths_seen"] for p in plumes], dtype=float)
+        age = np.array([p["last_in_view_age_mean_s"] for p in plumes], dtype=float)
+        ok = np.isfinite(age) & (seen > 0)
+        out["plume"] = {**tot, "apart_m": plumes[0]["apart_m"],
+                        "breaths_in_view_per_frame": tot["breath_frames_in_view"] / tot["frames"],
+                        "apart_fraction_of_in_view": tot["breath_frames_apart"] / tot["breath_frames_in_view"]
+                        if tot["breath_frames_in_view"] else math.nan,
+                        "last_in_view_age_mean_s": float(np.sum(age[ok] * seen[ok]) / np.sum(seen[ok]))
+                        if ok.any() else math.nan,
+                        "last_in_view_age_max_s": float(np.nanmax([p["last_in_view_age_max_s"] for p in plumes])),
+                        "farthest_from_body_median_m_mean": float(np.nanmean(
+                            [p["farthest_from_body_median_m"] for p in plumes]))}
     for prefix in ("", "horizontal_"):
         f, so, us = out[prefix + "fused"], out[prefix + "sonar"], out[prefix + "usbl"]
         out[prefix + "fused_beats_both"] = bool(f["mean_m"] < min(so["mean_m"], us["mean_m"]) and
@@ -88,7 +106,10 @@ def main() -> int:
                 pooled[k].append(sets[k])
             e = runs[-1]["errors_horizontal"]
             print(f"{name} seed {seed} (horizontal): " + ", ".join(f"{k} {e[k].get('mean_m', math.nan):.2f}" for k in ERROR_SETS)
-                  + f"; sonar steps {runs[-1]['fused_sonar_step_fraction']:.2f}", flush=True)
+                  + f"; sonar steps {runs[-1]['fused_sonar_step_fraction']:.2f}"
+                  + f"; bubble clusters {runs[-1]['roi']['bubble_clusters']}"
+                  + f", breaths in view / apart {runs[-1].get('plume', {}).get('breath_frames_in_view', 0)}"
+                  + f" / {runs[-1].get('plume', {}).get('breath_frames_apart', 0)}", flush=True)
         report[name] = {"summary": summarise(runs), "runs": runs}
         if args.png:
             args.png.mkdir(parents=True, exist_ok=True)
