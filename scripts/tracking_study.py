@@ -32,8 +32,9 @@ from sim.evaluation.tracking_eval import ERROR_SETS, error_boxplot_png, evaluati
 from sim.mission import Mission  # noqa: E402
 
 
-def run_one(scenario_path: Path, seed: int, duration_s: float | None) -> tuple[dict, dict[str, np.ndarray]]:
-    overrides = [f"seed={seed}"] + ([f"duration_s={duration_s}"] if duration_s else [])
+def run_one(scenario_path: Path, seed: int, duration_s: float | None,
+            extra: list[str] = ()) -> tuple[dict, dict[str, np.ndarray]]:
+    overrides = [f"seed={seed}"] + ([f"duration_s={duration_s}"] if duration_s else []) + list(extra)
     mission = Mission(load_scenario(str(scenario_path), overrides), perception=True)
     ev = evaluation_for(mission)
     mission.observers.append(ev)
@@ -77,8 +78,8 @@ def summarise(runs: list[dict]) -> dict:
                         "last_in_view_age_mean_s": float(np.sum(age[ok] * seen[ok]) / np.sum(seen[ok]))
                         if ok.any() else math.nan,
                         "last_in_view_age_max_s": float(np.nanmax([p["last_in_view_age_max_s"] for p in plumes])),
-                        "farthest_from_body_median_m_mean": float(np.nanmean(
-                            [p["farthest_from_body_median_m"] for p in plumes]))}
+                        "nearest_to_body_median_m_mean": float(np.nanmean(
+                            [p["nearest_to_body_median_m"] for p in plumes]))}
     for prefix in ("", "horizontal_"):
         f, so, us = out[prefix + "fused"], out[prefix + "sonar"], out[prefix + "usbl"]
         out[prefix + "fused_beats_both"] = bool(f["mean_m"] < min(so["mean_m"], us["mean_m"]) and
@@ -93,6 +94,9 @@ def main() -> int:
     p.add_argument("--scenarios", nargs="+", default=["track_static_vehicle", "track_moving_vehicle"])
     p.add_argument("--json", type=Path, default=None, help="write every run and the summary here")
     p.add_argument("--png", type=Path, default=None, help="folder for the pooled box plots")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="scenario override for every run (as `auvsim run --set`), e.g. "
+                        "world.current.velocity_ned_mps=[-0.35,0.35,0]")
     args = p.parse_args()
     logging.getLogger("autonomy.tracking.tracker").setLevel(logging.ERROR)
     report = {}
@@ -100,7 +104,7 @@ def main() -> int:
         path = ROOT / "scenarios" / f"{name}.yaml"
         runs, pooled = [], {k: [] for k in ERROR_SETS}
         for seed in range(args.seeds):
-            metrics, sets = run_one(path, seed, args.duration)
+            metrics, sets = run_one(path, seed, args.duration, args.overrides)
             runs.append(metrics)
             for k in ERROR_SETS:
                 pooled[k].append(sets[k])

@@ -80,7 +80,7 @@ class TrackingEvaluation:
         self.breaths_at, self.plume_apart_m = breaths_at, float(plume_apart_m)
         self.n_frames = self.n_breath_in_view = self.n_breath_apart = 0
         self._breath_view_age: dict[float, float] = {}  # release time -> oldest age seen in view
-        self._breath_apart_m: list[float] = []  # each in-view breath's farthest bubble from the body, per frame
+        self._breath_apart_m: list[float] = []  # each in-view breath's nearest bubble to the body, per frame
 
     # observer interface
     def on_start(self, info: Any) -> None:
@@ -143,8 +143,9 @@ class TrackingEvaluation:
 
     def _plume_view(self, res: Any) -> None:
         """Which breaths the sonar sees on this frame (a bubble inside its azimuth, range window
-        and vertical beam) and whether one of those bubbles lies ``plume_apart_m`` or more from
-        the target's body in the sonar's plane (so the detector could see it apart)."""
+        and vertical beam) and whether all of those bubbles lie ``plume_apart_m`` or more from
+        the target's body in the sonar's plane (so the detector could see the breath apart;
+        an upper bound: breaths can still chain to the body through one another)."""
         if self.breaths_at is None:
             return
         self.n_frames += 1
@@ -160,13 +161,14 @@ class TrackingEvaluation:
         if not seen.any():
             return
         d = np.where(seen.ravel(), self._axis_distance(self._plane_xy(flat, pos, R_nb), res.t_s, pos, R_nb),
-                     -np.inf).reshape(k, m).max(axis=1)
-        for i in np.nonzero(seen.any(axis=1))[0]:
+                     np.inf).reshape(k, m).min(axis=1)
+        in_view = seen.any(axis=1)
+        for i in np.nonzero(in_view)[0]:
             key = round(res.t_s - float(ages[i]), 6)
             self._breath_view_age[key] = max(self._breath_view_age.get(key, 0.0), float(ages[i]))
             self._breath_apart_m.append(float(d[i]))
-        self.n_breath_in_view += int(seen.any(axis=1).sum())
-        self.n_breath_apart += int((d >= self.plume_apart_m).sum())
+        self.n_breath_in_view += int(in_view.sum())
+        self.n_breath_apart += int((in_view & (d >= self.plume_apart_m)).sum())
 
     def _label(self, res: Any) -> None:
         if not res.candidates or res.roi["fused"] is None:
@@ -237,9 +239,10 @@ class TrackingEvaluation:
 
     def plume_metrics(self) -> dict[str, Any]:
         """What the sonar could see of the plume: sonar frames, (frame, breath) pairs with a
-        bubble in view and those with one ``plume_apart_m`` or more from the target's body in
-        the sonar's plane, breaths seen, how old a breath was when last in view (s: mean,
-        max) and the median of each in-view breath's farthest bubble from the body (m)."""
+        bubble in view and those whose in-view bubbles all lie ``plume_apart_m`` or more from
+        the target's body in the sonar's plane, breaths seen, how old a breath was when last
+        in view (s: mean, max) and the median distance of each in-view breath's nearest
+        bubble to the body (m)."""
         ages = np.array(list(self._breath_view_age.values()), dtype=float)
         apart = np.array(self._breath_apart_m, dtype=float)
         return {"frames": self.n_frames, "breath_frames_in_view": self.n_breath_in_view,
@@ -247,7 +250,7 @@ class TrackingEvaluation:
                 "breaths_seen": int(ages.size),
                 "last_in_view_age_mean_s": float(ages.mean()) if ages.size else math.nan,
                 "last_in_view_age_max_s": float(ages.max()) if ages.size else math.nan,
-                "farthest_from_body_median_m": float(np.median(apart)) if apart.size else math.nan}
+                "nearest_to_body_median_m": float(np.median(apart)) if apart.size else math.nan}
 
     def plot(self, error_png: Path, box_png: Path, title: str = "") -> None:
         """Error over time (PNG) and the box plot of the four error sets (PNG)."""
