@@ -18,6 +18,8 @@ from sim.physics import Physics
 from sim.target_motion import BubblePlumes, ManoeuvreTrajectory, WaterDrift
 
 U_MPS, START = 0.3, np.array([0.0, 0.0, 8.0])
+HOVERING_DIVER = dict(name="diver", kind="diver", initial_pos_ned=(6.0, 0.0, 5.0), surge_mps=0.0, surge_sigma_mps=0.0,
+                      course_rate_sigma_dps=0.0, heave_sigma_mps=0.0, bubbles={"enabled": True})
 
 
 def _straight_diver(duration_s: float = 120.0) -> ManoeuvreTrajectory:
@@ -122,12 +124,10 @@ def test_physics_carries_the_bubbles_with_the_current():
     """In the MuJoCo scene, the same seed with and without a 0.2 m/s east current: every
     bubble alive in both is displaced east by 0.2 x its age (less the wake's share of the
     current), a hovering diver's plume leaves it downstream."""
-    diver = dict(name="diver", kind="diver", initial_pos_ned=(6.0, 0.0, 5.0), surge_mps=0.0, surge_sigma_mps=0.0,
-                 course_rate_sigma_dps=0.0, heave_sigma_mps=0.0, bubbles={"enabled": True})
 
     def run(current_e: float):
         scn = Scenario(name="plume", duration_s=20.0,
-                       world={"seabed": {"depth_m": 30.0}, "movers": [diver],
+                       world={"seabed": {"depth_m": 30.0}, "movers": [HOVERING_DIVER],
                               "current": {"velocity_ned_mps": (0.0, current_e, 0.0)}},
                        vehicle={"model": "bluerov2_heavy", "initial_pos_ned": (0.0, 0.0, 5.0)})
         phys = Physics(scn)
@@ -158,12 +158,10 @@ def test_physics_carries_the_bubbles_with_a_varying_current():
     """A zero-mean Gauss-Markov current (sigma 0.1 m/s, tau 2 s): each live bubble's offset
     from the still-water run is the current summed over the physics steps since its release
     (an independent sum of the current the vehicle felt at each step)."""
-    diver = dict(name="diver", kind="diver", initial_pos_ned=(6.0, 0.0, 5.0), surge_mps=0.0, surge_sigma_mps=0.0,
-                 course_rate_sigma_dps=0.0, heave_sigma_mps=0.0, bubbles={"enabled": True})
 
     def scn(sigma: float) -> Scenario:
         return Scenario(name="plume", duration_s=20.0,
-                        world={"seabed": {"depth_m": 30.0}, "movers": [diver],
+                        world={"seabed": {"depth_m": 30.0}, "movers": [HOVERING_DIVER],
                                "current": {"gauss_markov_sigma_mps": sigma, "gauss_markov_tau_s": 2.0}},
                         vehicle={"model": "bluerov2_heavy", "initial_pos_ned": (0.0, 0.0, 5.0)})
 
@@ -191,3 +189,67 @@ def test_physics_carries_the_bubbles_with_a_varying_current():
         np.testing.assert_allclose(moved[sl] - still[sl], np.broadcast_to(disp, (m, 3)), atol=1e-9)
         checked += 1
     assert checked >= 2
+
+
+def test_rendered_breaths_apart_from_the_diver_are_refused_by_the_gating(monkeypatch):
+    """The ARIS 3000 (1.8 MHz) renders a diver lying across the beam 8 m ahead and two
+    breaths wholly apart from it: one 1 m beyond it in range (inside the fused filter's ROI)
+    and one 2 m to starboard of its feet (outside). The paper's contour detector sees each as
+    a cluster of its own; the ROI refuses the second, the size gate the first, and the
+    diver's cluster is kept and chosen."""
+    from autonomy.tracking.config import TrackingConfig
+    from autonomy.tracking.onboard import TrackingStack, cut_by_edge, roi_score, shape_gate
+    from autonomy.tracking.roi import polar_roi
+    from scenarios.load import load_scenario
+    from sim.sensors.registry import build_sensors
+
+    scn = load_scenario("scenarios/track_static_vehicle.yaml", ["duration_s=5"])
+    phys = Physics(scn)
+    phys.reset((0.0, 0.0, 5.0), (0.0, 0.0, 0.0))
+    fls = build_sensors({"fls": scn.sensors.fls}, phys.site_pos_body, 0)["fls"]
+    mv = phys.movers
+    monkeypatch.setattr(mv, "apply", lambda data, t: None)  # hold the poses set here
+    diver = np.array([8.0, -1.3, 5.0])
+    mid = mv._slots[0][0]
+    phys.data.mocap_pos[mid] = diver
+    phys.data.mocap_quat[mid] = (math.cos(math.pi / 4), 0.0, 0.0, math.sin(math.pi / 4))  # course east
+    rng = np.random.default_rng(1)
+    beyond, starboard = np.array([9.0, -1.3, 4.6]), np.array([8.0, 1.5, 4.6])
+    ids = mv._bubble_slots["diver"]
+    pos = np.tile([0.0, 0.0, -1000.0], (len(ids), 1))
+    pos[:5] = beyond + 0.08 * rng.standard_normal((5, 3)) * [1.0, 1.0, 0.3]
+    pos[5:10] = starboard + 0.08 * rng.standard_normal((5, 3)) * [1.0, 1.0, 0.3]
+    phys.data.mocap_pos[ids] = pos
+    truth = phys.truth()
+    frame = fls.measure(truth, phys.scene(), noise=True).frame
+
+    cfg = TrackingConfig(sonar_range_sigma_m=0.25, sonar_azimuth_sigma_deg=1.5)
+    stack = TrackingStack(cfg, scn.autonomy.atr.classical, sonar_mount_body_m=fls.mount.pos_body_m)
+    g = frame.geometry
+    boxes, scores, feats = stack.detector.clusters(frame.fan, g.m_per_px, geometry=g)
+    cands = stack._centre_detections(frame, boxes, scores)
+    head = truth.point_ned(fls.mount.pos_body_m)
+    R_ns = truth.R_nb @ fls.R_bs
+
+    def polar(p):
+        rel = R_ns.T @ (p - head)
+        return math.hypot(rel[0], rel[1]), math.atan2(rel[1], rel[0])
+
+    def nearest(p):
+        r, a = polar(p)
+        d = [math.hypot(c.range_m * math.cos(c.azimuth_rad) - r * math.cos(a),
+                        c.range_m * math.sin(c.azimuth_rad) - r * math.sin(a)) for c in cands]
+        return int(np.argmin(d)), min(d)
+
+    i_div, d_div = nearest(diver)
+    i_bey, d_bey = nearest(beyond)
+    i_stb, d_stb = nearest(starboard)
+    assert len({i_div, i_bey, i_stb}) == 3 and max(d_div, d_bey, d_stb) < 0.5  # three clusters, each where it is
+    # the fused filter's ROI about the diver (0.25 m sigma, 2.45 sigma + the 1 m target size)
+    roi = polar_roi(diver, np.diag([0.25**2, 0.25**2, 0.1**2]), head, R_ns, cfg.roi_sigma, cfg.target_size_m)
+    gate = shape_gate(feats, cfg.target_size_m, cfg.min_extent_frac, cfg.min_area_frac,
+                      cut_by_edge(feats, stack.detector.cfg.blur_sigma_m + g.m_per_px))
+    inside, s = roi_score(cands, roi, gate)
+    assert inside[i_div] and inside[i_bey] and not inside[i_stb]
+    assert gate[i_div] and not gate[i_bey]
+    assert int(np.argmax(s)) == i_div and s[i_div] >= cfg.detector_score_threshold
