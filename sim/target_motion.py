@@ -119,6 +119,8 @@ class WaterDrift:
         self._t = np.empty(1024)  # record times
         self._d = np.empty((1024, 3))  # integral of g up to _t[i]
         self._g = np.empty((1024, 3))  # g held from _t[i]
+        #: bumped whenever recorded history is dropped (a clock reset): cached displacements are stale
+        self.generation = 0
 
     def record(self, t_s: float, velocity_ned_mps) -> None:
         """The current (3,) m/s in force from ``t_s`` on."""
@@ -126,6 +128,7 @@ class WaterDrift:
         n = self._n
         if n and t_s < self._t[n - 1] - 1e-12:
             n = 0  # the clock went back: a new history
+            self.generation += 1
         if n == 0:
             d = np.zeros(3)  # before the first record the varying part is taken as zero
         else:
@@ -139,6 +142,11 @@ class WaterDrift:
         self._t[n], self._d[n], self._g[n] = t_s, d, g
         self._n = n + 1
 
+    @property
+    def history_end_s(self) -> float:
+        """Time of the last record (-inf: none); the displacement up to it is final."""
+        return float(self._t[self._n - 1]) if self._n else -math.inf
+
     def displacement_at(self, t_s: float | FloatArray) -> FloatArray:
         """(..., 3) water displacement since t = 0 at ``t_s`` (() or (N,)), m."""
         t = np.asarray(t_s, dtype=float)
@@ -146,6 +154,8 @@ class WaterDrift:
         n = self._n
         if n == 0:
             return out
+        if t.ndim == 0 and t_s >= self._t[n - 1]:  # now (the physics' query): the last record holds
+            return out + self._d[n - 1] + self._g[n - 1] * (t_s - self._t[n - 1])
         ts = self._t[:n]
         k = np.clip(np.searchsorted(ts, t, side="right") - 1, 0, n - 1)
         return out + self._d[k] + self._g[k] * np.clip(t - ts[k], 0.0, None)[..., None]
@@ -210,6 +220,22 @@ class BubblePlumes:
         v_rel = np.stack([surge * c, surge * s], axis=-1) - self.drift.mean_ned_mps[:2]
         #: (n_rel, 3) how far the wake carries each breath in the end, m
         self.wake_ned_m = np.concatenate([cfg.wake_fraction * cfg.wake_decay_s * v_rel, np.zeros((n_rel, 1))], axis=1)
+        self._d_release = np.full((n_rel, 3), np.nan)  # water displacement at each release, once known
+        self._d_generation = self.drift.generation
+
+    def _release_displacement(self, k: NDArray[np.intp]) -> FloatArray:
+        """(K, 3) water displacement at releases ``k``; those at or before the drift's last
+        record are final (until the clock is reset) and cached."""
+        if self._d_generation != self.drift.generation:
+            self._d_release[:] = np.nan
+            self._d_generation = self.drift.generation
+        d = self._d_release[k]
+        new = np.isnan(d[:, 0])
+        if new.any():
+            d[new] = self.drift.displacement_at(self.release_t_s[k[new]])
+            final = new & (self.release_t_s[k] <= self.drift.history_end_s)
+            self._d_release[k[final]] = d[final]
+        return d
 
     def breaths_at(self, t_s: float) -> tuple[NDArray[np.intp], FloatArray, FloatArray, NDArray[np.bool_]]:
         """The breaths in the water at ``t_s``: release indices (K,), ages (K,) s, bubble
@@ -219,7 +245,7 @@ class BubblePlumes:
         lo = int(np.searchsorted(self.release_t_s, t_s - cfg.lifetime_s, side="right"))
         k = np.arange(lo, max(hi, lo))
         age = t_s - self.release_t_s[k]
-        water = self.drift.displacement_at(t_s) - self.drift.displacement_at(self.release_t_s[k])
+        water = self.drift.displacement_at(t_s) - self._release_displacement(k)
         shift = water + self.wake_ned_m[k] * (-np.expm1(-age / cfg.wake_decay_s))[:, None]
         p = self.start_ned[k] + age[:, None, None] * self.vel_ned_mps[k] + shift[:, None, :]
         return k, age, p, p[..., 2] > 0.05
