@@ -12,6 +12,8 @@ Conventions used throughout auvsim:
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -21,9 +23,12 @@ FloatArray = NDArray[np.float64]
 def cross3(a: FloatArray, b: FloatArray) -> FloatArray:
     """Cross product ``a x b`` of two (3,) vectors, same frame in and out.
 
-    Written out because ``np.cross`` is slow for single vectors.
+    Written out in Python floats because ``np.cross`` (and numpy scalar arithmetic) is slow
+    for single vectors.
     """
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+    a0, a1, a2 = a.tolist() if isinstance(a, np.ndarray) else a
+    b0, b1, b2 = b.tolist() if isinstance(b, np.ndarray) else b
+    return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
 
 
 def skew(v: ArrayLike) -> FloatArray:
@@ -32,33 +37,43 @@ def skew(v: ArrayLike) -> FloatArray:
     return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
 
 
+# The functions of one angle or one rotation below take Python scalars through ``math``:
+# for single rotations numpy's per-call overhead costs several times the arithmetic.
+
+
 def rot_x(angle_rad: float) -> FloatArray:
-    c, s = np.cos(angle_rad), np.sin(angle_rad)
+    c, s = math.cos(angle_rad), math.sin(angle_rad)
     return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
 
 
 def rot_y(angle_rad: float) -> FloatArray:
-    c, s = np.cos(angle_rad), np.sin(angle_rad)
+    c, s = math.cos(angle_rad), math.sin(angle_rad)
     return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
 
 
 def rot_z(angle_rad: float) -> FloatArray:
-    c, s = np.cos(angle_rad), np.sin(angle_rad)
+    c, s = math.cos(angle_rad), math.sin(angle_rad)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
 def rot_from_euler(roll_rad: float, pitch_rad: float, yaw_rad: float) -> FloatArray:
-    """Body(FRD)->NED rotation ``R_nb`` from ZYX Euler angles. Shape (3, 3)."""
-    return rot_z(yaw_rad) @ rot_y(pitch_rad) @ rot_x(roll_rad)
+    """Body(FRD)->NED rotation ``R_nb`` from ZYX Euler angles. Shape (3, 3).
+
+    ``Rz(yaw) Ry(pitch) Rx(roll)`` multiplied out ([Fossen2021] section 2.2.1)."""
+    cf, sf = math.cos(roll_rad), math.sin(roll_rad)
+    ct, st = math.cos(pitch_rad), math.sin(pitch_rad)
+    cp, sp = math.cos(yaw_rad), math.sin(yaw_rad)
+    return np.array([[cp * ct, -sp * cf + cp * st * sf, sp * sf + cp * cf * st],
+                     [sp * ct, cp * cf + sf * st * sp, -cp * sf + st * sp * cf],
+                     [-st, ct * sf, ct * cf]])
 
 
 def euler_from_rot(R_nb: ArrayLike) -> FloatArray:
     """ZYX Euler angles ``[roll, pitch, yaw]`` (rad) of a body->NED rotation."""
     R = np.asarray(R_nb, dtype=float)
-    pitch = -np.arcsin(np.clip(R[2, 0], -1.0, 1.0))
-    roll = np.arctan2(R[2, 1], R[2, 2])
-    yaw = np.arctan2(R[1, 0], R[0, 0])
-    return np.array([roll, pitch, yaw])
+    (r00, _, _), (r10, _, _), (r20, r21, r22) = R.tolist()
+    pitch = -math.asin(min(max(r20, -1.0), 1.0))
+    return np.array([math.atan2(r21, r22), pitch, math.atan2(r10, r00)])
 
 
 def quat_from_rot(R: ArrayLike) -> FloatArray:
@@ -83,7 +98,9 @@ def quat_from_rot(R: ArrayLike) -> FloatArray:
 
 def rot_from_quat(q: ArrayLike) -> FloatArray:
     """Rotation matrix of a quaternion ``(w, x, y, z)`` (normalised first)."""
-    w, x, y, z = np.asarray(q, dtype=float) / np.linalg.norm(q)
+    w, x, y, z = np.asarray(q, dtype=float).tolist()
+    n = math.sqrt(w * w + x * x + y * y + z * z)
+    w, x, y, z = w / n, x / n, y / n, z / n
     return np.array(
         [
             [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
@@ -98,14 +115,16 @@ def quat_from_euler(roll_rad: float, pitch_rad: float, yaw_rad: float) -> FloatA
 
 
 def wrap_angle(angle_rad: ArrayLike) -> FloatArray | float:
-    """Wrap angle(s) to [-pi, pi)."""
+    """Wrap angle(s) to [-pi, pi) (a Python float for a float, else an array)."""
+    if isinstance(angle_rad, float):
+        return (angle_rad + math.pi) % (2.0 * math.pi) - math.pi
     return (np.asarray(angle_rad) + np.pi) % (2.0 * np.pi) - np.pi
 
 
 def euler_rate_matrix(roll_rad: float, pitch_rad: float) -> FloatArray:
     """T(Theta) mapping body rates [p, q, r] to Euler rates (Fossen eq. 2.41). (3, 3)."""
-    cphi, sphi = np.cos(roll_rad), np.sin(roll_rad)
-    cth, tth = np.cos(pitch_rad), np.tan(pitch_rad)
+    cphi, sphi = math.cos(roll_rad), math.sin(roll_rad)
+    cth, tth = math.cos(pitch_rad), math.tan(pitch_rad)
     return np.array(
         [[1.0, sphi * tth, cphi * tth], [0.0, cphi, -sphi], [0.0, sphi / cth, cphi / cth]]
     )

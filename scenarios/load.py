@@ -6,6 +6,7 @@ Errors name the file, the dotted key path and what is allowed, as a single
 
 from __future__ import annotations
 
+import difflib
 import json
 import re
 from importlib import resources
@@ -62,7 +63,7 @@ def _validate(data: dict[str, Any], source: str, overrides: list[str] | tuple[st
     try:
         return Scenario.model_validate_json(text, strict=True)
     except ValidationError as exc:
-        raise ScenarioError(_format_validation_error(exc, source, overrides)) from None
+        raise ScenarioError(_format_validation_error(exc, source, overrides, data)) from None
 
 
 def scenarios_dir() -> Path:
@@ -97,7 +98,9 @@ def resolve_path(name_or_path: str | Path) -> Path:
         raise ScenarioError(f"{p}: is a directory; give a scenario YAML file or a shipped scenario name")
     if p.suffix in (".yaml", ".yml") or p.exists() or "/" in text or "\\" in text:
         if not p.is_file():
-            raise ScenarioError(f"{p}: scenario file not found")
+            shipped = p.stem if (scenarios_dir() / f"{p.stem}.yaml").is_file() else None
+            hint = f" (the shipped scenario of that name runs as: {shipped})" if shipped else ""
+            raise ScenarioError(f"{p}: scenario file not found{hint}")
         return p
     shipped = scenarios_dir() / f"{text}.yaml"
     if not shipped.is_file():
@@ -171,7 +174,8 @@ def _override_for(loc: str, overrides: list[str] | tuple[str, ...]) -> str | Non
     return None
 
 
-def _format_validation_error(exc: ValidationError, source: str, overrides: list[str] | tuple[str, ...] = ()) -> str:
+def _format_validation_error(exc: ValidationError, source: str, overrides: list[str] | tuple[str, ...] = (),
+                             data: dict[str, Any] | None = None) -> str:
     lines = [f"{source}: invalid scenario ({exc.error_count()} error{'s' if exc.error_count() != 1 else ''})"]
     for err in exc.errors(include_url=False):
         loc = ".".join(str(p) for p in err["loc"]) or "(top level)"
@@ -181,10 +185,14 @@ def _format_validation_error(exc: ValidationError, source: str, overrides: list[
         kind = err["type"]
         msg = err["msg"]
         if kind == "extra_forbidden":
-            allowed = _allowed_keys(err["loc"][:-1])
-            msg = f"unknown key; allowed keys here: {', '.join(allowed)}" if allowed else "unknown key"
+            allowed = _allowed_keys(err["loc"][:-1], data)
+            close = difflib.get_close_matches(str(err["loc"][-1]), allowed, n=1)
+            hint = f" (did you mean {close[0]}?)" if close else ""
+            msg = f"unknown key{hint}; allowed keys here: {', '.join(allowed)}" if allowed else "unknown key"
         elif kind == "literal_error":
             msg = msg.replace("Input should be", "allowed values:")
+        elif kind == "value_error":
+            msg = msg.removeprefix("Value error, ")
         given = err.get("input")
         given_txt = "" if kind in ("extra_forbidden", "missing") or isinstance(given, dict) else f" (got {given!r})"
         lines.append(f"  {loc}: {msg}{given_txt}")
@@ -193,13 +201,23 @@ def _format_validation_error(exc: ValidationError, source: str, overrides: list[
     return "\n".join(lines)
 
 
-def _allowed_keys(loc: tuple[Any, ...]) -> list[str]:
-    """Field names of the model at ``loc`` inside :class:`Scenario`."""
+def _allowed_keys(loc: tuple[Any, ...], data: dict[str, Any] | None = None) -> list[str]:
+    """Field names of the model at ``loc`` inside :class:`Scenario` (a ``sensors.<name>``
+    entry: the config of its ``kind`` in ``data``, default the entry's name)."""
     import typing
 
     from pydantic import BaseModel
 
+    from scenarios.config.sensor import sensor_config_kinds
+
     model: Any = Scenario
+    if len(loc) >= 2 and loc[0] == "sensors":
+        entry = ((data or {}).get("sensors") or {}).get(loc[1])
+        kind = entry.get("kind", loc[1]) if isinstance(entry, dict) else loc[1]
+        model = sensor_config_kinds().get(kind)
+        if model is None:
+            return []
+        loc = loc[2:]
     for part in loc:
         if isinstance(part, int):
             continue
@@ -252,6 +270,10 @@ def load_scenario(name_or_path: str | Path, overrides: list[str] | tuple[str, ..
     try:
         data = _yaml_load(text)
     except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
+        if "'\\t'" in str(exc):
+            raise ScenarioError(f"{source}: not valid YAML{where}: a tab character; indent with spaces") from None
         raise ScenarioError(f"{source}: not valid YAML: {' '.join(str(exc).split())}") from None
     if data is None:
         raise ScenarioError(f"{source}: the file is empty (a scenario needs at least a world, a vehicle "
@@ -302,8 +324,9 @@ def check_scenario(scenario: Scenario, source: str, overrides: list[str] | tuple
         ScenarioError: listing every problem found, one per line.
     """
     from scenarios.placement import placement_problems
+    from scenarios.sensor_links import sensor_link_problems
 
-    problems = placement_problems(scenario) + _sensor_problems(scenario)
+    problems = placement_problems(scenario) + _sensor_problems(scenario) + sensor_link_problems(scenario)
     atr = scenario.autonomy.atr
     if atr.detector == "cnn" and atr.model_path is not None:
         model = Path(atr.model_path).expanduser()

@@ -15,7 +15,6 @@ pooled over the seeds, horizontal error as in paper 004 fig. 8
 
 from __future__ import annotations
 
-import argparse
 import json
 import logging
 import math
@@ -28,14 +27,17 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from scenarios.load import load_scenario  # noqa: E402
+from sim.cli.app import run_script, script_parser  # noqa: E402
+from sim.cli.args import positive_float, positive_int  # noqa: E402
+from sim.cli.errors import CliError  # noqa: E402
 from sim.evaluation.tracking_eval import ERROR_SETS, error_boxplot_png, evaluation_for  # noqa: E402
 from sim.mission import Mission  # noqa: E402
 
 
-def run_one(scenario_path: Path, seed: int, duration_s: float | None,
+def run_one(scenario: str, seed: int, duration_s: float | None,
             extra: list[str] = ()) -> tuple[dict, dict[str, np.ndarray]]:
     overrides = [f"seed={seed}"] + ([f"duration_s={duration_s}"] if duration_s else []) + list(extra)
-    mission = Mission(load_scenario(str(scenario_path), overrides), perception=True)
+    mission = Mission(load_scenario(scenario, overrides), perception=True)
     ev = evaluation_for(mission)
     mission.observers.append(ev)
     mission.reset()
@@ -87,24 +89,37 @@ def summarise(runs: list[dict]) -> dict:
     return out
 
 
-def main() -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--seeds", type=int, default=20)
-    p.add_argument("--duration", type=float, default=None, help="override duration_s (s)")
-    p.add_argument("--scenarios", nargs="+", default=["track_static_vehicle", "track_moving_vehicle"])
-    p.add_argument("--json", type=Path, default=None, help="write every run and the summary here")
-    p.add_argument("--png", type=Path, default=None, help="folder for the pooled box plots")
-    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
-                   help="scenario override for every run (as `auvsim run --set`), e.g. "
-                        "world.current.velocity_ned_mps=[-0.35,0.35,0]")
-    args = p.parse_args()
+def check_args(args) -> None:
+    """Refuse bad input before the first run: every scenario loads and tracks a target, and
+    the output paths can be written (a study's results are not lost at its end).
+
+    Raises:
+        CliError: naming the argument and what is allowed; ScenarioError: a scenario does not load.
+    """
+    for name in args.scenarios:
+        scn = load_scenario(name, ([f"duration_s={args.duration}"] if args.duration else []) + args.overrides)
+        if not scn.autonomy.tracking.enabled:
+            raise CliError(f"--scenarios {name}: does not track a target (autonomy.tracking.enabled is false; "
+                           "shipped: track_static_vehicle, track_moving_vehicle, diver_follow)")
+    if args.png is not None:
+        if args.png.exists() and not args.png.is_dir():
+            raise CliError(f"--png {args.png}: is a file; give a folder for the box plots")
+        args.png.mkdir(parents=True, exist_ok=True)
+    if args.json is not None:
+        if args.json.is_dir():
+            raise CliError(f"--json {args.json}: is a folder; give a file name")
+        if not args.json.parent.is_dir():
+            raise CliError(f"--json {args.json}: folder {args.json.parent} does not exist")
+
+
+def study(args) -> int:
+    check_args(args)
     logging.getLogger("autonomy.tracking.tracker").setLevel(logging.ERROR)
     report = {}
     for name in args.scenarios:
-        path = ROOT / "scenarios" / f"{name}.yaml"
         runs, pooled = [], {k: [] for k in ERROR_SETS}
         for seed in range(args.seeds):
-            metrics, sets = run_one(path, seed, args.duration, args.overrides)
+            metrics, sets = run_one(name, seed, args.duration, args.overrides)
             runs.append(metrics)
             for k in ERROR_SETS:
                 pooled[k].append(sets[k])
@@ -116,13 +131,27 @@ def main() -> int:
                   + f" / {runs[-1].get('plume', {}).get('breath_frames_apart', 0)}", flush=True)
         report[name] = {"summary": summarise(runs), "runs": runs}
         if args.png:
-            args.png.mkdir(parents=True, exist_ok=True)
-            error_boxplot_png({k: np.concatenate(v) for k, v in pooled.items()}, args.png / f"tracking_study_{name}.png",
-                              f"{name}: {args.seeds} seeds, horizontal error")
+            stem = Path(name).stem
+            error_boxplot_png({k: np.concatenate(v) for k, v in pooled.items()}, args.png / f"tracking_study_{stem}.png",
+                              f"{stem}: {args.seeds} seeds", ylabel="horizontal position error (m)")
         print(json.dumps({name: report[name]["summary"]}, indent=1), flush=True)
     if args.json:
         args.json.write_text(json.dumps(report, indent=1, default=float))
     return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = script_parser("tracking_study.py", __doc__.splitlines()[0])
+    p.add_argument("--seeds", type=positive_int, default=20, help="run seeds 0 to N-1 (default 20)")
+    p.add_argument("--duration", type=positive_float, default=None, help="override duration_s (s)")
+    p.add_argument("--scenarios", nargs="+", default=["track_static_vehicle", "track_moving_vehicle"],
+                   help="shipped scenario names or YAML files that track a target")
+    p.add_argument("--json", type=Path, default=None, help="write every run and the summary here")
+    p.add_argument("--png", type=Path, default=None, help="folder for the pooled box plots")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="scenario override for every run (as `auvsim run --set`), e.g. "
+                        "world.current.velocity_ned_mps=[-0.35,0.35,0]")
+    return run_script(p, study, argv)
 
 
 if __name__ == "__main__":

@@ -266,8 +266,9 @@ class FossenModel:
             fade = None
         if self._diag_damping:
             dl, dq = self._dl_diag, self._dq_diag
-            if fade is None:
-                d = [(dl[i] + dq[i] * abs(x)) * x for i, x in enumerate(nr)]
+            if fade is None:  # unrolled: this runs at the physics rate
+                d = [(dl[0] + dq[0] * abs(ur)) * ur, (dl[1] + dq[1] * abs(vr)) * vr, (dl[2] + dq[2] * abs(wr)) * wr,
+                     (dl[3] + dq[3] * abs(p)) * p, (dl[4] + dq[4] * abs(q)) * q, (dl[5] + dq[5] * abs(r)) * r]
             else:
                 d = [(dl[i] * fade[i] + dq[i] * abs(x)) * x for i, x in enumerate(nr)]
         else:

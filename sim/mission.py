@@ -30,7 +30,8 @@ from scenarios.schema import Scenario
 from sim.mission_build import NAV_SOURCES, MissionParts, build_mission_parts
 from sim.physics import Physics
 from sim.records import MissionInfo, MissionObserver, MissionSummary, StepRecord
-from sim.sensors.base import SceneView
+from sim.sensors.base import SceneView, Sensor
+from sim.sonar_pipeline import FrameTicket, SonarPipeline
 from sim.stage_timer import NULL_TIMER, StageTimer
 from sim.surface_runner import SurfaceVehicleRunner
 from sim.truth import VehicleTruth
@@ -50,9 +51,14 @@ class Mission:
             are still rendered at their rate when the sonar is enabled, but not processed).
         timer: a :class:`sim.stage_timer.StageTimer` to time the loop's stages (benchmarks);
             default: none.
+        workers: threads the loop may use. 1: the serial loop. 2 or more: the sonar's frames
+            and their perception run on worker threads (:mod:`sim.sonar_pipeline`) when nothing
+            in the loop reads perception back (survey perception; not target tracking), with
+            the serial loop's results bit for bit; observers get frames and perception results
+            once ready, in order.
 
     Raises:
-        ValueError: unknown ``nav_source``; a sensor mount site missing on the hull.
+        ValueError: unknown ``nav_source``; ``workers`` < 1; a sensor mount site missing on the hull.
     """
 
     def __init__(
@@ -63,9 +69,14 @@ class Mission:
         observers: Sequence[MissionObserver] = (),
         perception: bool = True,
         timer: StageTimer | None = None,
+        workers: int = 1,
     ) -> None:
         if nav_source not in NAV_SOURCES:
             raise ValueError(f"nav_source must be one of {NAV_SOURCES}, got {nav_source!r}")
+        if int(workers) < 1:
+            raise ValueError(f"workers must be >= 1, got {workers}")
+        self.workers = int(workers)
+        self._pipeline: SonarPipeline | None = None
         self.scenario = scenario
         self.nav_source = nav_source
         self.observers = list(observers)
@@ -109,6 +120,8 @@ class Mission:
 
     @property
     def perception(self):
+        """The perception chain (None without one); pipelined frames are finished first."""
+        self.flush()
         return self.parts.perception
 
     @property
@@ -139,6 +152,7 @@ class Mission:
     # -- stepping API ----------------------------------------------------------------
     def reset(self, seed: int | None = None) -> StepRecord:
         """Restart the mission; a given ``seed`` reseeds every component (same seed, same run)."""
+        self.close()
         if seed is not None:
             self._build(int(seed))
         scn, parts = self.scenario, self.parts
@@ -170,6 +184,11 @@ class Mission:
         parts.autopilot.reset()
         if parts.perception is not None:
             parts.perception.reset()
+        # pipelined only where perception is a sink and the sonar's latency is fixed (the
+        # scheduler gets a ticket, not the frame, to time the delivery by)
+        if (self.workers > 1 and parts.perception is not None and parts.tracking is None
+                and type(parts.sonar).latency_s is Sensor.latency_s):
+            self._pipeline = SonarPipeline(self.physics, parts.sonar, parts.perception.process, self.workers)
         self.last_dvl_lock = True
         self._setpoint: Setpoint | None = None
         self._wall_start = time.perf_counter()
@@ -241,8 +260,24 @@ class Mission:
             for handler in self._by_type.get(WrenchCmdMsg, ()):
                 handler(cmd)  # the speed model of a DVL-free filter
         rec = self._record(truth, nav, parts.fsm.mode)
+        if self._pipeline is not None and self._pipeline.busy:
+            self._to_observers(self._pipeline.ready())
         self._wall_s = time.perf_counter() - self._wall_start
         return rec
+
+    def flush(self) -> None:
+        """Wait for the pipelined sonar frames delivered so far and hand them to the observers
+        (nothing to do in the serial loop)."""
+        if self._pipeline is not None and self._pipeline.busy:
+            with self.timer.stage("pipeline_wait"):
+                self._to_observers(self._pipeline.ready(wait=True))
+            self._wall_s = time.perf_counter() - self._wall_start
+
+    def close(self) -> None:
+        """Stop the pipeline's worker threads, if any (frames not yet delivered are dropped)."""
+        if self._pipeline is not None:
+            self._pipeline.close()
+            self._pipeline = None
 
     def run(self, progress: bool = True) -> MissionSummary:
         """Run until the mission ends or the scenario's duration is reached."""
@@ -260,6 +295,7 @@ class Mission:
                     bar.update(self.t_s - last)
                     bar.set_postfix_str(self.fsm.mode)
                     last = self.t_s
+        self.flush()
         summary = self.summary()
         for obs in self.observers:
             obs.on_end(summary)
@@ -272,7 +308,12 @@ class Mission:
 
     # -- internals -------------------------------------------------------------------
     def _fire(self, name: str, truth: VehicleTruth, scene: SceneView) -> None:
-        self.parts.scheduler.push(name, truth.t_s, self.parts.sensors[name].measure(truth, scene))
+        pipeline = self._pipeline
+        if pipeline is not None and name == self.parts.sonar.name:
+            msg = pipeline.capture(truth)  # rendered on a worker from a copy of the scene now
+        else:
+            msg = self.parts.sensors[name].measure(truth, scene)
+        self.parts.scheduler.push(name, truth.t_s, msg)
 
     def _note_bottom_lock(self, msg: DvlMsg) -> None:
         self.last_dvl_lock = bool(msg.valid)
@@ -280,6 +321,9 @@ class Mission:
     def _deliver(self, name: str, msg: Any) -> None:
         self._delivered[name] += 1
         timer = self.timer
+        if isinstance(msg, FrameTicket):  # pipelined: perception with the estimate of now, on a worker
+            self._pipeline.deliver(name, msg, self.nav_filter.estimate())
+            return
         with timer.stage("nav_filter"):
             for handler in self._by_type.get(type(msg), ()):
                 handler(msg)
@@ -289,11 +333,16 @@ class Mission:
         with timer.stage("nav_filter"):
             for handler in self._by_type.get(type(result), ()) if result is not None else ():
                 handler(result)  # onboard results the filter fuses (position fixes)
-        with timer.stage("observers"):
-            for obs in self.observers:
-                obs.on_message(name, msg)
-                if result is not None:
-                    obs.on_message(name, result)
+        self._to_observers(((name, msg, result),))
+
+    def _to_observers(self, ready) -> None:
+        """Hand ``(name, message, result or None)`` triples to every observer, in order."""
+        with self.timer.stage("observers"):
+            for name, msg, result in ready:
+                for obs in self.observers:
+                    obs.on_message(name, msg)
+                    if result is not None:
+                        obs.on_message(name, result)
 
     def _record(self, truth: VehicleTruth, nav: NavEstimate, mode: str) -> StepRecord:
         sp = self._setpoint

@@ -22,6 +22,7 @@ from sim.target_motion import PARKED_NED, BubblePlumes, ManoeuvreTrajectory, Wat
 FloatArray = NDArray[np.float64]
 DIVER_RADIUS_M = 0.2  # capsule: a prone diver 1.8 m long (with fins), 0.4 m across
 DIVER_HALF_LENGTH_M = 0.7
+BUBBLE_CLASS = "bubble"  # class name of a plume's scatterers (parked above the surface between breaths)
 VEHICLE_HALF_SIZE_M = (0.35, 0.35, 0.175)  # PlaDyPos, paper 004 section 5
 _CAPSULE_ALONG_X = [math.cos(math.pi / 4), 0.0, math.sin(math.pi / 4), 0.0]  # local z -> x
 
@@ -69,7 +70,7 @@ def add_mover_bodies(spec: mujoco.MjSpec, movers: tuple[MoverConfig, ...], acous
                 g = bb.add_geom(name=f"target:{m.name}/bubble{i}", type=mujoco.mjtGeom.mjGEOM_SPHERE,
                                 size=[b.radius_m, 0, 0], group=acoustic_group, contype=0, conaffinity=0,
                                 rgba=[0.9, 0.9, 1.0, 0.6])
-                out.append(MoverGeom(g, bname, f"{m.name}/bubble{i}", "bubble", False, "sphere", b.radius_m,
+                out.append(MoverGeom(g, bname, f"{m.name}/bubble{i}", BUBBLE_CLASS, False, "sphere", b.radius_m,
                                      2 * b.radius_m, b.reflectivity))
     return out
 

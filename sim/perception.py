@@ -1,9 +1,10 @@
 """The mission's perception stage: ATR on each FLS frame -> geolocalisation -> PMHA.
 
 Runs the onboard code (``autonomy.atr``, ``autonomy.localization``,
-``autonomy.world_model``) and scores it against the frame's ground truth. The scoring
-reads the truth; the onboard code never does (except with ``nav_source='truth'``, which
-replaces the navigation estimate by the true pose, as paper 000's simulated evaluation).
+``autonomy.world_model``). It never reads the frame's ground truth (except with
+``nav_source='truth'``, which replaces the navigation estimate by the true pose, as paper
+000's simulated evaluation); scoring detections against the truth is the job of an observer
+(:class:`sim.evaluation.detection_scoring.DetectionScorer`), outside the loop.
 """
 
 from __future__ import annotations
@@ -18,7 +19,6 @@ from autonomy.localization import fls_visibility, localize
 from autonomy.messages import NavEstimate
 from autonomy.world_model import CLASS_NAMES, PMHA
 from scenarios.schema import Scenario
-from sim.evaluation.detection_matching import MISSION_DETECTION_MATCH_IOU, match_frame
 from sim.evaluation.world_model_score import score_world_model
 from sim.records import PerceptionResult
 from sim.seabed import Seabed
@@ -65,11 +65,6 @@ class Perception:
     def reset(self) -> None:
         self.pmha = PMHA(self.wm_cfg, region_ned=self.region_ned)
         self.n_frames = 0
-        self.n_detections = 0
-        self.n_true = 0
-        self.n_false = 0
-        self.n_visible_targets = 0
-        self.n_hit_targets = 0
 
     # -- per frame ----------------------------------------------------------------------
     def _truth_nav(self, render: FlsRender) -> NavEstimate:
@@ -83,22 +78,11 @@ class Perception:
                            altitude_m=altitude)
 
     def process(self, render: FlsRender, nav: NavEstimate) -> PerceptionResult:
-        """Run perception on one delivered frame; returns the detections, their scoring
-        against the frame's truth, their geolocalisation and the updated world model."""
+        """Run perception on one delivered frame; returns the detections, their
+        geolocalisation and the updated world model."""
         frame = render.frame
         self.n_frames += 1
         detections = self.detector.detect(frame)
-
-        gt = [o for o in render.truth.objects if o.visible and o.is_target and o.bbox_xyxy is not None]
-        self.n_visible_targets += len(gt)
-        gt_boxes = np.array([o.bbox_xyxy for o in gt], dtype=float).reshape(-1, 4)
-        state, gt_hit = match_frame(np.array([d.box_xyxy_px for d in detections], dtype=float).reshape(-1, 4),
-                                    np.array([d.score for d in detections], dtype=float), gt_boxes,
-                                    np.zeros(len(gt), dtype=bool), MISSION_DETECTION_MATCH_IOU)
-        self.n_detections += len(detections)
-        self.n_true += int(np.sum(state == 1))
-        self.n_false += int(np.sum(state != 1))
-        self.n_hit_targets += int(np.sum(gt_hit))
 
         nav_loc = self._truth_nav(render) if self.nav_source == "truth" else nav
         localized = [localize(d, nav_loc, self.fls.mount_pos_body_m, self.fls.mount_rpy_rad, self.loc_cfg,
@@ -108,8 +92,7 @@ class Perception:
                                  range_min_m=g.window_near_m, range_max_m=g.window_far_m, fov_rad=g.fov_rad,
                                  vertical_fov_rad=g.vertical_beamwidth_rad, margin_m=1.0)
         self.pmha.update(frame.t_s, localized, visible)
-        return PerceptionResult(t_s=frame.t_s, detections=tuple(detections),
-                                true_detection=tuple(bool(s_ == 1) for s_ in state), localized=tuple(localized),
+        return PerceptionResult(t_s=frame.t_s, detections=tuple(detections), localized=tuple(localized),
                                 world_objects=tuple(self.pmha.world_model()))
 
     # -- results --------------------------------------------------------------------------
@@ -118,16 +101,6 @@ class Perception:
 
     def world_model_json(self) -> dict:
         return self.pmha.to_json()
-
-    def detection_metrics(self) -> dict[str, Any]:
-        return {
-            "detections": self.n_detections,
-            "true_detections": self.n_true,
-            "false_detections": self.n_false,
-            "precision": self.n_true / self.n_detections if self.n_detections else None,
-            "recall_visible_targets": self.n_hit_targets / self.n_visible_targets if self.n_visible_targets else None,
-            "detector": self.scenario.autonomy.atr.detector,
-        }
 
     def target_objects(self) -> list[Any]:
         """World objects the world model classifies as targets (most probable class)."""

@@ -51,14 +51,12 @@ class PerceptionResult:
     Attributes:
         t_s: capture time of the frame, s.
         detections: ATR detections in the frame.
-        true_detection: per detection, whether it matched a visible target's box.
         localized: per detection, its geolocalised position (onboard estimate).
         world_objects: the world model after fusing the frame.
     """
 
     t_s: float
     detections: tuple[Detection, ...] = ()
-    true_detection: tuple[bool, ...] = ()
     localized: tuple[Any, ...] = ()
     world_objects: tuple[Any, ...] = ()
 

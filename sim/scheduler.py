@@ -11,7 +11,7 @@ from __future__ import annotations
 import heapq
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 Latency = float | Callable[[Any], float]
@@ -25,14 +25,6 @@ class _Channel:
     next_fire_s: float
 
 
-@dataclass(order=True)
-class _Pending:
-    deliver_s: float
-    seq: int
-    name: str = field(compare=False)
-    message: Any = field(compare=False)
-
-
 class SensorScheduler:
     """Tracks when each named sensor is due and queues messages until delivery.
 
@@ -43,7 +35,8 @@ class SensorScheduler:
     def __init__(self, eps_s: float = 1e-9) -> None:
         self.eps_s = eps_s
         self._channels: dict[str, _Channel] = {}
-        self._queue: list[_Pending] = []
+        # (deliver_s, seq, name, message): ordered by time, then push order (seq is unique)
+        self._queue: list[tuple[float, int, str, Any]] = []
         self._seq = 0
 
     def add(self, name: str, rate_hz: float, latency_s: Latency = 0.0, first_fire_s: float = 0.0) -> None:
@@ -96,13 +89,14 @@ class SensorScheduler:
         latency = ch.latency_s(message)
         if not (latency >= 0.0 and math.isfinite(latency)):
             raise ValueError(f"sensor {name!r}: latency of a message must be finite and >= 0, got {latency}")
-        heapq.heappush(self._queue, _Pending(t_s + latency, self._seq, name, message))
+        heapq.heappush(self._queue, (t_s + latency, self._seq, name, message))
         self._seq += 1
 
     def pop_ready(self, t_s: float) -> list[tuple[str, Any]]:
         """Messages whose delivery time has come, oldest first."""
         out = []
-        while self._queue and self._queue[0].deliver_s <= t_s + self.eps_s:
-            p = heapq.heappop(self._queue)
-            out.append((p.name, p.message))
+        queue, limit = self._queue, t_s + self.eps_s
+        while queue and queue[0][0] <= limit:
+            _, _, name, message = heapq.heappop(queue)
+            out.append((name, message))
         return out

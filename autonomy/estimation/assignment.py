@@ -80,13 +80,17 @@ class LazyRanked:
         self._gen: Iterator[tuple[float, tuple[int, ...]]] | None = gen
 
     def get(self, i: int) -> tuple[float, tuple[int, ...]] | None:
-        while len(self._items) <= i and self._gen is not None:
-            nxt = next(self._gen, None)
+        items = self._items
+        if i < len(items):  # the common case: already drawn
+            return items[i]
+        gen = self._gen
+        while gen is not None and len(items) <= i:
+            nxt = next(gen, None)
             if nxt is None:
-                self._gen = None
+                self._gen = gen = None
             else:
-                self._items.append(nxt)
-        return self._items[i] if i < len(self._items) else None
+                items.append(nxt)
+        return items[i] if i < len(items) else None
 
 
 def _component_stream(
@@ -173,19 +177,18 @@ def ranked_associations(
             k += 1
         return
     heap: list[tuple[float, tuple[int, ...], int]] = [(sum(f[0] for f in firsts), (0,) * n_c, 0)]
+    pop, push = heapq.heappop, heapq.heappush
     while heap:
-        total, idx, last = heapq.heappop(heap)
+        total, idx, last = pop(heap)
         labels = [0] * n
         for s, k, rows in zip(streams, idx, comps):
             sol = s.get(k)[1]
-            for i, r in enumerate(rows):
-                labels[r] = sol[i]
+            for r, lab in zip(rows, sol):
+                labels[r] = lab
         yield total, tuple(labels)
         for c in range(last, n_c):
             s = streams[c]
             k = idx[c]
             nxt = s.get(k + 1)
             if nxt is not None:
-                heapq.heappush(
-                    heap, (total - s.get(k)[0] + nxt[0], idx[:c] + (k + 1,) + idx[c + 1 :], c)
-                )
+                push(heap, (total - s.get(k)[0] + nxt[0], idx[:c] + (k + 1,) + idx[c + 1 :], c))

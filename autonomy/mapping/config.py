@@ -41,5 +41,8 @@ class SpaMapperConfig(StrictModel):
     varsigma_h_deg_per_sqrt_h: float = Field(0.6, ge=0.0)
     nav_floor_pos_m: float = Field(1.0, gt=0.0, description="floor of the INS position std in the likelihood")
     nav_floor_heading_deg: float = Field(2.0, gt=0.0, description="floor of the INS heading std")
+    merge_gate: float = Field(
+        4.0, ge=0.0, description="merge two POs (existence > 0.05) whose means are closer than "
+        "sqrt(merge_gate (var_1 + var_2 + 2 sigma_meas^2)); 0 disables (paper 003 does not merge)")
     roughening_k: float = Field(0.2, ge=0.0, description="Gordon's roughening constant K")
     bp_tol: float = Field(1e-5, gt=0.0)

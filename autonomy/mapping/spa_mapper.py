@@ -6,7 +6,8 @@ algorithm under unknown AUV position", JAIF 2023, Section IV (messages) and V (s
 Beliefs:
 * vehicle state ``s = [north, east, v_north, v_east, turn rate]`` (NED, m, m/s, rad/s): N
   particles, propagated at the INS rate by the nearly-constant-turn model
-  (:mod:`autonomy.mapping.auv_motion`) and weighted by the INS output
+  (:mod:`autonomy.mapping.auv_motion`, drawn from the locally optimal proposal given each
+  INS output, :func:`~autonomy.mapping.auv_motion.nct_predict_ins_proposal`) and weighted by the INS output
   ``g = [north, east, heading] + v`` with ``var v = diag(s_p^2, s_p^2, s_h^2)``,
   ``s_p^2 = (3 varsigma_p)^2 tau^3 / 3``, ``s_h^2 = (3 varsigma_h)^2 tau^2`` (tau hours; paper eq.
   after 30), floored by ``nav_floor_*`` so the first seconds do not degenerate the particles;
@@ -15,21 +16,27 @@ Beliefs:
 
 At each tile pair (measurements: positions ``ell`` in the vehicle frame, along-track forward
 and across-track starboard, m, and the ATR probability ``pi`` of class 1), the legacy POs'
-association weights ``beta_k(m)`` are particle integrals over the PO and vehicle beliefs
-(paired particles), new-PO weights ``xi_m = 1 + mu_N pd / mu_0 sum_c f_N(c) f(pi_m | c)``
-(uniform new-object prior over the tile, uniform clutter ``pi``), association by loopy BP
-(:mod:`autonomy.mapping.data_association`), then the messages back to the vehicle state
-(``spa`` mode) and the PO beliefs, new POs from the measurements, pruning at ``P_th`` and
-confirmation at ``E_th``. Resampled particles are roughened (Gordon, Salmond and Smith 1993:
-jitter of standard deviation ``K E N^(-1/d)``, E the particle range per dimension, here the
-1-99 percentile range so that a few outliers do not inflate it).
+association weights ``beta_k(m)`` (IV-C), new-PO weights
+``xi_m = 1 + mu_N / mu_0 sum_c f_N(c) f(pi_m | c)`` (eq. 15: uniform new-object prior over the
+tile, uniform clutter ``pi``), association by loopy BP
+(:mod:`autonomy.mapping.data_association`), then the messages from the legacy POs to the
+vehicle state (``spa`` mode), the PO beliefs from the *extrinsic* vehicle belief (every message
+but the PO's own, IV-D), new POs from the measurements mapped through the updated vehicle
+belief, pruning at ``P_th`` and confirmation at ``E_th``. The detection probability is
+averaged over the vehicle (and PO) uncertainty (a hard tile edge at the mean state turns
+objects near a tile boundary into misses, then into new duplicate POs); detection terms carry
+no in-tile factor (a detection lies in the tile). Resampled PO particles are roughened
+(Gordon, Salmond and Smith 1993: jitter of standard deviation ``K E N^(-1/d)``, E the particle
+range per dimension, here the 1-99 percentile range so that a few outliers do not inflate it);
+the vehicle particles are not (a velocity jitter is a heading jitter).
 
 Implementation choice (documented deviation): the paper's particle messages are quadratic in
-N (every vehicle particle against every PO particle). Here the two cross integrals that need
-it, the message from a PO to the vehicle state and from the vehicle state to a PO, use a
+N (every vehicle particle against every PO particle). Here every cross integral uses a
 Gaussian summary of the *other* belief (its mean and covariance; the heading spread enters
-linearised), so a step is linear in N. The association weights ``beta`` keep the paired
-particle integral.
+linearised): the association weights and PO updates summarise the vehicle belief, the
+messages to the vehicle summarise each PO, so a step is linear in N. (Pairing the particles
+at random instead starves ``beta`` once the vehicle spread exceeds the measurement noise:
+with 300 pairs, a 20 m spread and sigma 1 m almost no pair lands near the detection.)
 
 Modes (paper 003's baselines from the same code): ``spa``; ``clairvoyant`` (true state given
 by :meth:`SpaMapper.set_true_state`); ``ins_plain`` (the INS output as the state);
@@ -42,9 +49,9 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.special import betaln
+from scipy.special import betaln, ndtr
 
-from autonomy.mapping.auv_motion import heading_rad, nct_predict
+from autonomy.mapping.auv_motion import heading_rad, nct_predict_ins_proposal, wrap_angle
 from autonomy.mapping.config import SpaMapperConfig
 from autonomy.mapping.data_association import loopy_bp
 
@@ -110,6 +117,7 @@ class SpaMapper:
         self.r = np.zeros(0)
         self.X = np.zeros((0, n, 2))
         self.W = np.zeros((0, n, cfg.n_classes))
+        self._po_stats = np.zeros((0, 3))  # per PO: position mean (2) and total variance, m, m^2
         self.t_s = 0.0
         self.tile_area_m2 = 2.0 * cfg.tile_length_m * cfg.tile_width_m
         self.last_association: object = None
@@ -128,14 +136,16 @@ class SpaMapper:
             speed = float(np.hypot(self.point_state[2], self.point_state[3])) or 1.0
             self.point_state = np.array([g[0], g[1], speed * np.cos(g[2]), speed * np.sin(g[2]), 0.0])
             return
-        if dt > 0.0:
-            self.S = nct_predict(self.S, dt, cfg.sigma_lin_mps2, np.deg2rad(cfg.sigma_ang_degps2), self.rng)
         tau = t_s / S_PER_H
         var_p = max(cfg.nav_floor_pos_m ** 2, (3.0 * cfg.varsigma_p) ** 2 * tau ** 3 / 3.0)
         var_h = max(np.deg2rad(cfg.nav_floor_heading_deg) ** 2,
                     (3.0 * np.deg2rad(cfg.varsigma_h_deg_per_sqrt_h)) ** 2 * tau ** 2)
-        dpsi = np.angle(np.exp(1j * (heading_rad(self.S) - g[2])))
-        logl = -0.5 * (((self.S[:, 0] - g[0]) ** 2 + (self.S[:, 1] - g[1]) ** 2) / var_p + dpsi ** 2 / var_h)
+        if dt > 0.0:
+            self.S, logl = nct_predict_ins_proposal(self.S, dt, cfg.sigma_lin_mps2, np.deg2rad(cfg.sigma_ang_degps2),
+                                                    g, var_p, var_h, self.rng)
+        else:
+            dpsi = wrap_angle(heading_rad(self.S) - g[2])
+            logl = -0.5 * (((self.S[:, 0] - g[0]) ** 2 + (self.S[:, 1] - g[1]) ** 2) / var_p + dpsi ** 2 / var_h)
         self._reweight(np.log(np.maximum(self.w, 1e-300)) + logl)
 
     def set_true_state(self, state: ArrayLike) -> None:
@@ -152,11 +162,12 @@ class SpaMapper:
             w = np.full(len(w), 1.0 / len(w))
         self.w = w
 
-    def _resample_vehicle(self, rough: bool) -> None:
+    def _resample_vehicle(self) -> None:
+        """Resample the vehicle particles to equal weights. Not roughened: an isotropic jitter
+        of the velocity is a heading jitter (0.1 m/s at 1.5 m/s is 4 deg, 5 m at 70 m abeam),
+        and the next second's process noise restores the diversity anyway."""
         n = len(self.w)
         self.S = self.S[systematic_resample(self.w, self.rng)]
-        if rough:
-            self.S = self.S + self._roughening(self.S)
         self.w = np.full(n, 1.0 / n)
 
     def _roughening(self, particles: FloatArray) -> FloatArray:
@@ -203,10 +214,10 @@ class SpaMapper:
             raise ValueError("tile_update: ell_m (M, 2) and pi1 (M,) must be finite and of one length")
         n, m_n = cfg.n_particles, len(ell)
         if cfg.mode in ("spa", "ins_filter"):
-            self._resample_vehicle(rough=False)
+            self._resample_vehicle()
         f_pi = np.stack([beta_pdf(p1, *cfg.class_beta_1), beta_pdf(p1, *cfg.class_beta_2)], axis=1)  # (M, C)
         ratio = self.tile_area_m2 / cfg.clutter_mean  # 1 / (mu_0 f_FA(ell)) with uniform pi
-        xi = 1.0 + cfg.new_object_mean * cfg.pd / cfg.clutter_mean * f_pi.mean(axis=1)
+        xi = 1.0 + cfg.new_object_mean / cfg.clutter_mean * f_pi.mean(axis=1)  # eq. 15: mu_N counts detected objects
         veh = self._object_frame_particles()
         rel = self._relevant(veh)
         k_r = len(rel)
@@ -217,51 +228,148 @@ class SpaMapper:
             self.last_association = bp
         else:
             nu, phi_sum = np.ones((k_r, m_n)), np.zeros(m_n)
+        ext_logw = np.zeros((k_r, n))  # extrinsic vehicle log-weights seen by each legacy PO
+        logw_post = None
         if cfg.mode == "spa" and k_r:
-            self._update_vehicle(rel, ell, f_pi, nu, ratio)
-            veh = self._object_frame_particles()
+            log_gamma = self._po_to_vehicle_messages(rel, ell, f_pi, nu, ratio)  # (Kr, N)
+            logw_post = log_gamma.sum(axis=0)
+            # message to PO k: the vehicle belief times every message but its own (paper IV-D)
+            ext_logw = logw_post[None, :] - log_gamma
         if k_r:
-            self._update_legacy(rel, veh, ell, f_pi, nu, ratio)
+            self._update_legacy(rel, veh, ell, f_pi, nu, ratio, ext_logw)
+        if logw_post is not None:
+            lw = np.exp(logw_post - logw_post.max())
+            self.w = lw / lw.sum()
+            self._resample_vehicle()
+            veh = self._object_frame_particles()
         self._add_new(veh, ell, f_pi, xi, phi_sum)
-        keep = self.r >= cfg.prune_threshold
+        self._drop(self.r < cfg.prune_threshold)
+        if cfg.merge_gate > 0.0:
+            self._merge_coincident()
+
+    def _drop(self, gone: NDArray[np.bool_]) -> None:
+        keep = ~gone
+        if len(self._po_stats) == len(keep):
+            self._po_stats = self._po_stats[keep]
         self.r, self.X, self.W = self.r[keep], self.X[keep], self.W[keep]
+
+    def _merge_coincident(self) -> None:
+        """Merge POs whose position beliefs coincide (documented deviation from paper 003).
+
+        The BP keeps one PO per measurement but nothing removes a second PO of the same object:
+        once two POs of one object are both near existence 1 (each tile one takes the detection,
+        the other a miss), a miss divides the odds only by about five, and the stationary model
+        has no survival probability, so both stay confirmed for the rest of the survey and the
+        duplicate counts as a false object. Two POs with existence above 0.05 whose means are
+        closer than ``sqrt(merge_gate (var_1 + var_2 + 2 sigma^2))`` (total position variances)
+        become the one with the higher existence, with existence ``1 - (1 - r_1)(1 - r_2)``.
+        """
+        if len(self._po_stats) != len(self.r):
+            self._po_stats = self._summarise_pos(self.X)
+        cand = np.flatnonzero(self.r > 0.05)
+        if len(cand) < 2:
+            return
+        mu, var = self._po_stats[cand, :2], self._po_stats[cand, 2]
+        d2 = ((mu[:, None] - mu[None]) ** 2).sum(-1)
+        gate = self.cfg.merge_gate * (var[:, None] + var[None] + 2.0 * self.cfg.sigma_meas_m ** 2)
+        gone = np.zeros(len(self.r), dtype=bool)
+        for i, j in zip(*np.nonzero(np.triu(d2 < gate, 1))):
+            a, b = cand[i], cand[j]
+            if gone[a] or gone[b]:
+                continue
+            keep, lose = (a, b) if self.r[a] >= self.r[b] else (b, a)
+            self.r[keep] = 1.0 - (1.0 - self.r[keep]) * (1.0 - self.r[lose])
+            gone[lose] = True
+        if gone.any():
+            self._drop(gone)
 
     def association_weights(self, rel: NDArray[np.intp], veh: FloatArray, ell: FloatArray, f_pi: FloatArray
                             ) -> FloatArray:
-        """Association weights ``beta`` (Kr, M + 1) of POs ``rel`` (paper 003, messages from
-        ``q_k`` to ``a_k``): column 0 ``(1 - r) + r E[1 - P_d]``, column m
-        ``r pd E[in tile f(ell_m | x, s) f(pi_m | c)] / (mu_0 f_FA(z_m))``, expectations over the
-        PO particles paired with a random permutation of the vehicle particles ``veh`` (N, 5).
+        """Association weights ``beta`` (Kr, M + 1) of POs ``rel`` (paper 003, IV-C, message
+        ``zeta_{q_k -> a_k}``): column 0 ``(1 - r) + r E[1 - P_d]``, column m
+        ``r pd E[in tile f(ell_m | x, s) f(pi_m | c)] / (mu_0 f_FA(z_m))``; the expectation over
+        the vehicle belief ``veh`` (N, 5), equally weighted, is taken in closed form over its
+        Gaussian summary (:meth:`_vehicle_summary`), the one over the PO over its particles.
 
         Args:
             rel: (Kr,) PO indices; veh: (N, 5) vehicle states; ell: (M, 2) detections (vehicle
                 frame, m); f_pi: (M, C) class likelihoods ``f(pi_m | c)``.
         """
         cfg = self.cfg
-        n, m_n = cfg.n_particles, len(ell)
-        sig2 = cfg.sigma_meas_m ** 2
         ratio = self.tile_area_m2 / cfg.clutter_mean
-        perm = self.rng.permutation(n)
-        vp, vpsi = veh[perm, :2], heading_rad(veh[perm])
-        L = rotate_to_local(self.X[rel] - vp[None], vpsi[None])  # (Kr, N, 2)
-        inside = self._in_tile(L)
-        d2 = ((ell[None, None, :, :] - L[:, :, None, :]) ** 2).sum(-1)  # (Kr, N, M)
-        f_l = np.exp(-0.5 * d2 / sig2) / (2.0 * np.pi * sig2)
+        summary = self._vehicle_summary(veh, np.full(len(veh), 1.0 / len(veh)))
+        lik, inside = self._po_likelihoods(self.X[rel], summary, ell)  # (Kr, N, M), (Kr, N)
         cls = np.einsum("kic,mc->kim", self.W[rel], f_pi)  # (Kr, N, M)
         rr = self.r[rel]
-        beta = np.empty((len(rel), m_n + 1))
-        beta[:, 1:] = rr[:, None] * cfg.pd * ratio * np.einsum("ki,kim->km", inside, f_l * cls)
+        beta = np.empty((len(rel), len(ell) + 1))
+        # a detection lies in the tile: its term needs no in-tile factor (f(ell | x, s) is
+        # negligible where x is outside); the miss term takes E_s[P_d]
+        beta[:, 1:] = rr[:, None] * cfg.pd * ratio * np.einsum("kim->km", lik * cls)
         miss = (self.W[rel].sum(-1) * (1.0 - cfg.pd * inside)).sum(1)
         beta[:, 0] = (1.0 - rr) + rr * miss
         return beta
+
+    def _vehicle_summary(self, veh: FloatArray, w: FloatArray) -> tuple[FloatArray, float, FloatArray, float]:
+        """Gaussian summary of weighted vehicle particles (N, 5), weights (N,) summing to 1:
+        ``(pos mean (2,), heading mean, pos covariance (2, 2), heading variance)``; the
+        point modes have no spread."""
+        psis = heading_rad(veh)
+        p_mean = w @ veh[:, :2]
+        psi_mean = float(np.angle(w @ np.exp(1j * psis)))
+        if self.cfg.mode != "spa":
+            return p_mean, psi_mean, np.zeros((2, 2)), 0.0
+        dp = veh[:, :2] - p_mean
+        return p_mean, psi_mean, (dp * w[:, None]).T @ dp, float(w @ wrap_angle(psis - psi_mean) ** 2)
+
+    def _po_likelihoods(self, X: FloatArray, summary, ell: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Measurement likelihoods of PO particles ``X`` (K, N, 2) NED, marginalised over a
+        Gaussian vehicle belief ``summary``: ``N(ell_m; L, R^T P R + s^2 I + var_psi J J^T)``
+        with ``L`` the particle in the mean vehicle frame and ``J = d ell / d psi = [ell_across,
+        -ell_along]`` (heading linearised at the measurement). Returns (K, N, M) likelihoods
+        (1/m^2) and (K, N) in-tile indicators (at the mean vehicle state)."""
+        p_mean, psi_mean, P_s, var_psi = summary
+        c, s = np.cos(psi_mean), np.sin(psi_mean)
+        R = np.array([[c, -s], [s, c]])  # vehicle -> NED
+        J = np.stack([ell[:, 1], -ell[:, 0]], axis=1)  # (M, 2)
+        S = (R.T @ P_s @ R + self.cfg.sigma_meas_m ** 2 * np.eye(2))[None] + var_psi * J[:, :, None] * J[:, None, :]
+        det = S[:, 0, 0] * S[:, 1, 1] - S[:, 0, 1] ** 2  # (M,)
+        L = rotate_to_local(X - p_mean, np.full(X.shape[:-1], psi_mean))  # (K, N, 2)
+        e0 = ell[None, None, :, 0] - L[..., 0, None]
+        e1 = ell[None, None, :, 1] - L[..., 1, None]  # (K, N, M)
+        q2 = (S[:, 1, 1] * e0 * e0 - 2.0 * S[:, 0, 1] * e0 * e1 + S[:, 0, 0] * e1 * e1) / det
+        P_loc = R.T @ P_s @ R
+        sd_along = np.sqrt(P_loc[0, 0] + var_psi * L[..., 1] ** 2) + 1e-9
+        sd_across = np.sqrt(P_loc[1, 1] + var_psi * L[..., 0] ** 2) + 1e-9
+        return np.exp(-0.5 * q2) / (2.0 * np.pi * np.sqrt(det)), self._in_tile_probability(L, sd_along, sd_across)
+
+    def _in_tile_probability(self, L: FloatArray, sd_along: FloatArray, sd_across: FloatArray) -> FloatArray:
+        """Probability that a point at vehicle-frame ``L`` (..., 2), blurred by independent
+        Gaussian errors (along, across; m), lies in the tile pair: the detection probability
+        ``E_s[P_d]`` over the vehicle belief (a hard edge at the mean vehicle state turns every
+        object near a tile boundary into a miss, then into a new PO)."""
+        cfg = self.cfg
+        a0, a1 = L[..., 0], L[..., 1]
+        p_along = ndtr(-a0 / sd_along) - ndtr((-cfg.tile_length_m - a0) / sd_along)
+        near, far = cfg.tile_near_m, cfg.tile_near_m + cfg.tile_width_m
+        p_across = (ndtr((far - a1) / sd_across) - ndtr((near - a1) / sd_across)
+                    + ndtr((-near - a1) / sd_across) - ndtr((-far - a1) / sd_across))
+        return p_along * p_across
+
+    @staticmethod
+    def _summarise_pos(X: FloatArray) -> FloatArray:
+        """(K, 3) position mean (north, east) and total variance of PO particles X (K, N, 2)."""
+        mu = X.mean(axis=1)
+        return np.concatenate([mu, ((X - mu[:, None]) ** 2).sum(-1).mean(1)[:, None]], axis=1)
 
     def _relevant(self, veh: FloatArray) -> NDArray[np.intp]:
         """POs whose belief may reach the tile (mean within the tile grown by 3 sigma + 10 m)."""
         if len(self.r) == 0:
             return np.zeros(0, dtype=np.intp)
         cfg = self.cfg
-        mu = self.X.mean(axis=1)  # (K, 2), position means
-        sd = np.sqrt(self.X.var(axis=1).sum(-1) + veh[:, :2].var(axis=0).sum())
+        if len(self._po_stats) != len(self.r):  # set from outside: summarise every PO again
+            self._po_stats = self._summarise_pos(self.X)
+        mu = self._po_stats[:, :2]  # (K, 2), position means
+        sd = np.sqrt(self._po_stats[:, 2] + veh[:, :2].var(axis=0).sum())
         vm = veh.mean(axis=0)
         L = rotate_to_local(mu - vm[:2], np.full(len(mu), np.arctan2(vm[3], vm[2])))
         grow = 3.0 * sd + 10.0
@@ -270,12 +378,14 @@ class SpaMapper:
               & (a <= cfg.tile_near_m + cfg.tile_width_m + grow))
         return np.flatnonzero(ok)
 
-    def _update_vehicle(self, rel, ell, f_pi, nu, ratio) -> None:
-        """Messages from the legacy POs to the vehicle state (Gaussian summary of each PO)."""
+    def _po_to_vehicle_messages(self, rel, ell, f_pi, nu, ratio) -> FloatArray:
+        """Log-messages (Kr, N) from the legacy POs ``rel`` to the vehicle particles (paper 003,
+        IV-D, ``zeta_{q_k -> s}``; Gaussian summary of each PO belief); the vehicle particles are
+        equally weighted on entry."""
         cfg = self.cfg
         sig2 = cfg.sigma_meas_m ** 2
         pos, psi = self.S[:, :2], heading_rad(self.S)
-        logw = np.log(np.maximum(self.w, 1e-300))
+        out = np.empty((len(rel), len(self.S)))
         for j, k in enumerate(rel):
             q = self.W[k].sum(-1)  # (N,) position weights
             mu = q @ self.X[k]
@@ -289,7 +399,7 @@ class SpaMapper:
             a22 = s * s * P[0, 0] - 2 * c * s * P[0, 1] + c * c * P[1, 1] + sig2
             a12 = (c * c - s * s) * P[0, 1] + c * s * (P[1, 1] - P[0, 0])
             det = a11 * a22 - a12 * a12
-            inside = self._in_tile(L)
+            inside = self._in_tile_probability(L, np.sqrt(a11 - sig2) + 1e-9, np.sqrt(a22 - sig2) + 1e-9)
             det_term = 0.0
             for m in range(len(ell)):
                 e0, e1 = ell[m, 0] - L[:, 0], ell[m, 1] - L[:, 1]
@@ -297,44 +407,21 @@ class SpaMapper:
                 lik = np.exp(-0.5 * q2) / (2 * np.pi * np.sqrt(det))
                 det_term = det_term + nu[j, m] * lik * float(pc @ f_pi[m])
             rk = self.r[k]
-            gamma = (1.0 - rk) + rk * ((1.0 - cfg.pd * inside) + cfg.pd * inside * ratio * det_term)
-            logw = logw + np.log(np.maximum(gamma, 1e-300))
-        logw -= logw.max()
-        w = np.exp(logw)
-        self.w = w / w.sum()
-        self._resample_vehicle(rough=True)
+            gamma = (1.0 - rk) + rk * ((1.0 - cfg.pd * inside) + cfg.pd * ratio * det_term)
+            out[j] = np.log(np.maximum(gamma, 1e-300))
+        return out
 
-    def _update_legacy(self, rel, veh, ell, f_pi, nu, ratio) -> None:
-        """PO beliefs from the association messages (Gaussian summary of the vehicle belief)."""
+    def _update_legacy(self, rel, veh, ell, f_pi, nu, ratio, ext_logw) -> None:
+        """PO beliefs from the association messages (paper 003, IV-D/E, ``zeta_{q_k -> y_k}``):
+        the vehicle belief each PO sees is the extrinsic one (every message but its own,
+        ``ext_logw`` (Kr, N) log-weights over ``veh``), as a Gaussian summary."""
         cfg = self.cfg
         n = cfg.n_particles
-        sig2 = cfg.sigma_meas_m ** 2
-        p_mean = veh[:, :2].mean(axis=0)
-        psis = heading_rad(veh)
-        psi_mean = float(np.angle(np.exp(1j * psis).mean()))
-        dpsi = np.angle(np.exp(1j * (psis - psi_mean)))
-        var_psi = float(np.mean(dpsi ** 2))
-        P_s = np.cov(veh[:, :2].T) if cfg.mode == "spa" else np.zeros((2, 2))
-        if cfg.mode != "spa":
-            var_psi = 0.0
-        c, s = np.cos(psi_mean), np.sin(psi_mean)
-        R = np.array([[c, -s], [s, c]])  # vehicle -> NED
-        base = R.T @ P_s @ R + sig2 * np.eye(2)
-        S_inv, S_norm = [], []
-        for m in range(len(ell)):
-            J = np.array([ell[m, 1], -ell[m, 0]])
-            S = base + var_psi * np.outer(J, J)
-            S_inv.append(np.linalg.inv(S))
-            S_norm.append(1.0 / (2 * np.pi * np.sqrt(np.linalg.det(S))))
         for j, k in enumerate(rel):
-            L = rotate_to_local(self.X[k] - p_mean, np.full(n, psi_mean))
-            inside = self._in_tile(L)
-            acc = np.zeros((n, cfg.n_classes))
-            for m in range(len(ell)):
-                e = ell[m] - L
-                q2 = np.einsum("ni,ij,nj->n", e, S_inv[m], e)
-                acc += (nu[j, m] * S_norm[m] * np.exp(-0.5 * q2))[:, None] * f_pi[m][None, :]
-            factor = (1.0 - cfg.pd * inside)[:, None] + cfg.pd * inside[:, None] * ratio * acc
+            lw = np.exp(ext_logw[j] - ext_logw[j].max())
+            lik, inside = self._po_likelihoods(self.X[k][None], self._vehicle_summary(veh, lw / lw.sum()), ell)
+            acc = (lik[0] * nu[j][None, :]) @ f_pi  # (N, C)
+            factor = (1.0 - cfg.pd * inside[0])[:, None] + cfg.pd * ratio * acc
             w = self.W[k] * factor
             z = float(w.sum())
             rk = self.r[k]
@@ -350,6 +437,8 @@ class SpaMapper:
                 self.W[k] = w[idx] / q[idx][:, None] / n
             else:
                 self.W[k] = w
+        if len(self._po_stats) == len(self.r):
+            self._po_stats[rel] = self._summarise_pos(self.X[rel])
 
     def _add_new(self, veh, ell, f_pi, xi, phi_sum) -> None:
         cfg = self.cfg
@@ -363,6 +452,8 @@ class SpaMapper:
         X = veh[j, :2] + rotate_to_ned(noisy, heading_rad(veh)[j])
         pc = f_pi / f_pi.sum(axis=1, keepdims=True)
         W = np.repeat(pc[:, None, :], n, axis=1) / n
+        if len(self._po_stats) == len(self.r):
+            self._po_stats = np.concatenate([self._po_stats, self._summarise_pos(X)])
         self.r = np.concatenate([self.r, r_new])
         self.X = np.concatenate([self.X, X])
         self.W = np.concatenate([self.W, W])

@@ -32,6 +32,7 @@ body origin by the sensor's mount offset, with that sensor's own variance.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping
 from typing import Any
 
@@ -58,14 +59,34 @@ SEABED_RELIEF_M_PER_SQRT_M = 0.03
 _MIN_ALTITUDE_VAR_M2 = 1e-6
 
 
+def _rotation_and_jacobian(roll: float, pitch: float, yaw: float, v0: float, v1: float, v2: float
+                           ) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """Row-major entries of ``R = Rz(yaw) Ry(pitch) Rx(roll)`` ([Fossen2021] section 2.2.1) and of
+    ``d(R v)/d(roll, pitch, yaw)`` (3, 3), in Python floats (numpy's per-call cost dominates
+    for 3-vectors). The Jacobian's columns are ``R (e_x x v)``, ``Rz Ry (e_y x Rx v)`` and
+    ``e_z x (R v)``."""
+    cf, sf = math.cos(roll), math.sin(roll)
+    ct, st = math.cos(pitch), math.sin(pitch)
+    cp, sp = math.cos(yaw), math.sin(yaw)
+    r00, r01, r02 = cp * ct, -sp * cf + cp * st * sf, sp * sf + cp * cf * st
+    r10, r11, r12 = sp * ct, cp * cf + sf * st * sp, -cp * sf + st * sp * cf
+    r20, r21, r22 = -st, ct * sf, ct * cf
+    # pitch column: Rz Ry (e_y x w), w = Rx v, e_y x w = (w2, 0, -w0)
+    w2 = sf * v1 + cf * v2
+    y0, y2 = ct * w2 - st * v0, -st * w2 - ct * v0
+    rv0 = r00 * v0 + r01 * v1 + r02 * v2
+    rv1 = r10 * v0 + r11 * v1 + r12 * v2
+    return ((r00, r01, r02, r10, r11, r12, r20, r21, r22),
+            (-r01 * v2 + r02 * v1, cp * y0, -rv1,
+             -r11 * v2 + r12 * v1, sp * y0, rv0,
+             -r21 * v2 + r22 * v1, y2, 0.0))
+
+
 def rotated_vector_jacobian(rpy_rad: FloatArray, v: FloatArray) -> FloatArray:
     """d(R(rpy) v)/d(roll, pitch, yaw) for ZYX Euler angles, shape (3, 3)."""
-    roll, pitch, yaw = rpy_rad
-    Rx, Ry, Rz = rot_x(roll), rot_y(pitch), rot_z(yaw)
-    R = Rz @ Ry @ Rx
-    return np.column_stack(
-        [R @ cross3(_E[0], v), Rz @ Ry @ cross3(_E[1], Rx @ v), cross3(_E[2], R @ v)]
-    )
+    roll, pitch, yaw = (float(a) for a in rpy_rad)
+    v0, v1, v2 = (float(a) for a in v)
+    return np.array(_rotation_and_jacobian(roll, pitch, yaw, v0, v1, v2)[1]).reshape(3, 3)
 
 
 class NavigationFilter:
@@ -110,6 +131,9 @@ class NavigationFilter:
         self._usbl_model = RangeBearingElevation(
             self._r_usbl, cfg.usbl_range_noise_m, cfg.usbl_range_noise_frac, np.radians(cfg.usbl_angle_noise_deg)
         )
+        self._att_noise_var = np.asarray(self.noise.attitude_noise_rad, dtype=float) ** 2
+        self._F = np.eye(N_STATES)  # transition and process noise of the DVL prediction, written in place
+        self._Q = np.zeros((N_STATES, N_STATES))
         self._t_s = float(t0_s)
         self._x = np.zeros(N_STATES)
         self._x[POS] = np.asarray(initial_pos_ned, dtype=float).reshape(3)
@@ -125,6 +149,7 @@ class NavigationFilter:
         self._rate_meas = np.zeros(3)
         self._vel_dvl_meas = np.zeros(3)
         self._omega_at_dvl = np.zeros(3)
+        self._lever_vel_dvl = [0.0, 0.0, 0.0]  # omega x r_dvl of the held DVL velocity, m/s
         self._t_dvl_valid_s = -np.inf
         self._altitude_m = float("nan")  # body origin above the seabed, m (NaN until measured)
         self._altitude_var_m2 = float("inf")
@@ -166,10 +191,83 @@ class NavigationFilter:
 
     # ------------------------------------------------------------------ propagation
     def predict(self, t_s: float) -> None:
-        """Dead-reckon the state and covariance forward to ``t_s`` (no-op if not later)."""
+        """Dead-reckon the state and covariance forward to ``t_s`` (no-op if not later).
+
+        ``x_pos += R v_body dt``, ``P = F P F^T + Q`` with ``F = I + dt d(p_dot)/dx`` and ``Q``
+        as in the module docstring. With a DVL the 3 x 3 blocks are formed in Python floats (this
+        runs at the IMU rate, where numpy's per-call cost exceeds the arithmetic); the speed
+        model's prediction is :meth:`_predict_speed_model`."""
         dt = float(t_s) - self._t_s
         if dt <= 0.0:
             return
+        if self._speed_model is not None:
+            self._predict_speed_model(dt)
+            self._t_s = float(t_s)
+            return
+        x, cfg = self._x, self.cfg
+        # midpoint attitude of the step (as _attitude, in scalars)
+        roll, pitch, yaw = self._rpy_meas.tolist()
+        tau = self._t_s + 0.5 * dt - self._t_imu_s
+        if tau > 0.0:
+            p, q, r = self._rate_meas.tolist()
+            cphi, sphi = math.cos(roll), math.sin(roll)
+            cth, tth = math.cos(pitch), math.tan(pitch)
+            roll, pitch, yaw = (roll + (p + sphi * tth * q + cphi * tth * r) * tau,
+                                pitch + (cphi * q - sphi * r) * tau,
+                                yaw + (sphi / cth * q + cphi / cth * r) * tau)
+        b0, b1, b2, one_s, n0, n1, n2 = x[3:10].tolist()
+        one_s += 1.0
+        vm0, vm1, vm2 = (a - b for a, b in zip(self._vel_dvl_meas.tolist(), (n0, n1, n2)))
+        l0, l1, l2 = self._lever_vel_dvl
+        vb0, vb1, vb2 = vm0 / one_s - l0, vm1 / one_s - l1, vm2 / one_s - l2
+        (r00, r01, r02, r10, r11, r12, r20, r21, r22), J = _rotation_and_jacobian(
+            roll - b0, pitch - b1, yaw - b2, vb0, vb1, vb2)
+        j00, j01, j02, j10, j11, j12, j20, j21, j22 = J
+
+        # F and Q are reused: every entry that varies is written here, the rest stays I or 0
+        F, Q = self._F, self._Q
+        ks, kn = -dt / one_s**2, -dt / one_s
+        F[0:3, 3:10] = [
+            [-j00 * dt, -j01 * dt, -j02 * dt, ks * (r00 * vm0 + r01 * vm1 + r02 * vm2), kn * r00, kn * r01, kn * r02],
+            [-j10 * dt, -j11 * dt, -j12 * dt, ks * (r10 * vm0 + r11 * vm1 + r12 * vm2), kn * r10, kn * r11, kn * r12],
+            [-j20 * dt, -j21 * dt, -j22 * dt, ks * (r20 * vm0 + r21 * vm1 + r22 * vm2), kn * r20, kn * r21, kn * r22]]
+        s0, s1, s2 = (v * dt * dt for v in self._att_noise_var)  # J diag(sigma^2) J^T dt^2
+        q00 = s0 * j00 * j00 + s1 * j01 * j01 + s2 * j02 * j02
+        q01 = s0 * j00 * j10 + s1 * j01 * j11 + s2 * j02 * j12
+        q02 = s0 * j00 * j20 + s1 * j01 * j21 + s2 * j02 * j22
+        q11 = s0 * j10 * j10 + s1 * j11 * j11 + s2 * j12 * j12
+        q12 = s0 * j10 * j20 + s1 * j11 * j21 + s2 * j12 * j22
+        q22 = s0 * j20 * j20 + s1 * j21 * j21 + s2 * j22 * j22
+        Q[0:3, 0:3] = [[q00, q01, q02], [q01, q11, q12], [q02, q12, q22]]
+        Q[5, 5] = self.noise.heading_rw_rad_per_sqrt_s**2 * dt
+        # the held velocity goes stale: an unknown acceleration a ~ N(0, sigma_a^2) over the
+        # age tau of the ping gives var(a tau) = sigma_a^2 tau^2; after lock loss, a random walk
+        age = min(self._t_s - self._t_dvl_valid_s, cfg.dvl_timeout_s)
+        q_vel = cfg.hold_accel_sigma_mps2**2 * (2.0 * age * dt + dt * dt)
+        if self._t_s - self._t_dvl_valid_s > cfg.dvl_timeout_s:
+            q_vel += cfg.dvl_lost_noise_mps_per_sqrt_s**2 * dt
+        Q[7, 7] = Q[8, 8] = Q[9, 9] = q_vel
+
+        vn = r00 * vb0 + r01 * vb1 + r02 * vb2
+        ve = r10 * vb0 + r11 * vb1 + r12 * vb2
+        vd = r20 * vb0 + r21 * vb1 + r22 * vb2
+        if math.isfinite(self._altitude_m):
+            # altitude over the local seabed plane: a_dot = g . v_ne - v_down, h = (g_n, g_e, -1)
+            gn, ge = self._seabed_grad_ne.tolist()
+            h_R = np.array([gn * r00 + ge * r10 - r20, gn * r01 + ge * r11 - r21, gn * r02 + ge * r12 - r22])
+            var_rate = float(h_R @ self._P[DVEL, DVEL] @ h_R) / one_s**2
+            self._altitude_m += (gn * vn + ge * ve - vd) * dt
+            self._altitude_var_m2 += (var_rate * dt * dt
+                                      + SEABED_RELIEF_M_PER_SQRT_M**2 * math.hypot(vn, ve) * dt)
+        x[0] += vn * dt
+        x[1] += ve * dt
+        x[2] += vd * dt
+        self._P = F @ self._P @ F.T + Q
+        self._t_s = float(t_s)
+
+    def _predict_speed_model(self, dt: float) -> None:
+        """:meth:`predict` by ``dt`` (s, > 0) with the speed model's velocity (the clock is
+        advanced by the caller)."""
         x, noise = self._x, self.noise
         if self._speed_model is not None:
             self._vel_dvl_meas = np.array([*self._speed_model.step(dt), 0.0])
@@ -215,7 +313,6 @@ class NavigationFilter:
                                       + SEABED_RELIEF_M_PER_SQRT_M**2 * float(np.hypot(v_ned[0], v_ned[1])) * dt)
         x[POS] += v_ned * dt
         self._P = F @ self._P @ F.T + Q
-        self._t_s = float(t_s)
 
     # ------------------------------------------------------------------ measurements
     def _update(self, residual: FloatArray, H: FloatArray, R_meas: FloatArray, gate_chi2: float | None) -> bool:
@@ -257,6 +354,7 @@ class NavigationFilter:
             used = None
         self._vel_dvl_meas = vel.copy()
         self._omega_at_dvl = self._rate_meas.copy()
+        self._lever_vel_dvl = cross3(self._omega_at_dvl, self._r_dvl).tolist()  # omega x r_dvl, held
         self._x[DVEL] = 0.0
         self._P[DVEL, :] = 0.0
         self._P[:, DVEL] = 0.0

@@ -5,8 +5,9 @@ Variants (each at its default decision interval, one process unless stated):
 * ``waypoint``: ``auvsim/Waypoint-v1``, uniform random actions;
 * ``survey``: ``auvsim/Survey-v1`` without sonar, a slow constant turn (stays in the area);
 * ``survey_sonar``: the same with FLS, ATR, PMHA and the sonar image observation;
-* ``vector``: ``Waypoint-v1`` and ``Survey-v1`` (no sonar) in an ``AsyncVectorEnv`` with
-  one worker per core (2 by default): total env steps per second across workers.
+* ``vector``: ``Waypoint-v1``, ``Survey-v1`` without and with sonar in an ``AsyncVectorEnv``
+  with one worker process per core (2 by default, ``workers``): total env steps per second
+  across workers, and ``speedup``: that over the single env of the same run.
 
 Single-env figures time ``step`` only (resets are reported apart); vector figures
 include the workers' automatic resets. ``profile`` lists, per single-env
@@ -105,11 +106,12 @@ def _profile(env: gym.Env, n_steps: int, top: int = 8) -> list[dict[str, Any]]:
 
 
 def run(scenario: Scenario, *, waypoint_steps: int = 3000, survey_steps: int = 60, sonar_steps: int = 15,
-        n_envs: int | None = None, profile: bool = True) -> dict[str, Any]:
+        workers: int | None = None, profile: bool = True) -> dict[str, Any]:
     """Time every variant on ``scenario``; returns
     ``{"waypoint", "survey", "survey_sonar", "vector", "profile"}`` (each with
-    ``steps_per_s`` and ``real_time_factor``)."""
-    n_envs = n_envs or min(os.cpu_count() or 1, 2)
+    ``steps_per_s`` and ``real_time_factor``); ``workers``: vector-env processes (default:
+    the cores, at most 2)."""
+    n_envs = workers or min(os.cpu_count() or 1, 2)
     wp = WaypointEnv(scenario)
     sv = SurveyEnv(scenario, SurveyEnvOptions(sonar=False))
     sv_sonar = SurveyEnv(scenario, SurveyEnvOptions(sonar=True))
@@ -123,7 +125,11 @@ def run(scenario: Scenario, *, waypoint_steps: int = 3000, survey_steps: int = 6
                                  wp.decision_interval_s, wp.n_act, None),
         "survey": _time_vector(partial(SurveyEnv, scenario, SurveyEnvOptions(sonar=False)), n_envs,
                                survey_steps // n_envs, sv.decision_interval_s, 3, SURVEY_ACTION),
+        "survey_sonar": _time_vector(partial(SurveyEnv, scenario, SurveyEnvOptions(sonar=True)), n_envs,
+                                     max(sonar_steps // n_envs, 2), sv_sonar.decision_interval_s, 3, SURVEY_ACTION),
     }
+    for key, single in (("waypoint", "waypoint"), ("survey", "survey"), ("survey_sonar", "survey_sonar")):
+        result["vector"][key]["speedup"] = (result["vector"][key]["steps_per_s"] / result[single]["steps_per_s"])
     result["vector"].update(steps_per_s=result["vector"]["waypoint"]["steps_per_s"],
                             real_time_factor=result["vector"]["waypoint"]["real_time_factor"])
     if profile:

@@ -1,8 +1,14 @@
 """``auvsim bench mission``: closed-loop mission throughput and where the time goes.
 
-Runs the scenario (sensors at their scenario rates, perception included) for a fixed
-simulated time twice from the same state: once plain for the real-time factor, once with a
-:class:`sim.stage_timer.StageTimer` for the exclusive wall time of each loop stage.
+Runs the scenario (sensors at their scenario rates, perception included unless ``sonar`` is
+off) for a fixed simulated time after a warm-up: once plain for the real-time factor, once with
+a :class:`sim.stage_timer.StageTimer` for the exclusive wall time of each loop stage.
+
+With ``workers`` > 1 a second mission of the same scenario and seed runs the pipelined loop
+(:mod:`sim.sonar_pipeline`); the serial and the pipelined loop are timed in alternating
+segments of the same run, so a busy machine slows both alike, and the figure to read is their
+ratio (``workers_speedup``). CPU time is reported beside wall time (``cpu_real_time_factor``:
+simulated seconds per CPU second of this process, all its threads).
 """
 
 from __future__ import annotations
@@ -12,45 +18,96 @@ from typing import Any
 
 from scenarios.schema import Scenario
 
+SEGMENTS = 4  # alternating timed segments per loop when comparing serial and pipelined
 
-def run(scenario: Scenario, sim_time_s: float = 120.0, warmup_s: float = 30.0) -> dict[str, Any]:
+
+def _segment(mission, n_steps: int) -> tuple[float, float]:
+    """(wall s, process CPU s) of ``n_steps`` steps (pipelined frames finished)."""
+    t0, c0 = time.perf_counter(), time.process_time()
+    for _ in range(n_steps):
+        mission.step()
+    mission.flush()
+    return time.perf_counter() - t0, time.process_time() - c0
+
+
+def run(scenario: Scenario, sim_time_s: float = 120.0, warmup_s: float = 30.0, *, sonar: bool = True,
+        workers: int = 1) -> dict[str, Any]:
     """Mission real-time factor over ``sim_time_s`` after ``warmup_s`` (dive and start), and
-    the time per simulated second of each stage (``stage_ms_per_sim_s``)."""
+    the time per simulated second of each stage (``stage_ms_per_sim_s``).
+
+    Args:
+        scenario: the scenario to fly (its seed).
+        sim_time_s, warmup_s: timed and untimed simulated seconds.
+        sonar: False disables every forward-looking sonar (and so perception).
+        workers: > 1 also times the pipelined loop with that many threads against the serial one.
+
+    Raises:
+        ValueError: ``workers`` < 1.
+    """
     from sim.mission import Mission
     from sim.stage_timer import NULL_TIMER, StageTimer
 
-    timer = StageTimer()
-    mission = Mission(scenario)
-    mission.reset()
-    n_warm = int(round(warmup_s / mission.autonomy_dt_s))
-    n_steps = int(round(sim_time_s / mission.autonomy_dt_s))
-    for _ in range(n_warm):
-        mission.step()
-    frames0 = mission.n_fls_frames
-    t0 = time.perf_counter()
-    for _ in range(n_steps):
-        mission.step()
-    wall = time.perf_counter() - t0
-    frames = mission.n_fls_frames - frames0
+    if workers < 1:
+        raise ValueError(f"workers must be >= 1, got {workers}")
+    if not sonar:
+        sensors = {name: (cfg.model_copy(update={"enabled": False}) if cfg.kind == "fls" else cfg)
+                   for name, cfg in scenario.sensors.root.items()}
+        scenario = scenario.model_copy(update={"sensors": type(scenario.sensors)(sensors)})
+    loops = [Mission(scenario)] + ([Mission(scenario, workers=workers)] if workers > 1 else [])
+    n_warm = int(round(warmup_s / loops[0].autonomy_dt_s))
+    n_steps = int(round(sim_time_s / loops[0].autonomy_dt_s))
+    frames0 = []
+    for mission in loops:
+        mission.reset()
+        for _ in range(n_warm):
+            mission.step()
+        mission.flush()
+        frames0.append(mission.n_fls_frames)
+    wall, cpu = [0.0] * len(loops), [0.0] * len(loops)
+    n_seg = SEGMENTS if len(loops) > 1 else 1
+    for k in range(n_seg):
+        n = n_steps // n_seg + (1 if k < n_steps % n_seg else 0)
+        for i in (range(len(loops)) if k % 2 == 0 else reversed(range(len(loops)))):
+            w, c = _segment(loops[i], n)
+            wall[i] += w
+            cpu[i] += c
+    serial = loops[0]
+    frames = serial.n_fls_frames - frames0[0]
 
-    mission.timer = timer
+    timer = StageTimer()
+    serial.timer = timer
     t0 = time.perf_counter()
     for _ in range(n_steps):
-        mission.step()
+        serial.step()
     timed_wall = time.perf_counter() - t0
-    mission.timer = NULL_TIMER
+    serial.timer = NULL_TIMER
     stages = dict(sorted(timer.seconds.items(), key=lambda kv: -kv[1]))
     fls = scenario.sensors.first_of_kind("fls")
-    return {
+    result: dict[str, Any] = {
         "scenario": scenario.name,
+        "sonar": fls is not None,
         "sim_time_s": sim_time_s,
-        "wall_time_s": wall,
-        "real_time_factor": sim_time_s / wall,
+        "wall_time_s": wall[0],
+        "real_time_factor": sim_time_s / wall[0],
+        "cpu_real_time_factor": sim_time_s / cpu[0],
         "physics_rate_hz": scenario.physics.rate_hz,
         "fls_rate_hz": fls.rate_hz if fls is not None else 0.0,
         "fls_frames": frames,
         "detector": scenario.autonomy.atr.detector,
         "stage_share": {k: round(v / timed_wall, 4) for k, v in stages.items()},
         "stage_ms_per_sim_s": {k: round(1e3 * v / sim_time_s, 2) for k, v in stages.items()},
-        "timer_overhead_share": round(max(timed_wall - wall, 0.0) / wall, 4),
+        "timer_overhead_share": round(max(timed_wall - wall[0], 0.0) / wall[0], 4),
     }
+    if len(loops) > 1:
+        piped = loops[1]
+        result["workers"] = {
+            "workers": workers,
+            "pipelined": piped._pipeline is not None,
+            "real_time_factor": sim_time_s / wall[1],
+            "cpu_real_time_factor": sim_time_s / cpu[1],
+            "serial_real_time_factor": sim_time_s / wall[0],
+            "workers_speedup": wall[0] / wall[1],
+            "fls_frames": piped.n_fls_frames - frames0[1],
+        }
+        piped.close()
+    return result

@@ -14,7 +14,7 @@ import numpy as np
 from autonomy.frames import rot_from_euler
 from scenarios.config.sss import SssConfig
 from scenarios.schema import Scenario
-from sim.bench_fls import _TimedCaster
+from sim.bench.fls import _TimedCaster
 from sim.rng import component_rng
 from sim.sensors.raycast import MujocoRayCaster
 from sim.sensors.sss import SideScanSonar

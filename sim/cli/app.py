@@ -88,19 +88,20 @@ def main(argv: Sequence[str] | None = None) -> int:
     in_main_thread = threading.current_thread() is threading.main_thread()
     previous = signal.signal(signal.SIGTERM, _on_sigterm) if in_main_thread else None
     try:
-        return _dispatch(func, args, debug)
+        return _dispatch(func, args, debug, f"auvsim {args.command}")
     finally:
         if in_main_thread:
             signal.signal(signal.SIGTERM, previous)
 
 
-def _dispatch(func: Callable[[argparse.Namespace], int], args: argparse.Namespace, debug: bool) -> int:
-    """Run the subcommand; map what a user can cause to one line and an exit status."""
+def _dispatch(func: Callable[[argparse.Namespace], int], args: argparse.Namespace, debug: bool, prog: str) -> int:
+    """Run the subcommand; map what a user can cause to one line (``prog: error: ...``) and an
+    exit status."""
     try:
         return int(func(args) or 0)
     except user_error_types() as exc:
         message = " ".join(str(exc).split("\n")[0].split()) if not isinstance(exc, _multi_line_types()) else str(exc)
-        _say(f"auvsim {args.command}: error: {message}")
+        _say(f"{prog}: error: {message}")
         return EXIT_USAGE
     except BrokenPipeError:  # the reader went away (| head): stop quietly
         _silence_stdout()
@@ -110,17 +111,39 @@ def _dispatch(func: Callable[[argparse.Namespace], int], args: argparse.Namespac
             _report_internal_error(exc, debug)
             return EXIT_INTERNAL_ERROR
         where = f"{exc.filename}: " if exc.filename else ""
-        _say(f"auvsim {args.command}: error: {where}{exc.strerror or exc} (nothing was kept from this run)")
+        _say(f"{prog}: error: {where}{exc.strerror or exc} (nothing was kept from this run)")
         return EXIT_USAGE
     except KeyboardInterrupt:
-        _say(f"auvsim {args.command}: interrupted")
+        _say(f"{prog}: interrupted")
         return EXIT_INTERRUPTED
     except Terminated:
-        _say(f"auvsim {args.command}: terminated")
+        _say(f"{prog}: terminated")
         return EXIT_TERMINATED
     except Exception as exc:  # noqa: BLE001 - the last resort that keeps bugs visible
         _report_internal_error(exc, debug)
         return EXIT_INTERNAL_ERROR
+
+
+def script_parser(prog: str, description: str) -> argparse.ArgumentParser:
+    """An argument parser for a study script under ``scripts/`` with the CLI's one-line usage
+    errors (exit status 2)."""
+    return _Parser(prog=prog, description=description)
+
+
+def run_script(parser: argparse.ArgumentParser, func: Callable[[argparse.Namespace], int],
+               argv: Sequence[str] | None = None) -> int:
+    """Parse ``argv`` with ``parser`` (from :func:`script_parser`) and run ``func(args)`` as the
+    CLI runs a subcommand: bad input (a scenario, a key, an output path: the CLI's user error
+    types) is one line and exit status 2, Ctrl-C 130, a bug a short traceback and 1.
+
+    Returns:
+        the exit status.
+    """
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:
+        return int(exc.code or 0)
+    return _dispatch(func, args, os.environ.get(DEBUG_ENV, "") not in ("", "0"), parser.prog)
 
 
 # Failures of the machine, not of auvsim: a full disk, a read-only or vanished folder.

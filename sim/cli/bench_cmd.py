@@ -9,8 +9,12 @@ import json
 
 from scenarios.load import load_scenario
 from sim.bench import BENCHES
-from sim.cli.args import non_negative_int
+from sim.cli.args import non_negative_int, positive_int
+from sim.cli.errors import CliError
 from sim.cli.scenario_cmds import DEFAULT_SCENARIO, add_scenario_args
+
+OPTION_BENCHES = {"workers": ("mission", "gym"), "sonar": ("mission",)}  # benches taking each option
+
 
 def _cmd_bench(args: argparse.Namespace) -> int:
     module_name, func_name, _ = BENCHES[args.name]
@@ -20,10 +24,18 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     scenario = load_scenario(args.scenario, overrides)
     bench = getattr(importlib.import_module(module_name), func_name)
     params = inspect.signature(bench).parameters
+    options = {}
+    for flag, key, value, default in (("--workers", "workers", args.workers, None),
+                                      ("--no-sonar", "sonar", not args.no_sonar, True)):
+        if value == default or (key == "workers" and value is None):
+            continue
+        if key not in params:
+            raise CliError(f"{flag}: only for bench {' and '.join(OPTION_BENCHES[key])}, not {args.name}")
+        options[key] = value
     if "scenario" in params:
-        result = bench(scenario)
+        result = bench(scenario, **options)
     else:
-        result = bench(seed=scenario.seed) if "seed" in params else bench()
+        result = bench(seed=scenario.seed, **options) if "seed" in params else bench(**options)
     if args.json:
         print(json.dumps(result))
     else:
@@ -38,5 +50,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--scenario", default=DEFAULT_SCENARIO, help="scenario name or path")
     p.add_argument("--seed", type=non_negative_int, default=None)
     p.add_argument("--json", action="store_true", help="print one JSON object as the last line")
+    p.add_argument("--workers", type=positive_int, default=None, metavar="N",
+                   help="mission, gym: also time N threads (mission: the pipelined loop) or N vector-env "
+                        "processes (gym) against one, in the same run")
+    p.add_argument("--no-sonar", action="store_true", help="mission: without the forward-looking sonar "
+                                                           "(and so without perception)")
     add_scenario_args(p, positional=False)
     p.set_defaults(func=_cmd_bench)

@@ -34,8 +34,14 @@ def print_summary(metrics: dict, out: str) -> None:
         tr = metrics["tracking"]
         errs = ", ".join(f"{k} {_fmt(v.get('mean_m'), '.2f')} +- {_fmt(v.get('std_m'), '.2f')} m"
                          for k, v in tr["errors"].items())
-        print(f"tracking ({tr['mode']}): {errs}; sonar used in {_fmt(100 * tr['fused_sonar_step_fraction'], '.0f')} % "
+        print(f"tracking ({tr['mode']}; 3-D error, horizontal in metrics.json): {errs}; sonar used in "
+              f"{_fmt(100 * tr['fused_sonar_step_fraction'], '.0f')} % "
               f"of steps; target in view {_fmt(100 * tr['target_in_fov_fraction'], '.0f')} %")
+    if "msis_localization" in metrics:
+        ml = metrics["msis_localization"]
+        print(f"msis localisation: {ml['n_fixes']} sonar position fixes, horizontal RMS error "
+              f"{_fmt(ml.get('rms_fused_m'), '.2f', ' m')} (dead reckoning alone "
+              f"{_fmt(ml.get('rms_dead_reckoning_m'), '.2f', ' m')})")
     print(f"results in {out}")
 
 
@@ -58,7 +64,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     fls_every = args.rosbag_fls_every if args.rosbag_fls_every is not None else scenario.outputs.rosbag_fls_every
     metrics = run_mission(scenario, args.out, nav_source=args.nav, rerun=not args.no_rerun,
                           overwrite=args.overwrite, progress=not args.quiet, rosbag=rosbag,
-                          rosbag_fls_every=fls_every)
+                          rosbag_fls_every=fls_every, score_detections=not args.no_scoring,
+                          workers=args.workers)
     print_summary(metrics, args.out)
     mission = metrics["mission"]
     if mission["aborted"]:
@@ -78,6 +85,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", required=True, help="output folder (new, or an earlier run with --overwrite)")
     p.add_argument("--seed", type=non_negative_int, default=None)
     p.add_argument("--no-rerun", action="store_true", help="skip the rerun recording")
+    p.add_argument("--no-scoring", action="store_true",
+                   help="do not score detections against the sonar ground truth (no precision/recall in metrics.json)")
     p.add_argument("--rosbag", action="store_true",
                    help="also write a ROS 2 bag (rosbag2 folder, MCAP storage) into OUT/rosbag")
     p.add_argument("--rosbag-fls-every", type=positive_int, default=None, metavar="N",
@@ -89,5 +98,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="pose used for target geolocalisation (default: estimate)")
     p.add_argument("--detector", choices=["cnn", "classical", "none"], default=None,
                    help="override autonomy.atr.detector")
+    p.add_argument("--workers", type=positive_int, default=1, metavar="N",
+                   help="threads for the loop (default 1: serial); 2 or more render the sonar and run "
+                        "perception on worker threads while physics and navigation advance (same results)")
     p.add_argument("--quiet", action="store_true", help="no progress display")
     p.set_defaults(func=_cmd_run)

@@ -8,11 +8,15 @@ from sim.cli.args import non_negative_int, positive_int
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
-    from sim.sweep.runner import SweepSpec, parse_overrides, run_sweep
+    from sim.sweep.runner import SweepSpec, parse_grid, parse_overrides, run_grid, run_sweep
 
     spec = SweepSpec(scenario=args.scenario, runs=args.runs, seed=args.seed, overrides=parse_overrides(args.overrides))
-    summary = run_sweep(args.out, spec, workers=args.workers, use_ray=args.ray is not None,
-                        ray_address=args.ray or None, progress=not args.no_progress)
+    kwargs = {"workers": args.workers, "use_ray": args.ray is not None, "ray_address": args.ray or None,
+              "progress": not args.no_progress}
+    if args.grid:
+        summary = run_grid(args.out, spec, parse_grid(args.grid), **kwargs)
+    else:
+        summary = run_sweep(args.out, spec, **kwargs)
     print(f"sweep: wrote {args.out} ({summary['runs']} runs)")
     return 0
 
@@ -28,5 +32,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="run on Ray: a local instance, or the running cluster at ADDRESS")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                    help="scenario override, e.g. --set n_particles=300 (repeatable; values parsed as YAML)")
+    p.add_argument("--grid", action="append", default=[], metavar="KEY=V1,V2|FILE.yaml",
+                   help="parameter grid: every combination runs --runs runs into its own sub-folder "
+                        "(repeatable; or a YAML file mapping keys to value lists)")
     p.add_argument("--no-progress", action="store_true")
     p.set_defaults(func=_cmd_sweep)

@@ -72,6 +72,7 @@ class TrackingEvaluation:
         self.fov_rad, self.window_m, self.vbeam_rad = float(fov_rad), tuple(window_m), float(vertical_beam_rad)
         self.warmup_s, self.match_m = float(warmup_s), float(match_m)
         self.rows: list[tuple[float, ...]] = []  # t, err x3 modes, sonar_avail, fused_sonar, in_fov, distance, horizontal err x3
+        self.primary_est_ned: list[tuple[float, float, float, float]] = []  # t, NED of the primary filter's estimate
         self._poses: dict[int, tuple[FloatArray, FloatArray]] = {}
         self._n_results = 0
         self.n_bubble = self.n_bubble_rejected = self.n_target = self.n_target_kept = 0
@@ -114,6 +115,8 @@ class TrackingEvaluation:
             est = self.stack.trackers[m].estimate(t)
             errs.append(float(np.linalg.norm(est[0][:3] - tgt)) if est is not None else math.nan)
             errs_h.append(float(np.linalg.norm(est[0][:2] - tgt[:2])) if est is not None else math.nan)
+            if m == self.stack.cfg.mode and est is not None:
+                self.primary_est_ned.append((t, *(float(v) for v in est[0][:3])))
         sonar_avail = any(r.chosen["sonar"] is not None for r in results)
         fused_sonar = any(r.chosen["fused"] is not None for r in results)
         r, a, e = self._sonar_polar(tgt, truth.pos_ned, truth.R_nb)[0]
@@ -266,19 +269,20 @@ class TrackingEvaluation:
             ax.plot(a[:, 0], a[:, col], lw=1.0, label=m, color=colour)
         avail = a[:, 4] > 0
         ax.plot(a[avail, 0], a[avail, 1], ".", ms=2, color="tab:red", label="sonar when available")
-        ax.axvline(self.warmup_s, color="0.6", ls=":", lw=0.8)
+        ax.axvline(self.warmup_s, color="0.6", ls=":", lw=0.8, label=f"scored from {self.warmup_s:g} s")
         ax.set_xlabel("time (s)")
-        ax.set_ylabel("position error (m)")
+        ax.set_ylabel("3-D position error (m)")
         ax.set_title(title or "target position error")
         ax.legend(loc="upper right", fontsize=8)
         ax.grid(alpha=0.3)
         fig.tight_layout()
         fig.savefig(error_png, dpi=110)
-        error_boxplot_png(self.error_sets(), box_png, title or "error sets")
+        error_boxplot_png(self.error_sets(), box_png, title or "error sets", ylabel="3-D position error (m)")
 
 
-def error_boxplot_png(sets: dict[str, FloatArray], path: Path, title: str) -> None:
-    """Box plot (PNG) of the four error sets (m), as paper 004 fig. 8 (whiskers 1.5 IQR, no fliers)."""
+def error_boxplot_png(sets: dict[str, FloatArray], path: Path, title: str, ylabel: str = "position error (m)") -> None:
+    """Box plot (PNG) of the four error sets (m), as paper 004 fig. 8 (whiskers 1.5 IQR, no fliers);
+    ``ylabel`` says which error (3-D or horizontal)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -287,7 +291,7 @@ def error_boxplot_png(sets: dict[str, FloatArray], path: Path, title: str) -> No
     ax = fig.add_subplot()
     ax.boxplot([sets[k] if sets[k].size else [np.nan] for k in ERROR_SETS], showfliers=False)
     ax.set_xticks(range(1, 5), ["sonar", "sonar when\navailable", "USBL", "fused"])
-    ax.set_ylabel("position error (m)")
+    ax.set_ylabel(ylabel)
     ax.set_title(title)
     ax.grid(alpha=0.3, axis="y")
     fig.tight_layout()

@@ -17,7 +17,9 @@ import numpy as np
 
 from scenarios.schema import Scenario
 from sim.outputs.map_plot import plot_map
+from sim.evaluation.detection_scoring import DetectionScorer
 from sim.mission import Mission
+from sim.movers import BUBBLE_CLASS
 from sim.outputs.progress import MissionProgress
 from sim.outputs.run_dir import StagedOutput, check_output_dir
 from sim.outputs.trajectory_log import TrajectoryLog
@@ -55,9 +57,12 @@ def write_json(path: Path, data: Any, decimals: int | None = None) -> None:
 def planned_length_s(mission: Mission) -> float:
     """Planned mission length, s: start delay plus the survey path at the survey speed.
 
-    Used as the 100 % of the progress display; capped by the scenario's duration.
+    Used as the 100 % of the progress display; capped by the scenario's duration (a buddy
+    mission, which flies no survey: the duration).
     """
     scn = mission.scenario
+    if scn.autonomy.guidance.buddy.enabled:  # no survey plan: the mission runs to duration_s
+        return float(scn.duration_s)
     survey = scn.autonomy.guidance.survey
     wps = np.asarray(mission.waypoints_ne, dtype=float).reshape(-1, 2)
     start = np.asarray(scn.vehicle.initial_pos_ned[:2], dtype=float)
@@ -68,8 +73,9 @@ def planned_length_s(mission: Mission) -> float:
     return float(min(planned, scn.duration_s))
 
 
-def collect_metrics(mission: Mission, log: TrajectoryLog) -> dict[str, Any]:
-    """The figures of a finished mission (navigation, detections, world model)."""
+def collect_metrics(mission: Mission, log: TrajectoryLog, scorer: DetectionScorer | None = None) -> dict[str, Any]:
+    """The figures of a finished mission (navigation, detections as ``scorer`` counted them,
+    world model)."""
     s = mission.summary()
     metrics: dict[str, Any] = {
         "scenario": mission.scenario.name,
@@ -85,7 +91,8 @@ def collect_metrics(mission: Mission, log: TrajectoryLog) -> dict[str, Any]:
         "perception": {"fls_frames": mission.n_fls_frames},
     }
     if mission.perception is not None:
-        metrics["perception"].update(mission.perception.detection_metrics())
+        if scorer is not None:
+            metrics["perception"].update(scorer.metrics())
         wm = mission.perception.world_model_metrics()
         n_all = len(mission.perception.world_objects())
         n_targets = n_all - int(wm.get("objects_not_target", 0))
@@ -98,13 +105,50 @@ def collect_metrics(mission: Mission, log: TrajectoryLog) -> dict[str, Any]:
     return metrics
 
 
-def _outcome_suffix(metrics: dict[str, Any]) -> str:
+def _outcome_suffix(metrics: dict[str, Any], runs_to_duration: bool = False) -> str:
+    """Second title line: aborted, or not finished (not for a mission that runs to
+    ``duration_s`` by design, such as target tracking)."""
     m = metrics["mission"]
     if m["aborted"]:
         return f"\nABORTED at {metrics['sim_time_s']:.0f} s: {m['abort_reason']}"
-    if not m["finished"]:
+    if not m["finished"] and not runs_to_duration:
         return f"\nnot finished: stopped at duration_s ({metrics['sim_time_s']:.0f} s)"
     return ""
+
+
+def map_layers(mission: Mission, tracking: Any, sim_time_s: float, overlay=None,
+               extent: np.ndarray | None = None) -> dict[str, Any]:
+    """The scene layers of ``map.png`` (keyword arguments of :func:`sim.outputs.map_plot.plot_map`):
+    ``waypoints_ne`` (None for a buddy mission, which does not fly the survey plan),
+    ``targets`` (fixed objects; movers are drawn as their true paths over ``sim_time_s`` with
+    the tracker's estimate, :mod:`sim.outputs.tracking_overlay`, and bubble scatterers not at
+    all), ``overlay`` (``overlay`` given, e.g. a scanning sonar's, then the movers') and
+    ``extent_points_ne``.
+
+    Args:
+        mission: the finished mission; tracking: its :class:`TrackingEvaluation` or None.
+    """
+    scenario = mission.scenario
+    movers = {m.name for m in scenario.world.movers}
+    objects = [(o.name, o.centroid_ned, o.is_target) for o in mission.world.objects
+               if o.name not in movers and o.class_name != BUBBLE_CLASS]
+    draws, extents = [overlay] if overlay is not None else [], [extent] if extent is not None else []
+    if movers:
+        from sim.outputs.tracking_overlay import extent_points_ne, mover_paths_ned, tracking_overlay
+
+        paths = mover_paths_ned(mission.physics.movers, sim_time_s)
+        est = np.array(tracking.primary_est_ned, dtype=float).reshape(-1, 4)[:, 1:] if tracking is not None else None
+        draws.append(tracking_overlay(paths, est, f"tracker estimate ({scenario.autonomy.tracking.mode})"))
+        extents.append(extent_points_ne(paths, est))
+
+    def draw_all(ax) -> None:
+        for draw in draws:
+            draw(ax)
+
+    return {"waypoints_ne": None if scenario.autonomy.guidance.buddy.enabled else mission.waypoints_ne,
+            "targets": objects, "overlay": draw_all if draws else None,
+            "extent_points_ne": np.concatenate([np.asarray(e, dtype=float).reshape(-1, 2) for e in extents])
+            if extents else None}
 
 
 class _ProgressObserver:
@@ -129,13 +173,17 @@ class _ProgressObserver:
 def run_mission(
     scenario: Scenario, out: str | Path, *, nav_source: str = "estimate", rerun: bool = True,
     progress: bool = True, overwrite: bool = False, rosbag: bool | None = None, rosbag_fls_every: int | None = None,
+    score_detections: bool = True, workers: int = 1,
 ) -> dict[str, Any]:
     """Run ``scenario`` and write metrics.json, trajectory.csv, world_model.json, map.png
     (with target tracking also tracking_error.png and tracking_boxplot.png, and the
     trackers' figures under ``tracking`` in metrics.json; and recording.rrd; with ``rosbag``, a
     ROS 2 bag folder ``rosbag/`` in MCAP storage, :class:`sim.ros2bag.recorder.RosbagRecorder`,
     every ``rosbag_fls_every``-th sonar frame; None takes the scenario's ``outputs.rosbag`` /
-    ``outputs.rosbag_fls_every``) into ``out``. Returns the metrics.
+    ``outputs.rosbag_fls_every``) into ``out``. ``score_detections``: score the ATR against the
+    frames' ground truth (:class:`sim.evaluation.detection_scoring.DetectionScorer`; its figures
+    go under ``perception`` in metrics.json). ``workers`` > 1 pipelines the sonar and its
+    perception on worker threads (:class:`sim.mission.Mission`; same outputs). Returns the metrics.
 
     Raises:
         OutputDirError: ``out`` is protected, a file, not creatable, or holds files that
@@ -147,10 +195,13 @@ def run_mission(
     with staged as partial:
         log = TrajectoryLog()
         observers: list[Any] = [log]
+        scorer = DetectionScorer("", scenario.autonomy.atr.detector) if score_detections else None
+        if scorer is not None:
+            observers.append(scorer)  # before the recorder, which colours detections by it
         if rerun:
             from sim.outputs.rerun_recording import RerunRecorder
 
-            observers.append(RerunRecorder(partial / "recording.rrd"))
+            observers.append(RerunRecorder(partial / "recording.rrd", scorer=scorer))
         if rosbag is None:
             rosbag = scenario.outputs.rosbag
         if rosbag_fls_every is None:
@@ -159,7 +210,13 @@ def run_mission(
             from sim.ros2bag.recorder import RosbagRecorder
 
             observers.append(RosbagRecorder(partial / "rosbag", fls_every=rosbag_fls_every))
-        mission = Mission(scenario, nav_source=nav_source, observers=observers)
+        mission = Mission(scenario, nav_source=nav_source, observers=observers, workers=workers)
+        if scorer is not None:
+            if mission.perception is None:
+                mission.observers.remove(scorer)
+                scorer = None
+            else:
+                scorer.sonar_name = mission.fls.name
         msis = next(iter(p for p in mission.parts.processors.values() if hasattr(p, "localizer")), None)
         if msis is not None:
             from sim.msis_evaluation import LocalizationErrorObserver
@@ -175,9 +232,12 @@ def run_mission(
             tracking = evaluation_for(mission)
             mission.observers.append(tracking)
         mission.reset()
-        mission.run(progress=False)
+        try:
+            mission.run(progress=False)
+        finally:
+            mission.close()
 
-        metrics = collect_metrics(mission, log)
+        metrics = collect_metrics(mission, log, scorer)
         overlay = extent = None
         if msis is not None and msis_obs.err_fused_m:
             from sim.outputs.msis_overlay import basin_outline_ne, msis_overlay
@@ -186,6 +246,7 @@ def run_mission(
             overlay = msis_overlay(msis_obs, scenario.world.basin, msis.localizer)
             extent = basin_outline_ne(scenario.world.basin)
         log.write_csv(partial / "trajectory.csv")
+        layers = map_layers(mission, tracking, metrics["sim_time_s"], overlay, extent)
         estimates, rejected = [], []
         if mission.perception is not None:
             write_json(partial / "world_model.json", mission.perception.world_model_json())
@@ -195,11 +256,10 @@ def run_mission(
             rejected = [o.pos_ned for o in mission.perception.world_objects() if o.id not in target_ids]
         plot_map(
             partial / "map.png",
-            true_pos_ned=log.true_pos_ned, est_pos_ned=log.est_pos_ned, waypoints_ne=mission.waypoints_ne,
-            targets=[(o.name, o.centroid_ned, o.is_target) for o in mission.world.objects],
-            estimates=estimates, rejected_ned=rejected,
-            title=f"{scenario.name} seed {mission.seed} (nav: {nav_source})" + _outcome_suffix(metrics),
-            overlay=overlay, extent_points_ne=extent,
+            true_pos_ned=log.true_pos_ned, est_pos_ned=log.est_pos_ned, estimates=estimates, rejected_ned=rejected,
+            title=(f"{scenario.name} seed {mission.seed} (nav: {nav_source})"
+                   + _outcome_suffix(metrics, runs_to_duration=tracking is not None)),
+            **layers,
         )
         if tracking is not None:
             metrics["tracking"] = tracking.metrics()

@@ -57,13 +57,17 @@ class RerunRecorder:
         msis_max_points: at most this many (max-pooled) bins per ping.
         msis_image_every: re-log the scan image every n-th ping.
         msis_image_px: side of the logged scan image, px.
+        scorer: a :class:`sim.evaluation.detection_scoring.DetectionScorer` placed before this
+            recorder among the observers: detections are coloured true (green) or false (red)
+            by it; without one they are drawn in one neutral colour.
     """
 
     def __init__(self, path: Path, *, fls_every: int = 1, fls_scale: float = 0.5, path_every_s: float = 2.0,
                  msis_point_threshold: int = 80, msis_max_points: int = 200, msis_image_every: int = 10,
-                 msis_image_px: int = 256) -> None:
+                 msis_image_px: int = 256, scorer=None) -> None:
         import rerun as rr
 
+        self.scorer = scorer
         self._rr = rr
         self.path = Path(path)
         self.fls_every = max(int(fls_every), 1)
@@ -241,9 +245,16 @@ class RerunRecorder:
             rec.log("sonar/fan/detections", rr.Boxes2D(
                 array=np.array([d.box_xyxy_px for d in res.detections]) * s, array_format=rr.Box2DFormat.XYXY,
                 labels=[f"{d.class_name} {d.score:.2f}" for d in res.detections],
-                colors=[[40, 220, 40] if ok_ else [230, 40, 40] for ok_ in res.true_detection]))
+                colors=self._detection_colours(len(res.detections))))
         else:
             rec.log("sonar/fan/detections", rr.Clear(recursive=False))
+
+    def _detection_colours(self, n: int) -> list[list[int]]:
+        """Green/red by the scorer's verdict on the latest frame; amber without a scorer."""
+        verdict = self.scorer.last_true_detection if self.scorer is not None else ()
+        if len(verdict) != n:
+            return [[240, 170, 30]] * n
+        return [[40, 220, 40] if ok_ else [230, 40, 40] for ok_ in verdict]
 
     def _on_tracking(self, res: TrackingFrameResult) -> None:
         """ROI outlines and the clusters of a processed frame, on its fan image."""

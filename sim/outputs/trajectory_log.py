@@ -1,8 +1,10 @@
-"""Trajectory log: collects step records into arrays and writes ``trajectory.csv``."""
+"""Trajectory log: collects step records in float64 blocks (spooled to a temporary file) and writes
+``trajectory.csv``."""
 
 from __future__ import annotations
 
 import csv
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -24,29 +26,56 @@ COLUMNS = (
 
 
 class TrajectoryLog:
-    """Observer keeping the whole trajectory in memory (a few MB for an hour at 10 Hz)."""
+    """Observer logging the trajectory at the autonomy rate, with memory flat over the mission.
 
-    def __init__(self) -> None:
-        self._rows: list[list[float]] = []
-        self._modes: list[str] = []
-        self._thrusters: list[NDArray] = []
+    Each step is one float64 row (the numeric :data:`COLUMNS`, a mode code, the thruster
+    commands) in a block of ``block_rows`` rows; full blocks are appended to an unnamed
+    temporary file (``spool_dir``, default the system's temporary folder), so a 24 h
+    mission at 10 Hz keeps about 1.4 MB in memory and spools about 300 MB to disk. Columns and
+    ``trajectory.csv`` are read back block by block.
+    """
+
+    def __init__(self, *, block_rows: int = 4096, spool_dir: str | Path | None = None) -> None:
+        self.block_rows = int(block_rows)
+        self._spool_dir = spool_dir
+        self._spool: Any = None  # temporary file of full blocks (created at the first one)
+        self._n_spooled = 0
+        self._block: NDArray[np.float64] | None = None
+        self._n_block = 0
+        self._width = 0
+        self._mode_names: list[str] = []
+        self._mode_code: dict[str, int] = {}
 
     def on_start(self, info: MissionInfo) -> None:
-        self._rows.clear()
-        self._modes.clear()
-        self._thrusters.clear()
+        if self._spool is not None:
+            self._spool.close()
+        self._spool, self._n_spooled, self._block, self._n_block = None, 0, None, 0
+        self._mode_names.clear()
+        self._mode_code.clear()
 
     def on_step(self, r: StepRecord) -> None:
         tr, nav = r.truth, r.nav
-        self._modes.append(r.mode)
-        self._thrusters.append(np.asarray(r.thruster_cmd, dtype=float))
-        self._rows.append(
-            [r.t_s, *tr.pos_ned, *tr.rpy_rad, *tr.nu[:3], tr.nu[5],
-             *nav.pos_ned, *nav.rpy_rad, *nav.vel_body_mps,
-             *np.diag(nav.cov_pos_ned),
-             r.setpoint_speed_mps, r.setpoint_heading_rad, r.setpoint_altitude_m, r.setpoint_depth_m,
-             *r.wrench_body]
-        )
+        if self._block is None:
+            self._width = len(COLUMNS) + len(r.thruster_cmd)  # numeric columns, mode code, thrusters
+            self._block = np.empty((self.block_rows, self._width))
+        code = self._mode_code.get(r.mode)
+        if code is None:
+            code = self._mode_code[r.mode] = len(self._mode_names)
+            self._mode_names.append(r.mode)
+        cov = nav.cov_pos_ned
+        self._block[self._n_block] = (
+            r.t_s, *tr.pos_ned.tolist(), *tr.rpy_rad.tolist(), *tr.nu[:3].tolist(), float(tr.nu[5]),
+            *nav.pos_ned.tolist(), *nav.rpy_rad.tolist(), *nav.vel_body_mps.tolist(),
+            float(cov[0, 0]), float(cov[1, 1]), float(cov[2, 2]),
+            r.setpoint_speed_mps, r.setpoint_heading_rad, r.setpoint_altitude_m, r.setpoint_depth_m,
+            *r.wrench_body.tolist(), code, *np.asarray(r.thruster_cmd, dtype=float).tolist())
+        self._n_block += 1
+        if self._n_block == self.block_rows:
+            if self._spool is None:
+                self._spool = tempfile.TemporaryFile(prefix="auvsim-trajectory-", dir=self._spool_dir)
+            self._spool.write(self._block.tobytes())
+            self._n_spooled += self.block_rows
+            self._n_block = 0
 
     def on_message(self, name: str, msg: Any) -> None:
         pass
@@ -54,15 +83,40 @@ class TrajectoryLog:
     def on_end(self, summary: MissionSummary) -> None:
         pass
 
+    def __len__(self) -> int:
+        """Rows logged."""
+        return self._n_spooled + self._n_block
+
+    def _blocks(self, max_rows: int = 65536):
+        """The logged rows in order, as (k, width) float64 arrays of at most ``max_rows``."""
+        if self._n_spooled:
+            self._spool.flush()
+            self._spool.seek(0)
+            left = self._n_spooled
+            while left:
+                k = min(left, max_rows)
+                yield np.frombuffer(self._spool.read(k * self._width * 8)).reshape(k, self._width)
+                left -= k
+            self._spool.seek(0, 2)
+        if self._n_block:
+            yield self._block[:self._n_block]
+
+    def _columns(self, index: int | slice) -> NDArray[np.float64]:
+        parts = [b[:, index] for b in self._blocks()]
+        if not parts:
+            return np.zeros((0,) if isinstance(index, int) else (0, len(range(self._width)[index])))
+        return np.concatenate(parts).copy()
+
     # -- derived quantities --------------------------------------------------------
     @property
     def table(self) -> NDArray[np.float64]:
         """(n, len(COLUMNS) - 1) numeric table (mode column excluded)."""
-        return np.asarray(self._rows, dtype=float).reshape(-1, len(COLUMNS) - 1)
+        return self._columns(slice(0, len(COLUMNS) - 1))
 
     def column(self, name: str) -> NDArray[np.float64]:
+        """(n,) values of the numeric column ``name`` of :data:`COLUMNS`."""
         idx = COLUMNS.index(name)
-        return self.table[:, idx if idx == 0 else idx - 1]
+        return self._columns(idx if idx == 0 else idx - 1)
 
     @property
     def t_s(self) -> NDArray[np.float64]:
@@ -84,7 +138,7 @@ class TrajectoryLog:
         return np.linalg.norm(self.true_pos_ned[:, :2] - self.est_pos_ned[:, :2], axis=1)
 
     def navigation_metrics(self) -> dict[str, float]:
-        if not self._rows:
+        if not len(self):
             return {"final_position_error_m": float("nan"), "max_position_error_m": float("nan"),
                     "drift_percent_of_distance": float("nan")}
         err = np.linalg.norm(self.true_pos_ned - self.est_pos_ned, axis=1)
@@ -99,10 +153,15 @@ class TrajectoryLog:
         }
 
     def write_csv(self, path: Path) -> None:
-        n_thr = len(self._thrusters[0]) if self._thrusters else 0
+        """``trajectory.csv``: the header of :data:`COLUMNS` and ``thruster_<i>``, one row a step."""
+        n_num = len(COLUMNS) - 1
+        n_thr = self._width - len(COLUMNS) if len(self) else 0
         header = COLUMNS + [f"thruster_{i}" for i in range(n_thr)]
+        names = self._mode_names
         with open(path, "w", newline="") as fh:
             w = csv.writer(fh)
             w.writerow(header)
-            for row, mode, thr in zip(self._rows, self._modes, self._thrusters):
-                w.writerow([f"{row[0]:.3f}", mode, *(f"{v:.6g}" for v in row[1:]), *(f"{v:.4f}" for v in thr)])
+            for block in self._blocks():
+                for row in block.tolist():
+                    w.writerow([f"{row[0]:.3f}", names[int(row[n_num])], *(f"{v:.6g}" for v in row[1:n_num]),
+                                *(f"{v:.4f}" for v in row[n_num + 1:])])

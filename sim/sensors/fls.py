@@ -165,7 +165,9 @@ class FlsSensor(Sensor[FlsRender]):
         origin = np.asarray(pos_ned, dtype=float).reshape(3)
         R_ns = np.asarray(R_nb, dtype=float) @ self.R_bs
         base_rays, _ = self.rays.cast(caster, origin, R_ns, g.range_max_m)
-        sampled, owner, pairs = self._add_object_rays(base_rays, caster, origin, R_ns, objects)
+        spheres = ({int(o.id): caster.object_bounding_sphere(int(o.id)) for o in objects}
+                   if objects and hasattr(caster, "object_bounding_sphere") else None)
+        sampled, owner, pairs = self._add_object_rays(base_rays, caster, origin, R_ns, objects, spheres)
         rays, segments = self.rays.refine_edges(caster, origin, R_ns, sampled, g.range_max_m, g.window_far_m,
                                                 cfg.edge_refine_iters, pairs)
         strength = ray_strength(rays, cfg.scattering_exponent, g.vertical_beamwidth_rad,
@@ -182,9 +184,7 @@ class FlsSensor(Sensor[FlsRender]):
         polar_u8 = self.echo.display(intensity)
         fan_u8 = self._remap.image(polar_u8)
 
-        in_win = (sampled.dist >= g.window_near_m) & (sampled.dist <= g.window_far_m)
-        objs = tuple(self._object_truth(o, origin, R_ns, sampled, owner, in_win, extents.get(int(o.id)), caster)
-                     for o in objects)
+        objs = self._objects_truth(objects, origin, R_ns, sampled, owner, extents, caster, spheres)
         frame = FlsFrame(t_s=float(t_s), polar=polar_u8, fan=fan_u8, geometry=self.fan_geometry,
                          mount_pos_body_m=self.mount_pos_body_m.copy(), mount_rpy_rad=self.mount_rpy_rad.copy())
         truth = SonarGroundTruth(t_s=float(t_s), mask_polar=mask, objects=objs, pos_ned=origin.copy(), R_ns=R_ns,
@@ -193,33 +193,52 @@ class FlsSensor(Sensor[FlsRender]):
 
     # -- internals --------------------------------------------------------------------------
     def _add_object_rays(self, base: RayTable, caster: RayCaster, origin: FloatArray, R_ns: FloatArray,
-                         objects: Sequence[SceneObjectLike]
+                         objects: Sequence[SceneObjectLike], spheres: dict[int, tuple[FloatArray, float]] | None = None
                          ) -> tuple[RayTable, NDArray[np.int64], tuple[NDArray[np.intp], NDArray[np.intp]] | None]:
         """Finer rays over objects the base rays sample coarsely
         (:func:`sim.sensors.sonar.object_rays.add_object_rays` over the range window)."""
         g = self.geometry
         return add_object_rays(self.rays, base, caster, origin, R_ns, objects, g.window_near_m, g.window_far_m,
-                               g.range_max_m, OBJECT_RAYS_ACROSS, OBJECT_RAYS_SPAN_LIMIT)
+                               g.range_max_m, OBJECT_RAYS_ACROSS, OBJECT_RAYS_SPAN_LIMIT, spheres=spheres)
 
-    def _object_truth(self, obj: SceneObjectLike, origin: FloatArray, R_ns: FloatArray, sampled: RayTable,
-                      owner: NDArray[np.int64], in_win: NDArray[np.bool_],
-                      extent: tuple[int, int, int, int] | None, caster: RayCaster) -> SonarObjectTruth:
-        """Truth record of ``obj`` from the sampled rays (``owner``: the object whose sphere each
-        samples, -1 for base rays, -2 for sub-column rays at base elevations; ``in_win``: the hit
-        lies in the range window). The object is counted on the base rays and on the rays of its
-        own sphere only: two even samplings of its cone, whatever other objects were refined."""
+    def _objects_truth(self, objects: Sequence[SceneObjectLike], origin: FloatArray, R_ns: FloatArray,
+                       sampled: RayTable, owner: NDArray[np.int64], extents: dict[int, tuple[int, int, int, int]],
+                       caster: RayCaster, spheres: dict[int, tuple[FloatArray, float]] | None
+                       ) -> tuple[SonarObjectTruth, ...]:
+        """Truth records of ``objects`` from the sampled rays (``owner``: the object whose sphere
+        each samples, -1 for base rays, -2 for sub-column rays at base elevations; ``extents``:
+        :func:`label_bins`'s; ``spheres``: the caster's bounding spheres, if it has them). An
+        object is counted on the base rays and on the rays of its own sphere only: two even
+        samplings of its cone, whatever other objects were refined."""
+        if not objects:
+            return ()
+        g = self.geometry
+        in_win = (sampled.dist >= g.window_near_m) & (sampled.dist <= g.window_far_m)
+        first_obj = sampled.obj
+        # rays that count for the object they hit first: in the window, a base ray or one of its sphere
+        counted = in_win & (first_obj >= 0) & ((owner < 0) | (owner == first_obj))
+        hits_per_id = np.bincount(first_obj[counted])
+        base_only = not np.any(owner >= 0)
+        out = []
+        for obj in objects:
+            k = int(obj.id)
+            n_hit = int(hits_per_id[k]) if 0 <= k < len(hits_per_id) else 0
+            rows = None if base_only else (owner < 0) | (owner == k)
+            frac = visible_fraction(caster, k, origin, sampled.dirs, first_obj, n_hit, g.window_near_m,
+                                    g.window_far_m, g.range_max_m, self._ray_spacing_rad, rows=rows,
+                                    sphere=None if spheres is None else spheres[k])
+            out.append(self._object_truth(obj, origin, R_ns, n_hit, frac, extents.get(k)))
+        return tuple(out)
+
+    def _object_truth(self, obj: SceneObjectLike, origin: FloatArray, R_ns: FloatArray, n_hit: int, frac: float,
+                      extent: tuple[int, int, int, int] | None) -> SonarObjectTruth:
+        """Truth record of ``obj`` given its first-hit ray count and visible fraction."""
         g = self.geometry
         k = int(obj.id)
-        own = (owner < 0) | (owner == k)
-        first_obj = sampled.obj[own]
-        n_hit = int(np.count_nonzero((first_obj == k) & in_win[own]))
-        dirs = sampled.dirs[own]
         pos = np.asarray(obj.centroid_ned, dtype=float)
         rng_m, az, el = centroid_polar(pos, origin, R_ns)
         in_fov = bool(abs(az) <= 0.5 * g.fov_rad and abs(el) <= 0.5 * g.vertical_beamwidth_rad
                       and g.window_near_m <= rng_m <= g.window_far_m)
-        frac = visible_fraction(caster, k, origin, dirs, first_obj, n_hit, g.window_near_m, g.window_far_m,
-                                g.range_max_m, self._ray_spacing_rad)
         bbox = bbox_polar = None
         if extent is not None:
             c0, c1, k0, k1 = extent

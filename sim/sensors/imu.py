@@ -42,6 +42,9 @@ class ImuSensor(Sensor[ImuMsg]):
             raise ValueError(f"sensors.{self.name}: an IMU rotated w.r.t. the body is not modelled (mount_rpy_deg)")
         rp_noise = math.radians(cfg.roll_pitch_noise_deg)
         self._attitude_noise_rad = np.array([rp_noise, rp_noise, cfg.heading_noise_rad])
+        # (3, 3) white-noise sigmas, rows: attitude (rad), rate (rad/s), specific force (m/s^2)
+        self._white_sigma = np.array([self._attitude_noise_rad, np.full(3, math.radians(cfg.gyro_noise_dps)),
+                                      np.full(3, cfg.accel_noise_mps2)])
 
     def reset(self, rng: np.random.Generator) -> None:
         super().reset(rng)
@@ -55,19 +58,21 @@ class ImuSensor(Sensor[ImuMsg]):
 
     def ideal(self, truth: VehicleTruth, scene: SceneView) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
         """(t_s, rpy_rad (3,), rate_body_radps (3,), specific force FRD (3,)), yaw unwrapped."""
-        specific_force = truth.point_accel_body(self.mount.pos_body_m) - truth.R_nb.T @ GRAVITY_NED_MPS2
+        # R_nb^T g_ned = g * (third row of R_nb): g_ned is along NED z
+        specific_force = truth.point_accel_body(self.mount.pos_body_m) - GRAVITY_MPS2 * truth.R_nb[2]
         return truth.t_s, np.array(truth.rpy_rad, dtype=float), np.array(truth.nu[3:], dtype=float), specific_force
 
     def exact(self, ideal: tuple[float, np.ndarray, np.ndarray, np.ndarray]) -> ImuMsg:
         t_s, rpy, rate, specific_force = ideal
-        rpy[2] = float(wrap_angle(rpy[2]))
+        rpy[2] = wrap_angle(float(rpy[2]))
         return ImuMsg(t_s=t_s, rpy_rad=rpy, rate_body_radps=rate, accel_body_mps2=specific_force)
 
     def corrupt(self, ideal: tuple[float, np.ndarray, np.ndarray, np.ndarray], truth: VehicleTruth) -> ImuMsg:
         t_s, rpy, rate, specific_force = ideal
-        rpy = rpy + self._attitude_bias.at(t_s) + white_noise(self._rng, self._attitude_noise_rad)
-        rate = rate + self._gyro_bias_radps + white_noise(self._rng, np.full(3, math.radians(self.cfg.gyro_noise_dps)))
-        specific_force = (
-            specific_force + self._accel_bias_mps2 + white_noise(self._rng, np.full(3, self.cfg.accel_noise_mps2))
-        )
+        bias_rpy = self._attitude_bias.at(t_s)
+        # one draw for the white noise of the three outputs: attitude, rate, specific force
+        w = self._rng.standard_normal(9).reshape(3, 3) * self._white_sigma
+        rpy = rpy + bias_rpy + w[0]
+        rate = rate + self._gyro_bias_radps + w[1]
+        specific_force = specific_force + self._accel_bias_mps2 + w[2]
         return self.exact((t_s, rpy, rate, specific_force))

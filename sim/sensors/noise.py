@@ -6,6 +6,8 @@ noise depends only on the root seed and the sensor's name.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -45,6 +47,7 @@ class RandomWalkBias:
         if np.any(sigma0 < 0.0) or np.any(self._rw < 0.0):
             raise ValueError("RandomWalkBias: sigmas must be non-negative")
         self._value = white_noise(rng, sigma0)
+        self._walks = bool(np.any(self._rw > 0.0))
         self._t_s: float | None = None
 
     def at(self, t_s: float) -> FloatArray:
@@ -53,7 +56,7 @@ class RandomWalkBias:
             dt = t_s - self._t_s
             if dt < 0.0:
                 raise ValueError(f"RandomWalkBias queried at t={t_s} s before previous t={self._t_s} s")
-            if dt > 0.0 and np.any(self._rw > 0.0):
-                self._value = self._value + white_noise(self._rng, self._rw * np.sqrt(dt))
+            if dt > 0.0 and self._walks:
+                self._value = self._value + white_noise(self._rng, self._rw * math.sqrt(dt))
         self._t_s = float(t_s)
         return self._value.copy()

@@ -106,6 +106,8 @@ def test_run_command_writes_all_outputs(tmp_path):
     assert metrics["seed"] == 1 and metrics["sim_time_s"] == pytest.approx(40.0, abs=0.2)
     assert set(metrics["navigation"]) >= {"final_position_error_m", "max_position_error_m", "drift_percent_of_distance"}
     assert metrics["perception"]["fls_frames"] >= 100
+    # the scoring observer (on by default) counted the detections
+    assert {"detections", "true_detections", "false_detections", "precision"} <= set(metrics["perception"])
     assert {"objects", "matched", "missed", "false", "mean_position_error_m", "gospa"} <= set(metrics["world_model"])
     rows = (out / "trajectory.csv").read_text().splitlines()
     assert len(rows) == 1 + 1 + 400 and rows[0].startswith("t_s,mode,true_n_m")  # header, reset, 400 ticks

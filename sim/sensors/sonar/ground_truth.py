@@ -156,7 +156,8 @@ def centroid_polar(centroid_ned: FloatArray, origin_ned: FloatArray, R_ns: Float
 
 def visible_fraction(caster: RayCaster, object_id: int, origin_ned: FloatArray, dirs_ned: FloatArray,
                      first_obj: NDArray[np.int64], n_hit: int, window_near_m: float, window_far_m: float,
-                     max_range_m: float, ray_spacing_rad: float) -> float:
+                     max_range_m: float, ray_spacing_rad: float, *, rows: NDArray[np.bool_] | None = None,
+                     sphere: tuple[FloatArray, float] | None = None) -> float:
     """Fraction of object ``object_id`` that the rays see unoccluded.
 
     Args:
@@ -170,6 +171,9 @@ def visible_fraction(caster: RayCaster, object_id: int, origin_ned: FloatArray, 
         window_near_m, window_far_m: the range window (m).
         max_range_m: cast range (m).
         ray_spacing_rad: angular ray spacing; the object's bounding cone is widened by it.
+        rows: (N,) the rays to count (default all), so a caller need not copy a subset out.
+        sphere: the object's bounding sphere (centre (3,) NED m, radius m) if already known
+            (default: asked of the caster).
 
     Returns:
         ``n_hit / (rays that hit the object alone inside the window)`` in [0, 1]; 0 when no ray
@@ -179,7 +183,7 @@ def visible_fraction(caster: RayCaster, object_id: int, origin_ned: FloatArray, 
         return float("nan")
     if n_hit == 0:
         return 0.0  # no first hit in the window: 0 whatever the isolated count
-    centre, radius = caster.object_bounding_sphere(object_id)
+    centre, radius = caster.object_bounding_sphere(object_id) if sphere is None else sphere
     v = np.asarray(centre, dtype=float) - origin_ned
     dist_c = float(np.linalg.norm(v))
     n_alone = 0
@@ -191,6 +195,8 @@ def visible_fraction(caster: RayCaster, object_id: int, origin_ned: FloatArray, 
             cand = dirs_ned @ (v / dist_c) >= np.cos(min(half, np.pi))
         # a ray whose first hit is k hits k alone at the same range: only the others are cast
         cand &= first_obj != object_id
+        if rows is not None:
+            cand &= rows
         n_alone = n_hit
         if cand.any():
             d_alone = caster.cast_isolated(origin_ned, dirs_ned[cand], max_range_m, object_id)

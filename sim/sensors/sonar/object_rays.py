@@ -24,7 +24,9 @@ Pairs = tuple[NDArray[np.intp], NDArray[np.intp]]
 
 def add_object_rays(fan: RayFan, base: RayTable, caster: RayCaster, origin_ned: FloatArray, R_ns: FloatArray,
                     objects: Sequence[SceneObjectLike], window_near_m: float, window_far_m: float,
-                    max_range_m: float, rays_across: int, span_limit: float | None = None) -> tuple[RayTable, NDArray[np.int64], Pairs | None]:
+                    max_range_m: float, rays_across: int, span_limit: float | None = None,
+                    spheres: dict[int, tuple[FloatArray, float]] | None = None
+                    ) -> tuple[RayTable, NDArray[np.int64], Pairs | None]:
     """Append sub-column rays over the objects the base rays sample coarsely.
 
     Args:
@@ -35,6 +37,8 @@ def add_object_rays(fan: RayFan, base: RayTable, caster: RayCaster, origin_ned: 
         window_near_m, window_far_m: range window (m): only spheres reaching into it count.
         max_range_m: cast range (m).
         rays_across: rays across an object each way (:meth:`RayFan.strip_rays`).
+        spheres: object id -> bounding sphere (centre (3,) NED m, radius m) if already known
+            (default: asked of the caster).
 
     Returns:
         The base rays followed by the new rays; per row the object whose sphere it samples
@@ -44,14 +48,14 @@ def add_object_rays(fan: RayFan, base: RayTable, caster: RayCaster, origin_ned: 
     n0 = len(base.dist)
     if not objects or not hasattr(caster, "object_bounding_sphere"):
         return base, np.full(n0, -1, dtype=np.int64), None
-    spheres = []
+    near = []
     for o in objects:
-        centre, radius = caster.object_bounding_sphere(int(o.id))
+        centre, radius = caster.object_bounding_sphere(int(o.id)) if spheres is None else spheres[int(o.id)]
         v = np.asarray(centre, dtype=float) - origin_ned
         dist = float(np.linalg.norm(v))
         if dist - radius <= window_far_m and dist + radius >= window_near_m:
-            spheres.append((int(o.id), R_ns.T @ v, float(radius)))
-    strips = fan.strip_rays(spheres, rays_across, span_limit=span_limit)
+            near.append((int(o.id), R_ns.T @ v, float(radius)))
+    strips = fan.strip_rays(near, rays_across, span_limit=span_limit)
     if strips.empty:
         return base, np.full(n0, -1, dtype=np.int64), None
     extra = _cast_strips(fan, base, caster, origin_ned, R_ns, strips, max_range_m)

@@ -108,7 +108,12 @@ class RayTable:
         return RayTable(*out)
 
     def concat(self, other: "RayTable") -> "RayTable":
-        return RayTable(*(np.concatenate([getattr(self, f), getattr(other, f)]) for f in self.__slots__))
+        return RayTable.stack([self, other])
+
+    @staticmethod
+    def stack(tables: "list[RayTable]") -> "RayTable":
+        """The rows of ``tables``, one after the other."""
+        return RayTable(*(np.concatenate([getattr(t, f) for t in tables]) for f in RayTable.__slots__))
 
     def same_surface(self, ia: NDArray[np.intp], ib: NDArray[np.intp]) -> NDArray[np.bool_]:
         """:func:`same_surface` of rows ``ia`` and ``ib``."""
@@ -336,7 +341,7 @@ class RayFan:
         n0 = len(rays.dist)
         ra, rb = pa[refine], pb[refine]
         lo, hi = self.bisect(caster, origin_ned, R_ns, rays, ra, rb, max_range_m, window_far_m, iters)
-        rays = rays.concat(lo).concat(hi)
+        rays = RayTable.stack([rays, lo, hi])
         n_ref = len(ra)
         lo_i = n0 + np.arange(n_ref)
         hi_i = n0 + n_ref + np.arange(n_ref)
@@ -352,28 +357,48 @@ class RayFan:
                iters: int) -> tuple[RayTable, RayTable]:
         """Shrink each (ia, ib) elevation interval onto the edge between ia's surface and the next.
 
+        One cast per level for all intervals still open.
+
         An interval stops once both its ends lie beyond ``window_far_m`` (as base pairs beyond
         it are not refined): what is left of it cannot put energy into the image.
 
         Returns:
             (lo, hi): the rays just before and just past each edge, one row per interval.
         """
-        lo, hi = rays.take(ia), rays.take(ib)
+        n = len(ia)
+        # The loop carries only what it reads (range, normal, object, direction, elevation of each
+        # end) and, per end, the row of the ray it holds in a pool of every ray met (the two end
+        # tables, then each level's casts); the full rows are gathered once at the end.
+        lo_t, hi_t = rays.take(ia), rays.take(ib)
+        lo_d, lo_n, lo_o, lo_v, lo_p = (a.copy() for a in (lo_t.dist, lo_t.normal, lo_t.obj, lo_t.dirs, lo_t.phi))
+        hi_d, hi_p = hi_t.dist.copy(), hi_t.phi.copy()
+        lo_row, hi_row = np.arange(n), np.arange(n, 2 * n)
+        pool, n_pool = [lo_t, hi_t], 2 * n
         for _ in range(iters):
-            act = np.flatnonzero(np.minimum(lo.dist, hi.dist) <= window_far_m)
+            act = np.flatnonzero(np.minimum(lo_d, hi_d) <= window_far_m)
             if act.size == 0:
                 break
-            lo_a, hi_a = lo.take(act), hi.take(act)
-            mid = self.cast_rays(caster, origin_ned, R_ns, lo_a.col, lo_a.az, 0.5 * (lo_a.phi + hi_a.phi),
-                                 lo_a.weight, max_range_m)
-            with_lo = same_surface(lo_a.dist, lo_a.normal, lo_a.obj, lo_a.dirs, mid.dist, mid.normal, mid.obj,
-                                   mid.dirs)
-            with_lo |= ~np.isfinite(lo_a.dist) & ~np.isfinite(mid.dist)
-            if act.size == len(lo.dist):
-                lo, hi = lo_a.where(with_lo, mid), mid.where(with_lo, hi_a)
+            whole = act.size == n
+            if whole:  # column, azimuth and weight never change
+                col, az, weight, a_p, b_p = lo_t.col, lo_t.az, lo_t.weight, lo_p, hi_p
+                a_d, a_n, a_o, a_v = lo_d, lo_n, lo_o, lo_v
             else:
-                lo, hi = lo.put(act, lo_a.where(with_lo, mid)), hi.put(act, mid.where(with_lo, hi_a))
-        return lo, hi
+                col, az, weight, a_p, b_p = lo_t.col[act], lo_t.az[act], lo_t.weight[act], lo_p[act], hi_p[act]
+                a_d, a_n, a_o, a_v = lo_d[act], lo_n[act], lo_o[act], lo_v[act]
+            mid = self.cast_rays(caster, origin_ned, R_ns, col, az, 0.5 * (a_p + b_p), weight, max_range_m)
+            with_lo = same_surface(a_d, a_n, a_o, a_v, mid.dist, mid.normal, mid.obj, mid.dirs)
+            with_lo |= ~np.isfinite(a_d) & ~np.isfinite(mid.dist)
+            mid_row = n_pool + np.arange(act.size)
+            pool.append(mid)
+            n_pool += act.size
+            to_lo, to_hi = act[with_lo], act[~with_lo]
+            lo_d[to_lo], lo_n[to_lo], lo_o[to_lo] = mid.dist[with_lo], mid.normal[with_lo], mid.obj[with_lo]
+            lo_v[to_lo], lo_p[to_lo], lo_row[to_lo] = mid.dirs[with_lo], mid.phi[with_lo], mid_row[with_lo]
+            hi_d[to_hi], hi_p[to_hi], hi_row[to_hi] = mid.dist[~with_lo], mid.phi[~with_lo], mid_row[~with_lo]
+        if len(pool) == 2:
+            return lo_t, hi_t
+        every = RayTable.stack(pool)
+        return every.take(lo_row), every.take(hi_row)
 
     def range_slope(self, rays: RayTable, R_ns: FloatArray) -> FloatArray:
         """dr/dphi (m/rad) of each hit along its column, from the surface normal; 0 where no hit.

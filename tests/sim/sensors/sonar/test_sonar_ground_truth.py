@@ -82,3 +82,19 @@ def test_visible_fraction_limits():
     # wholly beyond the range window: nothing to see
     assert visible_fraction(caster, 1, np.zeros(3), dirs, first, n, 1.0, 5.0, 50.0, 0.001) == 0.0
     assert np.isnan(visible_fraction(object(), 1, np.zeros(3), dirs, first, n, 1.0, 30.0, 50.0, 0.001))
+
+
+def test_visible_fraction_over_a_row_subset_matches_the_copied_subset():
+    """Counting only ``rows`` of the full ray table (with the sphere given) equals passing a copy
+    of those rows (with the sphere asked of the caster)."""
+    sphere = AnalyticSphere(np.array([15.0, 0.0, 0.0]), 1.0, 1)
+    wall = AnalyticBox(np.array([8.0, 0.3 - 5.0, 0.0]), np.array([0.05, 5.0, 5.0]), 2)
+    caster = AnalyticCaster(None, spheres=(sphere,), boxes=(wall,))
+    dirs = _ray_grid(6.0, 121)
+    first = caster.cast(np.zeros(3), dirs, 50.0).object_id
+    rows = np.random.default_rng(3).random(len(dirs)) < 0.6
+    n_hit = int(np.count_nonzero(first[rows] == 1))
+    ref = visible_fraction(caster, 1, np.zeros(3), dirs[rows], first[rows], n_hit, 1.0, 30.0, 50.0, 0.001)
+    got = visible_fraction(caster, 1, np.zeros(3), dirs, first, n_hit, 1.0, 30.0, 50.0, 0.001, rows=rows,
+                           sphere=caster.object_bounding_sphere(1))
+    assert 0.1 < ref < 0.9 and got == ref

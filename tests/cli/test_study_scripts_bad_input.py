@@ -1,0 +1,60 @@
+"""The study scripts (``scripts/tracking_study.py``, ``scripts/evaluate_msis_localization.py``)
+refuse bad input as the CLI does: one line naming the argument, exit status 2, no traceback,
+before any run (so a study's results are never lost at its end)."""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import pytest
+
+SCRIPTS = Path(__file__).resolve().parents[2] / "scripts"
+
+
+def _script(name: str):
+    spec = importlib.util.spec_from_file_location(name, SCRIPTS / f"{name}.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def _refused(mod, argv, capsys, *culprits: str) -> str:
+    capsys.readouterr()
+    code = mod.main(argv)
+    out = capsys.readouterr()
+    assert code == 2, out.err
+    assert "Traceback" not in out.err and out.out == ""
+    lines = out.err.strip().splitlines()
+    assert len(lines) == 1, out.err
+    for c in culprits:
+        assert c in lines[0], lines[0]
+    return lines[0]
+
+
+@pytest.mark.parametrize("argv,culprits", [
+    (["--seeds", "0"], ("tracking_study.py: error:", "--seeds", ">= 1")),
+    (["--duration", "-5"], ("--duration", "> 0")),
+    (["--duration", "nan"], ("--duration",)),
+    (["--scenarios", "track_static_vehicel"], ("track_static_vehicel", "no such scenario")),
+    (["--scenarios", "pool_circular"], ("--scenarios pool_circular", "does not track a target")),
+    (["--scenarios", "track_static_vehicle", "--png", "{file}"], ("--png", "is a file")),
+    (["--scenarios", "track_static_vehicle", "--json", "{missing}/x.json"], ("--json", "does not exist")),
+    (["--scenarios", "track_static_vehicle", "--json", "{dir}"], ("--json", "is a folder")),
+])
+def test_tracking_study_refuses(argv, culprits, capsys, tmp_path):
+    (tmp_path / "f.txt").write_text("keep")
+    argv = [a.format(file=tmp_path / "f.txt", missing=tmp_path / "nope", dir=tmp_path) for a in argv]
+    _refused(_script("tracking_study"), argv, capsys, *culprits)
+    assert (tmp_path / "f.txt").read_text() == "keep"
+
+
+@pytest.mark.parametrize("argv,culprits", [
+    (["pool_circular", "--seeds", "0"], ("evaluate_msis_localization.py: error:", "--seeds")),
+    (["pool_circuler"], ("pool_circuler", "no such scenario")),
+    (["cssn_lawnmower"], ("cssn_lawnmower", "no enabled msis sensor")),
+    (["pool_circular", "--set", "sensors.msis.rang_m=3"], ("sensors.msis.rang_m", "did you mean range_m?")),
+    (["pool_circular", "--set", "sensors.msis.sector_width_grad=401"], ("sector_width_grad", "400")),
+])
+def test_msis_evaluation_refuses(argv, culprits, capsys):
+    _refused(_script("evaluate_msis_localization"), argv, capsys, *culprits)

@@ -1,0 +1,51 @@
+"""scripts/speed_table.py: the README's speed table is the one made from the saved benchmark JSON."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[3]
+_spec = importlib.util.spec_from_file_location("speed_table", ROOT / "scripts" / "speed_table.py")
+speed_table = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(speed_table)
+
+
+def _save(json_dir: Path, key: str, result: dict) -> None:
+    json_dir.mkdir(exist_ok=True)
+    (json_dir / f"{key}.json").write_text(json.dumps({
+        "command": f"auvsim bench {key} --json", "measured": "2026-01-01 00:00 UTC", "cpu_count": 2,
+        "load_avg_1min_before": 0.5, "load_avg_1min_after": 1.25, "result": result}))
+
+
+def test_readme_table_is_the_saved_json():
+    text = (ROOT / "README.md").read_text()
+    assert speed_table.table() in text
+    assert text.count(speed_table.BEGIN) == 1
+
+
+def test_table_rows_come_from_the_json_and_readme_is_rewritten_between_markers(tmp_path):
+    json_dir = tmp_path / "speed"
+    _save(json_dir, "mission", {"real_time_factor": 9.04, "cpu_real_time_factor": 10.2,
+                                "workers": {"real_time_factor": 13.5, "workers_speedup": 1.49,
+                                            "serial_real_time_factor": 9.06}})
+    _save(json_dir, "tracking", {"p50_ms": 0.091, "p99_ms": 1.5})
+    table = speed_table.table(json_dir)
+    rows = table.splitlines()
+    assert rows[0] == speed_table.BEGIN and rows[-1] == speed_table.END
+    assert len(rows) == 2 + 2 + 2 + 1  # markers, header, two mission rows, one tracking row
+    assert "| 9.0x real time (10.2x per CPU second) | >= 20x (stretch 30x) |" in table
+    assert "13.5x real time, 1.49x the serial loop of the same run (9.1x)" in table
+    assert "p50 0.09 ms, p99 1.50 ms" in table
+    assert "2 cores, load 0.5-1.2" in table
+    readme = tmp_path / "README.md"
+    readme.write_text(f"intro\n{speed_table.BEGIN}\nold | table\n{speed_table.END}\nafter\n")
+    assert speed_table.rewrite_readme(readme, json_dir)
+    assert readme.read_text() == f"intro\n{table}\nafter\n"
+    assert not speed_table.rewrite_readme(readme, json_dir)
+    readme.write_text("no markers\n")
+    with pytest.raises(ValueError, match="markers"):
+        speed_table.rewrite_readme(readme, json_dir)
