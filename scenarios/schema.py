@@ -18,6 +18,7 @@ from autonomy.tracking.config import TrackingConfig
 from autonomy.world_model.config import WorldModelConfig
 from scenarios.config.base import StrictModel
 from scenarios.config.comms import CommsConfig
+from scenarios.config.mcm import McmConfig
 from scenarios.config.outputs import OutputsConfig
 from scenarios.config.sensor import SensorConfig, fill_sensor_entries, sensor_config_kinds
 from scenarios.config.vehicle import SurfaceVehicleConfig, VehicleConfig
@@ -150,6 +151,7 @@ class Scenario(StrictModel):
     autonomy: AutonomyConfig = AutonomyConfig()
     comms: CommsConfig = Field(CommsConfig(), description="channels between vehicles (acoustic modem link)")
     outputs: OutputsConfig = OutputsConfig()
+    mcm: McmConfig = Field(McmConfig(), description="mine-countermeasures mapping on side-scan tiles (mode: full)")
 
     @field_validator("vehicles")
     @classmethod
@@ -159,3 +161,24 @@ class Scenario(StrictModel):
             raise ValueError(f"vehicle name {taken[0]!r} is taken (the AUV is 'vehicle'; reserved: "
                              f"{', '.join(RESERVED_VEHICLE_NAMES)})")
         return value
+
+    @model_validator(mode="after")
+    def _mcm_needs_its_sonar(self) -> "Scenario":
+        if self.mcm.mode == "full":
+            cfg = self.sensors.enabled().get(self.mcm.sensor)
+            if cfg is None or cfg.kind != "sss":
+                raise ValueError(f"mcm.sensor: mode full needs an enabled side-scan (kind sss) sensor entry "
+                                 f"named {self.mcm.sensor!r}")
+        return self
+
+    @model_validator(mode="after")
+    def _link_has_its_surface_vehicle(self) -> "Scenario":
+        comms = self.comms
+        if comms.acoustic.enabled:
+            name = comms.surface.vehicle
+            if name not in self.vehicles:
+                raise ValueError(f"comms.surface.vehicle {name!r} is not a key of vehicles: "
+                                 f"{sorted(self.vehicles) or 'none'} (comms.acoustic needs the surface vehicle)")
+            if comms.surface.usbl_fixes and self.vehicles[name].usbl is None:
+                raise ValueError(f"comms.surface.usbl_fixes needs vehicles.{name}.usbl (its USBL head)")
+        return self

@@ -161,6 +161,10 @@ def build_mission_parts(scenario: Scenario, physics: Physics, seed: int, *, nav_
     if msis is not None and auto.msis_localization.method != "none":
         localizer = MsisLocalizer(auto.msis_localization, component_rng(seed, f"{msis.name}_localizer"))
         processors[msis.name] = MsisPingProcessor(localizer)
+    if scenario.mcm.mode == "full":
+        from sim.mcm.full_mode import SssTileProcessor
+
+        processors[scenario.mcm.sensor] = SssTileProcessor(scenario)
     return MissionParts(
         processors=processors,
         seed=int(seed), sensors=sensors, scheduler=scheduler, nav_noise=nav_noise, nav_mounts=nav_mounts,

@@ -43,15 +43,30 @@ def nct_predict(states: FloatArray, dt_s: float, sigma_lin_mps2: float, sigma_an
 
 def _ct_move(states: FloatArray, turn_rate: FloatArray, dt_s: float) -> FloatArray:
     """Noise-free coordinated turn of states (N, 5) over ``dt_s`` at ``turn_rate`` (N,) rad/s."""
-    n, e, vn, ve, _ = states.T
-    wt = turn_rate * dt_s
+    return _ct_move_columns(states[:, 0], states[:, 1], states[:, 2], states[:, 3], turn_rate, dt_s).T
+
+
+def _ct_move_columns(north: FloatArray, east: FloatArray, v_n: FloatArray, v_e: FloatArray, turn: FloatArray,
+                     dt_s: float) -> FloatArray:
+    """Noise-free coordinated turn (Li and Jilkov eq. 6) of states given by component (each
+    (N,)) over ``dt_s`` at ``turn`` (N,) rad/s; returns the new states (5, N)."""
+    wt = turn * dt_s
+    sin_wt, cos_wt = np.sin(wt), np.cos(wt)
     small = np.abs(wt) < 1e-6
-    safe_w = np.where(small, 1.0, turn_rate)
-    s_w = np.where(small, dt_s, np.sin(wt) / safe_w)
-    c_w = np.where(small, 0.5 * turn_rate * dt_s ** 2, (1.0 - np.cos(wt)) / safe_w)
-    c, s = np.cos(wt), np.sin(wt)
-    return np.column_stack([n + s_w * vn - c_w * ve, e + c_w * vn + s_w * ve, c * vn - s * ve, s * vn + c * ve,
-                            turn_rate])
+    if small.any():
+        safe = np.where(small, 1.0, turn)
+        s_w = np.where(small, dt_s, sin_wt / safe)
+        c_w = np.where(small, 0.5 * turn * dt_s ** 2, (1.0 - cos_wt) / safe)
+    else:
+        s_w = sin_wt / turn
+        c_w = (1.0 - cos_wt) / turn
+    new = np.empty((5, len(north)))
+    new[0] = north + s_w * v_n - c_w * v_e
+    new[1] = east + c_w * v_n + s_w * v_e
+    new[2] = cos_wt * v_n - sin_wt * v_e
+    new[3] = sin_wt * v_n + cos_wt * v_e
+    new[4] = turn
+    return new
 
 
 def nct_predict_ins_proposal(states: FloatArray, dt_s: float, sigma_lin_mps2: float, sigma_ang_radps2: float,
@@ -83,32 +98,70 @@ def nct_predict_ins_proposal(states: FloatArray, dt_s: float, sigma_lin_mps2: fl
     Returns:
         ``(states_t, log_weight)``: (N, 5) and (N,).
     """
+    new, logw = ins_proposal_columns(np.asarray(states, dtype=float).T, dt_s, sigma_lin_mps2, sigma_ang_radps2,
+                                     g, var_pos_m2, var_heading_rad2, rng)
+    return new.T, logw
+
+
+def ins_proposal_columns(cols: FloatArray, dt_s: float, sigma_lin_mps2: float, sigma_ang_radps2: float,
+                         g: FloatArray, var_pos_m2: float, var_heading_rad2: float,
+                         rng: np.random.Generator) -> tuple[FloatArray, FloatArray]:
+    """:func:`nct_predict_ins_proposal` on the states stored by component, ``cols`` (5, N) (any
+    strides, e.g. the transpose of an (N, 5) array); returns ``(new (5, N), log_weight (N,))``.
+
+    The same algebra and the same draws (one (2, N) standard-normal block: the angular noises,
+    then the linear ones, as two successive (N,) draws would give), written with few numpy
+    calls, since at N of a few thousand the per-call overhead, not the arithmetic, sets the
+    cost of the per-second filter.
+    """
+    north, east, v_n, v_e, rate = cols
     d2 = dt_s * dt_s
-    psi = heading_rad(states)
-    # angular noise: heading_t = psi0 + dt^2 u_ang
-    psi0 = psi + states[:, 4] * dt_s
-    e_h = wrap_angle(g[2] - psi0)
     sa2 = sigma_ang_radps2 ** 2
     s_h = var_heading_rad2 + d2 * d2 * sa2
-    u_ang = sa2 * d2 * e_h / s_h + np.sqrt(sa2 * var_heading_rad2 / s_h) * rng.standard_normal(len(states))
-    out = _ct_move(states, states[:, 4] + dt_s * u_ang, dt_s)
-    # linear noise along the new heading: p_t = p0 + dt^2/2 h u_lin, v_t = v0 + dt h u_lin
-    hdg = heading_rad(out)
-    h = np.column_stack([np.cos(hdg), np.sin(hdg)])
-    e_p = g[:2] - out[:, :2]
-    along = np.einsum("ij,ij->i", h, e_p)
-    cross = h[:, 0] * e_p[:, 1] - h[:, 1] * e_p[:, 0]
+    # angular noise: heading_t = psi + omega dt + dt^2 u_ang; innovation e_h against the INS heading
+    e_h = rate * dt_s
+    e_h += np.arctan2(v_e, v_n)
+    np.subtract(g[2] + np.pi, e_h, out=e_h)
+    np.remainder(e_h, 2.0 * np.pi, out=e_h)
+    e_h -= np.pi
+    z = rng.standard_normal((2, len(north)))
+    turn = z[0] * np.sqrt(sa2 * var_heading_rad2 / s_h)
+    turn += (sa2 * d2 / s_h) * e_h
+    turn *= dt_s
+    turn += rate  # the turn rate over the step, omega + dt u_ang
+    new = _ct_move_columns(north, east, v_n, v_e, turn, dt_s)  # noise-free turn at that rate
+    # linear noise along the new heading h: p_t = p0 + dt^2/2 h u_lin, v_t = v0 + dt h u_lin
+    speed = np.hypot(new[2], new[3])
+    moving = speed > 0.0
+    h_n = np.divide(new[2], speed, out=np.ones_like(speed), where=moving)  # heading 0 when at rest
+    h_e = np.divide(new[3], speed, out=np.zeros_like(speed), where=moving)
+    e_n, e_e = g[0] - new[0], g[1] - new[1]
+    along = h_n * e_n + h_e * e_e
+    cross = h_n * e_e - h_e * e_n
     sl2, b = sigma_lin_mps2 ** 2, 0.5 * d2
     s_a = var_pos_m2 + b * b * sl2
-    u_lin = sl2 * b * along / s_a + np.sqrt(sl2 * var_pos_m2 / s_a) * rng.standard_normal(len(states))
-    out[:, :2] += (b * u_lin)[:, None] * h
-    out[:, 2:4] += (dt_s * u_lin)[:, None] * h
-    logw = -0.5 * (e_h * e_h / s_h + along * along / s_a + cross * cross / var_pos_m2
-                   + np.log(s_h / var_heading_rad2) + np.log(s_a / var_pos_m2))
-    # a draw that reverses the velocity turns the heading by pi, outside the linear model above:
-    # weight it by its true heading likelihood (about zero, as the bootstrap filter would)
-    flipped = np.einsum("ij,ij->i", out[:, 2:4], h) < 0.0
-    if np.any(flipped):
-        e_f = wrap_angle(g[2] - heading_rad(out[flipped]))
+    u_lin = z[1] * np.sqrt(sl2 * var_pos_m2 / s_a)
+    u_lin += (sl2 * b / s_a) * along
+    step = b * u_lin
+    new[0] += step * h_n
+    new[1] += step * h_e
+    step = dt_s * u_lin
+    new[2] += step * h_n
+    new[3] += step * h_e
+    e_h *= e_h
+    e_h *= -0.5 / s_h
+    along *= along
+    e_h -= (0.5 / s_a) * along
+    cross *= cross
+    e_h -= (0.5 / var_pos_m2) * cross
+    logw = e_h
+    logw -= 0.5 * (np.log(s_h / var_heading_rad2) + np.log(s_a / var_pos_m2))
+    # a draw that reverses the velocity (speed + dt u_lin < 0) turns the heading by pi, outside
+    # the linear model above: weight it by its true heading likelihood (about zero, as the
+    # bootstrap filter would)
+    step += speed
+    flipped = step < 0.0
+    if flipped.any():
+        e_f = wrap_angle(g[2] - np.arctan2(new[3, flipped], new[2, flipped]))
         logw[flipped] += -0.5 * e_f * e_f / var_heading_rad2
-    return out, logw
+    return new, logw

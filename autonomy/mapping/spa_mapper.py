@@ -51,7 +51,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.special import betaln, ndtr
 
-from autonomy.mapping.auv_motion import heading_rad, nct_predict_ins_proposal, wrap_angle
+from autonomy.mapping.auv_motion import heading_rad, ins_proposal_columns, wrap_angle
 from autonomy.mapping.config import SpaMapperConfig
 from autonomy.mapping.data_association import loopy_bp
 
@@ -126,41 +126,65 @@ class SpaMapper:
     def nav_update(self, t_s: float, g: ArrayLike) -> None:
         """Advance to ``t_s`` (s since the start) and take one INS output ``g`` = (north m, east m,
         heading rad). ``clairvoyant`` ignores it; ``ins_plain`` takes it as the state."""
-        g = np.asarray(g, dtype=float).reshape(3)
-        dt = t_s - self.t_s
-        self.t_s = float(t_s)
+        self.nav_updates(np.array([t_s], dtype=float), np.asarray(g, dtype=float).reshape(1, 3))
+
+    def nav_updates(self, t_s: ArrayLike, g: ArrayLike) -> None:
+        """Take INS outputs ``g`` (T, 3) (north m, east m, heading rad) at times ``t_s`` (T,) (s
+        since the start, non-decreasing, after the last one taken), one after the other: the
+        same filter as T calls of :meth:`nav_update`, run as one loop (between tiles the vehicle
+        belief is only propagated and weighted by the INS).
+
+        Per output: the particles are drawn from the locally optimal proposal
+        (:func:`~autonomy.mapping.auv_motion.ins_proposal_columns`) and weighted by its
+        predictive likelihood; they are resampled when the effective sample size falls below N/2.
+
+        Raises:
+            ValueError: shapes differ.
+        """
+        t = np.asarray(t_s, dtype=float).reshape(-1)
+        g = np.asarray(g, dtype=float).reshape(-1, 3)
+        if len(t) != len(g):
+            raise ValueError(f"nav_updates: {len(t)} times but {len(g)} INS outputs")
+        if len(t) == 0:
+            return
         cfg = self.cfg
+        dts = np.diff(t, prepend=self.t_s)
+        self.t_s = float(t[-1])
         if cfg.mode == "clairvoyant":
             return
-        if cfg.mode == "ins_plain":
+        if cfg.mode == "ins_plain":  # only the last output counts; the speed is carried over
             speed = float(np.hypot(self.point_state[2], self.point_state[3])) or 1.0
-            self.point_state = np.array([g[0], g[1], speed * np.cos(g[2]), speed * np.sin(g[2]), 0.0])
+            self.point_state = np.array([g[-1, 0], g[-1, 1], speed * np.cos(g[-1, 2]), speed * np.sin(g[-1, 2]), 0.0])
             return
-        tau = t_s / S_PER_H
-        var_p = max(cfg.nav_floor_pos_m ** 2, (3.0 * cfg.varsigma_p) ** 2 * tau ** 3 / 3.0)
-        var_h = max(np.deg2rad(cfg.nav_floor_heading_deg) ** 2,
-                    (3.0 * np.deg2rad(cfg.varsigma_h_deg_per_sqrt_h)) ** 2 * tau ** 2)
-        if dt > 0.0:
-            self.S, logl = nct_predict_ins_proposal(self.S, dt, cfg.sigma_lin_mps2, np.deg2rad(cfg.sigma_ang_degps2),
-                                                    g, var_p, var_h, self.rng)
-        else:
-            dpsi = wrap_angle(heading_rad(self.S) - g[2])
-            logl = -0.5 * (((self.S[:, 0] - g[0]) ** 2 + (self.S[:, 1] - g[1]) ** 2) / var_p + dpsi ** 2 / var_h)
-        self._reweight(np.log(np.maximum(self.w, 1e-300)) + logl)
+        tau = t / S_PER_H
+        var_p = np.maximum(cfg.nav_floor_pos_m ** 2, (3.0 * cfg.varsigma_p) ** 2 * tau ** 3 / 3.0)
+        var_h = np.maximum(np.deg2rad(cfg.nav_floor_heading_deg) ** 2,
+                           (3.0 * np.deg2rad(cfg.varsigma_h_deg_per_sqrt_h)) ** 2 * tau ** 2)
+        sigma_ang = float(np.deg2rad(cfg.sigma_ang_degps2))
+        cols = self.S.T  # (5, N) by component
+        w = self.w
+        half_n = 0.5 * len(w)
+        for k in range(len(t)):
+            if dts[k] > 0.0:
+                cols, logw = ins_proposal_columns(cols, float(dts[k]), cfg.sigma_lin_mps2, sigma_ang, g[k],
+                                                  float(var_p[k]), float(var_h[k]), self.rng)
+            else:
+                dpsi = wrap_angle(np.arctan2(cols[3], cols[2]) - g[k, 2])
+                logw = -0.5 * (((cols[0] - g[k, 0]) ** 2 + (cols[1] - g[k, 1]) ** 2) / var_p[k]
+                               + dpsi ** 2 / var_h[k])
+            logw += np.log(np.maximum(w, 1e-300))
+            logw -= logw.max()
+            w = np.exp(logw, out=logw)
+            w /= w.sum()
+            if 1.0 / np.dot(w, w) < half_n:
+                cols = cols[:, systematic_resample(w, self.rng)]
+                w = np.full(len(w), 1.0 / len(w))
+        self.S, self.w = cols.T, w
 
     def set_true_state(self, state: ArrayLike) -> None:
         """The true state (5,) (``clairvoyant`` mode only uses it)."""
         if self.cfg.mode == "clairvoyant":
             self.point_state = np.asarray(state, dtype=float).reshape(5).copy()
-
-    def _reweight(self, logw: FloatArray) -> None:
-        logw = logw - logw.max()
-        w = np.exp(logw)
-        w /= w.sum()
-        if 1.0 / np.sum(w * w) < 0.5 * len(w):
-            self.S = self.S[systematic_resample(w, self.rng)]
-            w = np.full(len(w), 1.0 / len(w))
-        self.w = w
 
     def _resample_vehicle(self) -> None:
         """Resample the vehicle particles to equal weights. Not roughened: an isotropic jitter
@@ -172,7 +196,8 @@ class SpaMapper:
 
     def _roughening(self, particles: FloatArray) -> FloatArray:
         n, d = particles.shape
-        span = np.percentile(particles, 99.0, axis=0) - np.percentile(particles, 1.0, axis=0)
+        lo, hi = np.percentile(particles, [1.0, 99.0], axis=0)
+        span = hi - lo
         return self.rng.standard_normal(particles.shape) * (self.cfg.roughening_k * span * n ** (-1.0 / d))
 
     def vehicle_estimate(self) -> FloatArray:
@@ -221,8 +246,13 @@ class SpaMapper:
         veh = self._object_frame_particles()
         rel = self._relevant(veh)
         k_r = len(rel)
+        # PO measurement terms under the equally weighted vehicle belief: the association weights
+        # use them, and so does the PO update of the point modes (there the belief is the same)
+        terms = None
+        if k_r and (m_n or cfg.mode != "spa"):
+            terms = self._po_likelihoods(self.X[rel], self._uniform_vehicle_summary(veh), ell)
         if k_r and m_n:
-            beta = self.association_weights(rel, veh, ell, f_pi)
+            beta = self.association_weights(rel, veh, ell, f_pi, terms)
             bp = loopy_bp(beta, xi, tol=cfg.bp_tol)
             nu, phi_sum = bp.nu, bp.phi.sum(axis=0)
             self.last_association = bp
@@ -236,7 +266,7 @@ class SpaMapper:
             # message to PO k: the vehicle belief times every message but its own (paper IV-D)
             ext_logw = logw_post[None, :] - log_gamma
         if k_r:
-            self._update_legacy(rel, veh, ell, f_pi, nu, ratio, ext_logw)
+            self._update_legacy(rel, veh, ell, f_pi, nu, ratio, ext_logw, terms)
         if logw_post is not None:
             lw = np.exp(logw_post - logw_post.max())
             self.w = lw / lw.sum()
@@ -248,6 +278,8 @@ class SpaMapper:
             self._merge_coincident()
 
     def _drop(self, gone: NDArray[np.bool_]) -> None:
+        if not gone.any():
+            return
         keep = ~gone
         if len(self._po_stats) == len(keep):
             self._po_stats = self._po_stats[keep]
@@ -283,22 +315,24 @@ class SpaMapper:
         if gone.any():
             self._drop(gone)
 
-    def association_weights(self, rel: NDArray[np.intp], veh: FloatArray, ell: FloatArray, f_pi: FloatArray
-                            ) -> FloatArray:
+    def association_weights(self, rel: NDArray[np.intp], veh: FloatArray, ell: FloatArray, f_pi: FloatArray,
+                            terms: tuple[FloatArray, FloatArray] | None = None) -> FloatArray:
         """Association weights ``beta`` (Kr, M + 1) of POs ``rel`` (paper 003, IV-C, message
         ``zeta_{q_k -> a_k}``): column 0 ``(1 - r) + r E[1 - P_d]``, column m
         ``r pd E[in tile f(ell_m | x, s) f(pi_m | c)] / (mu_0 f_FA(z_m))``; the expectation over
         the vehicle belief ``veh`` (N, 5), equally weighted, is taken in closed form over its
-        Gaussian summary (:meth:`_vehicle_summary`), the one over the PO over its particles.
+        Gaussian summary (:meth:`_vehicle_summaries`), the one over the PO over its particles.
 
         Args:
             rel: (Kr,) PO indices; veh: (N, 5) vehicle states; ell: (M, 2) detections (vehicle
-                frame, m); f_pi: (M, C) class likelihoods ``f(pi_m | c)``.
+                frame, m); f_pi: (M, C) class likelihoods ``f(pi_m | c)``; terms: the POs'
+                :meth:`_po_likelihoods` under that belief when already computed.
         """
         cfg = self.cfg
         ratio = self.tile_area_m2 / cfg.clutter_mean
-        summary = self._vehicle_summary(veh, np.full(len(veh), 1.0 / len(veh)))
-        lik, inside = self._po_likelihoods(self.X[rel], summary, ell)  # (Kr, N, M), (Kr, N)
+        if terms is None:
+            terms = self._po_likelihoods(self.X[rel], self._uniform_vehicle_summary(veh), ell)
+        lik, inside = terms  # (Kr, N, M), (Kr, N)
         cls = np.einsum("kic,mc->kim", self.W[rel], f_pi)  # (Kr, N, M)
         rr = self.r[rel]
         beta = np.empty((len(rel), len(ell) + 1))
@@ -309,37 +343,47 @@ class SpaMapper:
         beta[:, 0] = (1.0 - rr) + rr * miss
         return beta
 
-    def _vehicle_summary(self, veh: FloatArray, w: FloatArray) -> tuple[FloatArray, float, FloatArray, float]:
-        """Gaussian summary of weighted vehicle particles (N, 5), weights (N,) summing to 1:
-        ``(pos mean (2,), heading mean, pos covariance (2, 2), heading variance)``; the
-        point modes have no spread."""
+    def _uniform_vehicle_summary(self, veh: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """:meth:`_vehicle_summaries` of the equally weighted particles ``veh`` (N, 5) (B = 1)."""
+        return self._vehicle_summaries(veh, np.full((1, len(veh)), 1.0 / len(veh)))
+
+    def _vehicle_summaries(self, veh: FloatArray, w: FloatArray
+                           ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """Gaussian summaries of the vehicle particles ``veh`` (N, 5) under B weightings ``w``
+        (B, N), rows summing to 1: ``(pos mean (B, 2), heading mean (B,), pos covariance
+        (B, 2, 2), heading variance (B,))`` (NED, m, rad); the point modes have no spread."""
+        # einsum, not matmul: these thin products would go to a multi-threaded BLAS, whose
+        # threads cost more than the arithmetic (and oversubscribe the cores of parallel runs)
         psis = heading_rad(veh)
-        p_mean = w @ veh[:, :2]
-        psi_mean = float(np.angle(w @ np.exp(1j * psis)))
+        p_mean = np.einsum("bn,nd->bd", w, veh[:, :2])
+        psi_mean = np.arctan2(np.einsum("bn,n->b", w, np.sin(psis)), np.einsum("bn,n->b", w, np.cos(psis)))
         if self.cfg.mode != "spa":
-            return p_mean, psi_mean, np.zeros((2, 2)), 0.0
-        dp = veh[:, :2] - p_mean
-        return p_mean, psi_mean, (dp * w[:, None]).T @ dp, float(w @ wrap_angle(psis - psi_mean) ** 2)
+            return p_mean, psi_mean, np.zeros((len(w), 2, 2)), np.zeros(len(w))
+        dp = veh[None, :, :2] - p_mean[:, None, :]  # (B, N, 2)
+        cov = np.einsum("bn,bni,bnj->bij", w, dp, dp)
+        return p_mean, psi_mean, cov, np.einsum("bn,bn->b", w, wrap_angle(psis[None] - psi_mean[:, None]) ** 2)
 
     def _po_likelihoods(self, X: FloatArray, summary, ell: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Measurement likelihoods of PO particles ``X`` (K, N, 2) NED, marginalised over a
-        Gaussian vehicle belief ``summary``: ``N(ell_m; L, R^T P R + s^2 I + var_psi J J^T)``
-        with ``L`` the particle in the mean vehicle frame and ``J = d ell / d psi = [ell_across,
-        -ell_along]`` (heading linearised at the measurement). Returns (K, N, M) likelihoods
-        (1/m^2) and (K, N) in-tile indicators (at the mean vehicle state)."""
+        """Measurement likelihoods of PO particles ``X`` (K, N, 2) NED, marginalised over
+        Gaussian vehicle beliefs ``summary`` (:meth:`_vehicle_summaries`, B = 1 for all POs or
+        B = K, one per PO): ``N(ell_m; L, R^T P R + s^2 I + var_psi J J^T)`` with ``L`` the
+        particle in the mean vehicle frame and ``J = d ell / d psi = [ell_across, -ell_along]``
+        (heading linearised at the measurement). Returns (K, N, M) likelihoods (1/m^2) and (K, N)
+        in-tile probabilities (:meth:`_in_tile_probability`)."""
         p_mean, psi_mean, P_s, var_psi = summary
-        c, s = np.cos(psi_mean), np.sin(psi_mean)
-        R = np.array([[c, -s], [s, c]])  # vehicle -> NED
+        c, s = np.cos(psi_mean), np.sin(psi_mean)  # (B,)
+        R = np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)  # (B, 2, 2) vehicle -> NED
+        P_loc = R.transpose(0, 2, 1) @ P_s @ R  # (B, 2, 2) vehicle frame
         J = np.stack([ell[:, 1], -ell[:, 0]], axis=1)  # (M, 2)
-        S = (R.T @ P_s @ R + self.cfg.sigma_meas_m ** 2 * np.eye(2))[None] + var_psi * J[:, :, None] * J[:, None, :]
-        det = S[:, 0, 0] * S[:, 1, 1] - S[:, 0, 1] ** 2  # (M,)
-        L = rotate_to_local(X - p_mean, np.full(X.shape[:-1], psi_mean))  # (K, N, 2)
+        S = ((P_loc + self.cfg.sigma_meas_m ** 2 * np.eye(2))[:, None]
+             + var_psi[:, None, None, None] * (J[:, :, None] * J[:, None, :])[None])  # (B, M, 2, 2)
+        det = (S[..., 0, 0] * S[..., 1, 1] - S[..., 0, 1] ** 2)[:, None, :]  # (B, 1, M)
+        L = rotate_to_local(X - p_mean[:, None, :], psi_mean[:, None])  # (K, N, 2)
         e0 = ell[None, None, :, 0] - L[..., 0, None]
         e1 = ell[None, None, :, 1] - L[..., 1, None]  # (K, N, M)
-        q2 = (S[:, 1, 1] * e0 * e0 - 2.0 * S[:, 0, 1] * e0 * e1 + S[:, 0, 0] * e1 * e1) / det
-        P_loc = R.T @ P_s @ R
-        sd_along = np.sqrt(P_loc[0, 0] + var_psi * L[..., 1] ** 2) + 1e-9
-        sd_across = np.sqrt(P_loc[1, 1] + var_psi * L[..., 0] ** 2) + 1e-9
+        q2 = (S[:, None, :, 1, 1] * e0 * e0 - 2.0 * S[:, None, :, 0, 1] * e0 * e1 + S[:, None, :, 0, 0] * e1 * e1) / det
+        sd_along = np.sqrt(P_loc[:, None, 0, 0] + var_psi[:, None] * L[..., 1] ** 2) + 1e-9
+        sd_across = np.sqrt(P_loc[:, None, 1, 1] + var_psi[:, None] * L[..., 0] ** 2) + 1e-9
         return np.exp(-0.5 * q2) / (2.0 * np.pi * np.sqrt(det)), self._in_tile_probability(L, sd_along, sd_across)
 
     def _in_tile_probability(self, L: FloatArray, sd_along: FloatArray, sd_across: FloatArray) -> FloatArray:
@@ -385,58 +429,63 @@ class SpaMapper:
         cfg = self.cfg
         sig2 = cfg.sigma_meas_m ** 2
         pos, psi = self.S[:, :2], heading_rad(self.S)
-        out = np.empty((len(rel), len(self.S)))
-        for j, k in enumerate(rel):
-            q = self.W[k].sum(-1)  # (N,) position weights
-            mu = q @ self.X[k]
-            dx = self.X[k] - mu
-            P = (dx * q[:, None]).T @ dx
-            pc = self.W[k].sum(0)  # (C,)
-            L = rotate_to_local(mu[None] - pos, psi)  # (N, 2)
-            c, s = np.cos(psi), np.sin(psi)
-            # R^T P R per particle
-            a11 = c * c * P[0, 0] + 2 * c * s * P[0, 1] + s * s * P[1, 1] + sig2
-            a22 = s * s * P[0, 0] - 2 * c * s * P[0, 1] + c * c * P[1, 1] + sig2
-            a12 = (c * c - s * s) * P[0, 1] + c * s * (P[1, 1] - P[0, 0])
-            det = a11 * a22 - a12 * a12
-            inside = self._in_tile_probability(L, np.sqrt(a11 - sig2) + 1e-9, np.sqrt(a22 - sig2) + 1e-9)
-            det_term = 0.0
-            for m in range(len(ell)):
-                e0, e1 = ell[m, 0] - L[:, 0], ell[m, 1] - L[:, 1]
-                q2 = (a22 * e0 * e0 - 2 * a12 * e0 * e1 + a11 * e1 * e1) / det
-                lik = np.exp(-0.5 * q2) / (2 * np.pi * np.sqrt(det))
-                det_term = det_term + nu[j, m] * lik * float(pc @ f_pi[m])
-            rk = self.r[k]
-            gamma = (1.0 - rk) + rk * ((1.0 - cfg.pd * inside) + cfg.pd * ratio * det_term)
-            out[j] = np.log(np.maximum(gamma, 1e-300))
-        return out
+        W = self.W[rel]
+        q = W.sum(-1)  # (Kr, N) position weights
+        mu = np.einsum("kn,knd->kd", q, self.X[rel])
+        dx = self.X[rel] - mu[:, None, :]
+        P = np.einsum("kn,kni,knj->kij", q, dx, dx)  # (Kr, 2, 2)
+        p00, p01, p11 = P[:, 0, 0, None], P[:, 0, 1, None], P[:, 1, 1, None]
+        L = rotate_to_local(mu[:, None, :] - pos[None], psi[None])  # (Kr, N, 2)
+        c, s = np.cos(psi), np.sin(psi)
+        # R^T P R per vehicle particle
+        a11 = c * c * p00 + 2 * c * s * p01 + s * s * p11 + sig2
+        a22 = s * s * p00 - 2 * c * s * p01 + c * c * p11 + sig2
+        a12 = (c * c - s * s) * p01 + c * s * (p11 - p00)
+        det = a11 * a22 - a12 * a12  # (Kr, N)
+        inside = self._in_tile_probability(L, np.sqrt(a11 - sig2) + 1e-9, np.sqrt(a22 - sig2) + 1e-9)
+        e0 = ell[None, None, :, 0] - L[..., 0, None]
+        e1 = ell[None, None, :, 1] - L[..., 1, None]  # (Kr, N, M)
+        q2 = (a22[..., None] * e0 * e0 - 2 * a12[..., None] * e0 * e1 + a11[..., None] * e1 * e1) / det[..., None]
+        lik = np.exp(-0.5 * q2) / (2 * np.pi * np.sqrt(det))[..., None]
+        det_term = np.einsum("knm,km->kn", lik, nu * (W.sum(1) @ f_pi.T))  # sum_m nu lik f(pi_m)
+        rk = self.r[rel][:, None]
+        gamma = (1.0 - rk) + rk * ((1.0 - cfg.pd * inside) + cfg.pd * ratio * det_term)
+        return np.log(np.maximum(gamma, 1e-300))
 
-    def _update_legacy(self, rel, veh, ell, f_pi, nu, ratio, ext_logw) -> None:
+    def _update_legacy(self, rel, veh, ell, f_pi, nu, ratio, ext_logw, terms=None) -> None:
         """PO beliefs from the association messages (paper 003, IV-D/E, ``zeta_{q_k -> y_k}``):
         the vehicle belief each PO sees is the extrinsic one (every message but its own,
-        ``ext_logw`` (Kr, N) log-weights over ``veh``), as a Gaussian summary."""
+        ``ext_logw`` (Kr, N) log-weights over ``veh``), as a Gaussian summary. In the point
+        modes that is the equally weighted one for every PO, whose :meth:`_po_likelihoods` the
+        association already computed (``terms``, reused when given)."""
         cfg = self.cfg
         n = cfg.n_particles
+        if cfg.mode == "spa":  # one extrinsic vehicle belief per PO
+            lw = np.exp(ext_logw - ext_logw.max(axis=1, keepdims=True))
+            terms = self._po_likelihoods(self.X[rel], self._vehicle_summaries(veh, lw / lw.sum(axis=1, keepdims=True)),
+                                         ell)
+        elif terms is None:
+            terms = self._po_likelihoods(self.X[rel], self._uniform_vehicle_summary(veh), ell)
+        lik, inside = terms  # (Kr, N, M), (Kr, N)
+        acc = np.einsum("knm,km,mc->knc", lik, nu, f_pi)  # (Kr, N, C)
+        factor = (1.0 - cfg.pd * inside)[..., None] + cfg.pd * ratio * acc
+        w = self.W[rel] * factor
+        q_all = np.einsum("knc->kn", w)  # (Kr, N) position weights
+        z = q_all.sum(axis=1)
+        rk = self.r[rel]
+        self.r[rel] = rk * z / (rk * z + 1.0 - rk)
         for j, k in enumerate(rel):
-            lw = np.exp(ext_logw[j] - ext_logw[j].max())
-            lik, inside = self._po_likelihoods(self.X[k][None], self._vehicle_summary(veh, lw / lw.sum()), ell)
-            acc = (lik[0] * nu[j][None, :]) @ f_pi  # (N, C)
-            factor = (1.0 - cfg.pd * inside[0])[:, None] + cfg.pd * ratio * acc
-            w = self.W[k] * factor
-            z = float(w.sum())
-            rk = self.r[k]
-            self.r[k] = rk * z / (rk * z + 1.0 - rk)
-            if z <= 0.0:
+            if z[j] <= 0.0:
                 continue
-            w /= z
-            q = w.sum(-1)
-            if 1.0 / np.sum(q * q) < 0.5 * n:
+            wk = w[j] / z[j]
+            q = q_all[j] / z[j]
+            if 1.0 / np.dot(q, q) < 0.5 * n:
                 idx = systematic_resample(q, self.rng)
                 X = self.X[k][idx]
                 self.X[k] = X + self._roughening(X)
-                self.W[k] = w[idx] / q[idx][:, None] / n
+                self.W[k] = wk[idx] / q[idx][:, None] / n
             else:
-                self.W[k] = w
+                self.W[k] = wk
         if len(self._po_stats) == len(self.r):
             self._po_stats[rel] = self._summarise_pos(self.X[rel])
 
@@ -463,7 +512,8 @@ class SpaMapper:
         """Confirmed objects: existence above ``threshold`` (default ``E_th``)."""
         th = self.cfg.confirm_threshold if threshold is None else threshold
         sel = np.flatnonzero(self.r > th)
-        q = self.W[sel].sum(-1)  # (J, N)
-        pos = np.einsum("ki,kid->kd", q, self.X[sel]) / np.maximum(q.sum(1, keepdims=True), 1e-300)
-        cls = np.argmax(self.W[sel].sum(1), axis=1) if len(sel) else np.zeros(0, dtype=np.intp)
+        W = self.W[sel]
+        w_cls = W.sum(axis=1)  # (J, C)
+        pos = np.einsum("kic,kid->kd", W, self.X[sel]) / np.maximum(w_cls.sum(1, keepdims=True), 1e-300)
+        cls = np.argmax(w_cls, axis=1) if len(sel) else np.zeros(0, dtype=np.intp)
         return MapEstimate(pos.reshape(-1, 2), cls.astype(np.intp), self.r[sel].copy())

@@ -30,6 +30,15 @@ def print_summary(metrics: dict, out: str) -> None:
         print(f"world model: {wm['objects']} targets ({wm.get('objects_not_target', 0)} more objects classified "
               f"not target), {wm['matched']} matched, {wm['missed']} missed, {wm['false']} false, "
               f"mean error {_fmt(wm.get('mean_position_error_m'), '.2f', ' m')}, GOSPA {_fmt(wm.get('gospa'), '.2f')}")
+    if "surface_world_model" in metrics:
+        wm = metrics["surface_world_model"]
+        print(f"surface world model: {wm['objects']} targets, {wm['matched']} matched, {wm['missed']} missed, "
+              f"{wm['false']} false, mean error {_fmt(wm.get('mean_position_error_m'), '.2f', ' m')}")
+    if "link" in metrics:
+        up, down = metrics["link"]["uplink_detections"], metrics["link"]["downlink_usbl_fixes"]
+        for name, st in (("detections up", up), ("USBL fixes down", down)):
+            print(f"link, {name}: {st['sent']} sent, {st['delivered']} delivered, {st['lost']} lost, latency mean "
+                  f"{_fmt(st.get('mean_latency_s'), '.2f', ' s')}, p95 {_fmt(st.get('p95_latency_s'), '.2f', ' s')}")
     if "tracking" in metrics:
         tr = metrics["tracking"]
         errs = ", ".join(f"{k} {_fmt(v.get('mean_m'), '.2f')} +- {_fmt(v.get('std_m'), '.2f')} m"
@@ -37,6 +46,12 @@ def print_summary(metrics: dict, out: str) -> None:
         print(f"tracking ({tr['mode']}; 3-D error, horizontal in metrics.json): {errs}; sonar used in "
               f"{_fmt(100 * tr['fused_sonar_step_fraction'], '.0f')} % "
               f"of steps; target in view {_fmt(100 * tr['target_in_fov_fraction'], '.0f')} %")
+    if "mcm" in metrics:
+        mcm, det = metrics["mcm"], metrics["mcm"]["detector"]
+        maps = ", ".join(f"{k} GOSPA {_fmt(v['final_gospa_mean'], '.1f')} ({v['final_cardinality_mean']:.0f} objects)"
+                         for k, v in mcm.items() if isinstance(v, dict) and "final_gospa_mean" in v)
+        print(f"mcm: {det['tiles']} tiles, detector pd {_fmt(det['pd'], '.2f')}, "
+              f"{det['clutter_per_tile']:.2f} false per tile; {maps}")
     if "msis_localization" in metrics:
         ml = metrics["msis_localization"]
         print(f"msis localisation: {ml['n_fixes']} sonar position fixes, horizontal RMS error "

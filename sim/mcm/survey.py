@@ -165,31 +165,60 @@ def run_survey(cfg: McmSurveyConfig, run_index: int, thresholds: FloatArray | No
     tiles = [detector.detect(path.state(np.array([t]))[0], truth_pos, truth_cls) for t in t_tiles]
     out: dict = {"run": int(run_index), "seed": seed, "n_tiles": n_tiles, "n_objects": int(len(truth_pos)),
                  "lambda0_rad": lam, "iota": iota}
-    s0 = path.state(np.array([0.0]))[0]
-    for mode in cfg.modes:
-        mapper = SpaMapper(cfg.mapper_config(mode), s0, component_rng(seed, f"mcm/mapper/{mode}"))
+    true_at_tiles = path.state(t_tiles)
+    out.update(map_and_score(cfg.mapper_config, cfg.modes, seed, truth_pos, truth_cls, t_nav, g, t_tiles, tiles,
+                             true_at_tiles, path.state(np.array([0.0]))[0], th, cfg.gospa_cutoff_m,
+                             cfg.correct_within_m))
+    return out
+
+
+def map_and_score(mapper_config, modes, seed: int, truth_pos: FloatArray, truth_cls: NDArray[np.intp],
+                  t_nav: FloatArray, g: FloatArray, t_tiles: FloatArray, tiles: list[tuple[FloatArray, FloatArray]],
+                  true_at_tiles: FloatArray, initial_state: FloatArray, thresholds: FloatArray,
+                  gospa_cutoff_m: float, correct_within_m: float) -> dict:
+    """Run each mapper of ``modes`` over one survey's INS outputs and tile detections, and
+    score it (paper 003, Section V; shared by the kinematic and the full mode).
+
+    Args:
+        mapper_config: mode -> :class:`SpaMapperConfig`.
+        modes: the mappers to run; seed: the run's seed (mapper ``component_rng`` streams).
+        truth_pos: (K, 2) true objects (north, east) m; truth_cls: (K,) 0 mine-like, 1 other.
+        t_nav: (T,) INS output times, s; g: (T, 3) INS outputs (north m, east m, heading rad).
+        t_tiles: (N,) tile times, s; tiles: N pairs ``(ell (M, 2) tile frame m, pi1 (M,))``.
+        true_at_tiles: (N, 5) true states [north, east, v_north, v_east, turn rate] at the tiles.
+        initial_state: (5,) the known start state.
+        thresholds: existence thresholds for correct / false counts.
+        gospa_cutoff_m, correct_within_m: GOSPA cut-off c (p 1, alpha 2); match radius, m.
+
+    Returns:
+        per mode: ``gospa``, ``cardinality``, ``auv_err_m`` (per tile), ``final_gospa``,
+        ``auv_rmse_m``, ``class_accuracy``, ``class_matched``, ``correct``, ``false``; and
+        ``thresholds``.
+    """
+    out: dict = {}
+    for mode in modes:
+        mapper = SpaMapper(mapper_config(mode), initial_state, component_rng(seed, f"mcm/mapper/{mode}"))
         gos, card, err = [], [], []
         k_nav = 0
-        for t_tile, (ell, pi1) in zip(t_tiles, tiles):
-            while k_nav < len(t_nav) and t_nav[k_nav] <= t_tile + 1e-9:
-                mapper.nav_update(float(t_nav[k_nav]), g[k_nav])
-                k_nav += 1
-            true_state = path.state(np.array([t_tile]))[0]
+        for t_tile, (ell, pi1), true_state in zip(t_tiles, tiles, true_at_tiles):
+            k_end = int(np.searchsorted(t_nav, t_tile + 1e-9, side="right"))  # INS outputs up to the tile
+            mapper.nav_updates(t_nav[k_nav:k_end], g[k_nav:k_end])
+            k_nav = max(k_nav, k_end)
             mapper.set_true_state(true_state)
             mapper.tile_update(ell, pi1)
             est = mapper.estimate()
-            gos.append(gospa(est.pos_ned, truth_pos, c=cfg.gospa_cutoff_m, p=1.0))
+            gos.append(gospa(est.pos_ned, truth_pos, c=gospa_cutoff_m, p=1.0))
             card.append(int(len(est.pos_ned)))
             err.append(float(np.linalg.norm(mapper.vehicle_estimate()[:2] - true_state[:2])))
         correct, false = [], []
         acc_hits = acc_n = 0
-        for e_th in th:
+        for e_th in thresholds:
             est = mapper.estimate(float(e_th))
-            pairs = match(est.pos_ned, truth_pos, max_dist_m=cfg.correct_within_m)
+            pairs = match(est.pos_ned, truth_pos, max_dist_m=correct_within_m)
             correct.append(len(pairs))
             false.append(int(len(est.pos_ned) - len(pairs)))
         est = mapper.estimate()
-        for i_est, i_tru, _ in match(est.pos_ned, truth_pos, max_dist_m=cfg.correct_within_m):
+        for i_est, i_tru, _ in match(est.pos_ned, truth_pos, max_dist_m=correct_within_m):
             acc_n += 1
             acc_hits += int(est.class_index[i_est] == truth_cls[i_tru])
         out[mode] = {
@@ -198,5 +227,5 @@ def run_survey(cfg: McmSurveyConfig, run_index: int, thresholds: FloatArray | No
             "class_accuracy": acc_hits / acc_n if acc_n else None, "class_matched": acc_n,
             "correct": correct, "false": false,
         }
-    out["thresholds"] = th.tolist()
+    out["thresholds"] = np.asarray(thresholds, dtype=float).tolist()
     return out

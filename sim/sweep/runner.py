@@ -126,12 +126,9 @@ def run_grid(out: str | os.PathLike[str], spec: SweepSpec, grid: dict[str, list[
     both = sorted(set(grid) & set(spec.overrides))
     if both:
         raise SweepError(f"--grid {both[0]}: also given with --set; give it in one place")
-    if spec.scenario not in SWEEPABLE:
-        raise SweepError(f"sweep: scenario {spec.scenario!r} has no Monte Carlo runner; sweepable: "
-                         f"{sorted(SWEEPABLE)}")
     points = grid_points(grid)
     for point in points:  # every point is checked before any runs
-        SWEEPABLE[spec.scenario][0](SweepSpec(spec.scenario, spec.runs, spec.seed, {**spec.overrides, **point}))
+        sweep_parts(spec.scenario)[0](SweepSpec(spec.scenario, spec.runs, spec.seed, {**spec.overrides, **point}))
     folder = check_output_dir(out, kind=SWEEP_KIND, resume=True)
     folder.mkdir(parents=True, exist_ok=True)
     write_marker(folder, SWEEP_KIND)
@@ -183,8 +180,39 @@ def _mcm_finish(out: Path, spec: SweepSpec, results: list[dict]) -> dict:
     return summary
 
 
+def _mcm_full_config(spec: SweepSpec):
+    """A scenario file with ``mcm.mode: full``; ``--set`` keys are the scenario's dotted keys."""
+    from scenarios.load import ScenarioError, load_scenario
+
+    items = [f"{k}={json.dumps(v)}" for k, v in spec.overrides.items()] + [f"seed={spec.seed}"]
+    try:
+        scenario = load_scenario(spec.scenario, items)
+    except ScenarioError as exc:
+        raise SweepError(f"sweep: {exc} (sweepable: mcm_survey and scenarios with mcm.mode: full)") from None
+    if scenario.mcm.mode != "full":
+        raise SweepError(f"sweep: scenario {spec.scenario!r} has no Monte Carlo runner (mcm.mode is "
+                         f"{scenario.mcm.mode!r}; sweepable: mcm_survey and scenarios with mcm.mode: full)")
+    return scenario
+
+
+def _mcm_full_job(args: tuple[dict, int]) -> dict:
+    from scenarios.schema import Scenario
+    from sim.mcm.full_mode import run_full
+
+    scenario_json, i = args
+    return run_full(Scenario.model_validate(scenario_json), i)
+
+
 #: scenario name -> (config builder, run job (picklable), finisher (summary + figures))
 SWEEPABLE: dict[str, tuple[Callable, Callable, Callable]] = {"mcm_survey": (_mcm_config, _mcm_job, _mcm_finish)}
+#: any other scenario with ``mcm.mode: full`` sweeps with these
+MCM_FULL = (_mcm_full_config, _mcm_full_job, _mcm_finish)
+
+
+def sweep_parts(scenario: str) -> tuple[Callable, Callable, Callable]:
+    """The (config builder, job, finisher) of ``scenario``: :data:`SWEEPABLE`, else the full
+    MCM mode for a scenario file (checked by the builder)."""
+    return SWEEPABLE.get(scenario, MCM_FULL)
 
 
 def _write_atomic(path: Path, text: str) -> None:
@@ -269,10 +297,7 @@ def run_sweep(out: str | os.PathLike[str], spec: SweepSpec, *, workers: int = 1,
             unreachable.
         OutputDirError: the folder is protected or holds something else.
     """
-    if spec.scenario not in SWEEPABLE:
-        raise SweepError(f"sweep: scenario {spec.scenario!r} has no Monte Carlo runner; sweepable: "
-                         f"{sorted(SWEEPABLE)}")
-    build, job, finish = SWEEPABLE[spec.scenario]
+    build, job, finish = sweep_parts(spec.scenario)
     cfg = build(spec)
     folder = check_output_dir(out, kind=SWEEP_KIND, resume=True)
     if use_ray and ray_address:

@@ -23,6 +23,11 @@ def test_shipped_files_load_unchanged_with_the_default_suite(name):
         # a dump lists the entries kept; the removed defaults need their nulls again
         assert Scenario.model_validate({**dump, "sensors": {**dump["sensors"], **dict.fromkeys(removed)}}) == scn
         return
+    if scn.mcm.mode == "full":  # the MCM full mode replaces the FLS with a side-scan sonar
+        assert list(scn.sensors) == [d for d in DEFAULTS if d != "fls"] + ["sss"]
+        dump = scn.model_dump()
+        assert Scenario.model_validate({**dump, "sensors": {**dump["sensors"], "fls": None}}) == scn
+        return
     tracking = scn.autonomy.tracking.enabled  # the diver-tracking scenarios add a USBL, an ARIS window
     assert list(scn.sensors) == DEFAULTS + (["usbl"] if tracking else [])
     assert all(cfg.kind == entry for entry, cfg in scn.sensors.items())

@@ -1,0 +1,1 @@
+"""Onboard side-scan processing: tiles from pings, and the highlight-shadow detector."""
