@@ -18,9 +18,11 @@ topic                       type                               rate
 /auvsim/<fls>/image         marine_acoustic_msgs/ProjectedSonarImage  sensor rate / fls_every
 /auvsim/<fls>/detections    vision_msgs/Detection2DArray       per processed frame
 /auvsim/world_model         visualization_msgs/MarkerArray     per processed frame
+/auvsim/<vehicle>/truth/odometry  nav_msgs/Odometry            autonomy rate (map, <vehicle>_truth)
 =========================== ================================== =============================
 
-``<name>`` is the sensor's entry name in the scenario. Messages of other sensors (GPS,
+``<name>`` is the sensor's entry name in the scenario, ``<vehicle>`` an extra vehicle's
+(``vehicles:``, e.g. the sea trial's buoy; ``/tf`` carries map->``<vehicle>_truth`` too). Messages of other sensors (GPS,
 USBL, ...) are not exported.
 """
 
@@ -151,7 +153,13 @@ class RosbagRecorder:
         R_nav = rot_from_euler(*nav.rpy_rad)
         pos_true_enu_tf = c.transform(r.t_s, MAP, BASE_TRUTH, enu_from_ned(tr.pos_ned), rot_enu_flu(tr.R_nb))
         pos_nav_enu_tf = c.transform(r.t_s, ODOM, BASE, enu_from_ned(nav.pos_ned), rot_enu_flu(R_nav))
-        self._write("/tf", "tf2_msgs/msg/TFMessage", r.t_s, c.tf_message([pos_true_enu_tf, pos_nav_enu_tf]))
+        others = [(name, f"{name}_truth", o) for name, o in r.others.items()]
+        other_tfs = [c.transform(r.t_s, MAP, frame, enu_from_ned(o.pos_ned), rot_enu_flu(o.R_nb))
+                     for _, frame, o in others]
+        self._write("/tf", "tf2_msgs/msg/TFMessage", r.t_s, c.tf_message([pos_true_enu_tf, pos_nav_enu_tf, *other_tfs]))
+        for name, frame, o in others:
+            self._write(f"/auvsim/{name}/truth/odometry", "nav_msgs/msg/Odometry", r.t_s,
+                        c.odometry(r.t_s, o.pos_ned, o.R_nb, o.nu[:3], o.nu[3:], MAP, frame))
         self._write("/auvsim/truth/odometry", "nav_msgs/msg/Odometry", r.t_s,
                     c.odometry(r.t_s, tr.pos_ned, tr.R_nb, tr.nu[:3], tr.nu[3:], MAP, BASE_TRUTH))
         self._write("/auvsim/truth/pose", "geometry_msgs/msg/PoseStamped", r.t_s,

@@ -260,3 +260,41 @@ def test_scenario_outputs_key_is_validated(tmp_path, capsys):
 
     assert main(["validate", "cssn_lawnmower", "--set", "outputs.rosbag_fls_every=0"]) == 2
     assert "outputs.rosbag_fls_every" in capsys.readouterr().err
+
+
+def test_extra_vehicles_get_their_true_odometry_and_tf(tmp_path):
+    """The sea trial's buoy: /auvsim/buoy/truth/odometry and map->buoy_truth are its true
+    state at each autonomy step, in ENU."""
+    class _Steps:
+        def __init__(self) -> None:
+            self.buoy_ned: list = []
+
+        def on_start(self, info) -> None: ...
+
+        def on_step(self, r) -> None:
+            self.buoy_ned.append(r.others["buoy"].pos_ned.copy())
+
+        def on_message(self, name, msg) -> None: ...
+
+        def on_end(self, summary) -> None: ...
+
+    scn = load_scenario("cssn_sea_trial", ["duration_s=2", "autonomy.atr.detector=none"])
+    steps = _Steps()
+    mission = Mission(scn, observers=[steps, RosbagRecorder(tmp_path / "rosbag", fls_every=1000)])
+    mission.reset()
+    mission.run(progress=False)
+    store = make_typestore()
+    odo, tf = [], []
+    with Reader(tmp_path / "rosbag") as reader:
+        for conn, _, raw in reader.messages():
+            if conn.topic == "/auvsim/buoy/truth/odometry":
+                odo.append(store.deserialize_cdr(raw, conn.msgtype))
+            elif conn.topic == "/tf":
+                tf += [t for t in store.deserialize_cdr(raw, conn.msgtype).transforms if t.child_frame_id == "buoy_truth"]
+    ned = np.array(steps.buoy_ned)
+    assert len(ned) >= 10 and len(odo) == len(ned) == len(tf)
+    assert {m.child_frame_id for m in odo} == {"buoy_truth"} and {t.header.frame_id for t in tf} == {"map"}
+    pos = np.array([[m.pose.pose.position.x, m.pose.pose.position.y, m.pose.pose.position.z] for m in odo])
+    np.testing.assert_allclose(pos, np.c_[ned[:, 1], ned[:, 0], -ned[:, 2]], atol=1e-9)
+    np.testing.assert_allclose([[t.transform.translation.x, t.transform.translation.y] for t in tf], pos[:, :2],
+                               atol=1e-9)
