@@ -163,15 +163,19 @@ class SideScanSonar(Sensor[SssRender]):
 
     # -- rendering --------------------------------------------------------------------------
     def side_segments(self, side: int, origin_ned: FloatArray, R_nb: FloatArray, caster: RayCaster,
-                      objects: Sequence[SceneObjectLike]) -> tuple[EchoSegments, float]:
+                      objects: Sequence[SceneObjectLike],
+                      spheres: dict[int, tuple[FloatArray, float]] | None = None) -> tuple[EchoSegments, float]:
         """Echo intervals of one side (0 port, 1 starboard) on line ``side``, along-track columns
-        summed with their beam-pattern weights; and the range of its vertical ray (m, inf if none)."""
+        summed with their beam-pattern weights; and the range of its vertical ray (m, inf if none).
+
+        ``spheres``: object id -> bounding sphere (centre (3,) NED m, radius m), shared by both
+        sides of a ping (default: asked of the caster)."""
         cfg = self.cfg
         R_ns = R_nb @ self.R_bs[side]
         rmax = float(cfg.range_max_m)
         base, _ = self.fan.cast(caster, origin_ned, R_ns, rmax)
         sampled, _, pairs = add_object_rays(self.fan, base, caster, origin_ned, R_ns, objects, 0.0, rmax, rmax,
-                                            OBJECT_RAYS_ACROSS)
+                                            OBJECT_RAYS_ACROSS, spheres=spheres)
         rays, segs = self.fan.refine_edges(caster, origin_ned, R_ns, sampled, rmax, rmax, cfg.edge_refine_iters,
                                            pairs)
         strength = ray_strength(rays, cfg.scattering_exponent, self.vertical_beamwidth_rad,
@@ -196,7 +200,10 @@ class SideScanSonar(Sensor[SssRender]):
         """
         origin = np.asarray(pos_ned, dtype=float).reshape(3)
         R = np.asarray(R_nb, dtype=float).reshape(3, 3)
-        parts = [self.side_segments(s, origin, R, caster, objects) for s in (0, 1)]
+        spheres = None
+        if objects and hasattr(caster, "object_bounding_sphere"):  # once per ping, not per side
+            spheres = {int(o.id): caster.object_bounding_sphere(int(o.id)) for o in objects}
+        parts = [self.side_segments(s, origin, R, caster, objects, spheres) for s in (0, 1)]
         seg = EchoSegments(*(np.concatenate([getattr(p[0], f) for p in parts])
                              for f in ("line", "u0", "u1", "energy", "obj")))
         altitude = min(parts[0][1], parts[1][1])
