@@ -121,13 +121,12 @@ class MujocoRayCaster:
         """Cast unit ``dirs_ned`` (N, 3) from ``origin_ned`` (3,); hits beyond ``max_range_m`` are misses."""
         n = self._raw(origin_ned, dirs_ned, max_range_m, self.geomgroup, self.exclude_body_id)
         gid = self._geomid[:n].astype(np.intp)
-        hit = gid >= 0
-        dist = np.where(hit, self._dist[:n], np.inf)
-        hit &= dist <= max_range_m
-        dist[~hit] = np.inf
-        gid[~hit] = -1
+        dist = self._dist[:n].copy()
+        miss = (gid < 0) | ~(dist <= max_range_m)
+        dist[miss] = np.inf
+        gid[miss] = -1
         normal = self._normal[:3 * n].reshape(n, 3).copy()
-        normal[~hit] = 0.0
+        normal[miss] = 0.0
         return RayHits(dist_m=dist, normal_ned=normal, reflectivity=self._refl_lut[gid],
                        object_id=self._obj_lut[gid])
 
