@@ -33,7 +33,7 @@ from sim.sensors.sonar.beam_pattern import two_way_beam_power
 from sim.sensors.sonar.echo_chain import EchoChain
 from sim.sensors.sonar.echo_lines import EchoSegments, echo_segments, ray_strength
 from sim.sensors.sonar.ground_truth import SceneObjectLike, label_bins
-from sim.sensors.sonar.object_rays import add_object_rays
+from sim.sensors.sonar.object_rays import add_object_rays, sphere_in_window
 from sim.sensors.sonar.ray_fan import RayFan
 from sim.truth import VehicleTruth
 
@@ -203,6 +203,11 @@ class SideScanSonar(Sensor[SssRender]):
         spheres = None
         if objects and hasattr(caster, "object_bounding_sphere"):  # once per ping, not per side
             spheres = {int(o.id): caster.object_bounding_sphere(int(o.id)) for o in objects}
+            # both sides share the range window: drop the objects out of range once
+            rmax = float(self.cfg.range_max_m)
+            objects = [o for o in objects
+                       if sphere_in_window(np.asarray(spheres[int(o.id)][0], dtype=float) - origin,
+                                           spheres[int(o.id)][1], 0.0, rmax)]
         parts = [self.side_segments(s, origin, R, caster, objects, spheres) for s in (0, 1)]
         seg = EchoSegments(*(np.concatenate([getattr(p[0], f) for p in parts])
                              for f in ("line", "u0", "u1", "energy", "obj")))
