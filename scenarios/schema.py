@@ -170,3 +170,15 @@ class Scenario(StrictModel):
                 raise ValueError(f"mcm.sensor: mode full needs an enabled side-scan (kind sss) sensor entry "
                                  f"named {self.mcm.sensor!r}")
         return self
+
+    @model_validator(mode="after")
+    def _link_has_its_surface_vehicle(self) -> "Scenario":
+        comms = self.comms
+        if comms.acoustic.enabled:
+            name = comms.surface.vehicle
+            if name not in self.vehicles:
+                raise ValueError(f"comms.surface.vehicle {name!r} is not a key of vehicles: "
+                                 f"{sorted(self.vehicles) or 'none'} (comms.acoustic needs the surface vehicle)")
+            if comms.surface.usbl_fixes and self.vehicles[name].usbl is None:
+                raise ValueError(f"comms.surface.usbl_fixes needs vehicles.{name}.usbl (its USBL head)")
+        return self

@@ -2,7 +2,9 @@
 
 Runs each tracking scenario over N seeds (no output files) and reports, per scenario, the
 mean over seeds of each error set's mean and spread (m), the fraction of filter steps with a
-sonar detection in the fused filter, and the ROI gating of bubble clusters; with
+sonar detection in the fused filter, the ROI gating of bubble clusters, and what the sonar
+could see of the diver's bubble plume (breaths in its view, and apart from the diver's body
+in its plane: ``TrackingEvaluation.plume_metrics``); with
 ``--json`` also every run's figures; with ``--png DIR`` the box plot of the four error sets
 pooled over the seeds, horizontal error as in paper 004 fig. 8
 (``DIR/tracking_study_<scenario>.png``).
@@ -32,8 +34,9 @@ from sim.evaluation.tracking_eval import ERROR_SETS, error_boxplot_png, evaluati
 from sim.mission import Mission  # noqa: E402
 
 
-def run_one(scenario: str, seed: int, duration_s: float | None) -> tuple[dict, dict[str, np.ndarray]]:
-    overrides = [f"seed={seed}"] + ([f"duration_s={duration_s}"] if duration_s else [])
+def run_one(scenario: str, seed: int, duration_s: float | None,
+            extra: list[str] = ()) -> tuple[dict, dict[str, np.ndarray]]:
+    overrides = [f"seed={seed}"] + ([f"duration_s={duration_s}"] if duration_s else []) + list(extra)
     mission = Mission(load_scenario(scenario, overrides), perception=True)
     ev = evaluation_for(mission)
     mission.observers.append(ev)
@@ -63,6 +66,22 @@ def summarise(runs: list[dict]) -> dict:
         ok = np.isfinite(v) & (w > 0)
         roi[frac] = float(np.sum(v[ok] * w[ok]) / np.sum(w[ok])) if ok.any() else math.nan
     out["roi"] = roi
+    plumes = [r["plume"] for r in runs if r.get("plume", {}).get("frames")]
+    if plumes:
+        tot = {k: sum(p[k] for p in plumes) for k in ("frames", "breath_frames_in_view", "breath_frames_apart",
+                                                      "breaths_seen")}
+        seen = np.array([p["breaths_seen"] for p in plumes], dtype=float)
+        age = np.array([p["last_in_view_age_mean_s"] for p in plumes], dtype=float)
+        ok = np.isfinite(age) & (seen > 0)
+        out["plume"] = {**tot, "apart_m": plumes[0]["apart_m"],
+                        "breaths_in_view_per_frame": tot["breath_frames_in_view"] / tot["frames"],
+                        "apart_fraction_of_in_view": tot["breath_frames_apart"] / tot["breath_frames_in_view"]
+                        if tot["breath_frames_in_view"] else math.nan,
+                        "last_in_view_age_mean_s": float(np.sum(age[ok] * seen[ok]) / np.sum(seen[ok]))
+                        if ok.any() else math.nan,
+                        "last_in_view_age_max_s": float(np.nanmax([p["last_in_view_age_max_s"] for p in plumes])),
+                        "nearest_to_body_median_m_mean": float(np.nanmean(
+                            [p["nearest_to_body_median_m"] for p in plumes]))}
     for prefix in ("", "horizontal_"):
         f, so, us = out[prefix + "fused"], out[prefix + "sonar"], out[prefix + "usbl"]
         out[prefix + "fused_beats_both"] = bool(f["mean_m"] < min(so["mean_m"], us["mean_m"]) and
@@ -78,7 +97,7 @@ def check_args(args) -> None:
         CliError: naming the argument and what is allowed; ScenarioError: a scenario does not load.
     """
     for name in args.scenarios:
-        scn = load_scenario(name, [f"duration_s={args.duration}"] if args.duration else [])
+        scn = load_scenario(name, ([f"duration_s={args.duration}"] if args.duration else []) + args.overrides)
         if not scn.autonomy.tracking.enabled:
             raise CliError(f"--scenarios {name}: does not track a target (autonomy.tracking.enabled is false; "
                            "shipped: track_static_vehicle, track_moving_vehicle, diver_follow)")
@@ -100,13 +119,16 @@ def study(args) -> int:
     for name in args.scenarios:
         runs, pooled = [], {k: [] for k in ERROR_SETS}
         for seed in range(args.seeds):
-            metrics, sets = run_one(name, seed, args.duration)
+            metrics, sets = run_one(name, seed, args.duration, args.overrides)
             runs.append(metrics)
             for k in ERROR_SETS:
                 pooled[k].append(sets[k])
             e = runs[-1]["errors_horizontal"]
             print(f"{name} seed {seed} (horizontal): " + ", ".join(f"{k} {e[k].get('mean_m', math.nan):.2f}" for k in ERROR_SETS)
-                  + f"; sonar steps {runs[-1]['fused_sonar_step_fraction']:.2f}", flush=True)
+                  + f"; sonar steps {runs[-1]['fused_sonar_step_fraction']:.2f}"
+                  + f"; bubble clusters {runs[-1]['roi']['bubble_clusters']}"
+                  + f", breaths in view / apart {runs[-1].get('plume', {}).get('breath_frames_in_view', 0)}"
+                  + f" / {runs[-1].get('plume', {}).get('breath_frames_apart', 0)}", flush=True)
         report[name] = {"summary": summarise(runs), "runs": runs}
         if args.png:
             stem = Path(name).stem
@@ -126,6 +148,9 @@ def main(argv: list[str] | None = None) -> int:
                    help="shipped scenario names or YAML files that track a target")
     p.add_argument("--json", type=Path, default=None, help="write every run and the summary here")
     p.add_argument("--png", type=Path, default=None, help="folder for the pooled box plots")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="scenario override for every run (as `auvsim run --set`), e.g. "
+                        "world.current.velocity_ned_mps=[-0.35,0.35,0]")
     return run_script(p, study, argv)
 
 

@@ -11,6 +11,13 @@ machine's bottom-lock flag) and on its source (perception runs on the frames of 
 ATR -> geolocalisation -> world model; or, when the scenario tracks a target, the tracking
 stack takes the USBL fixes and that sonar's frames, and the buddy observer may guide). Observers receive every delivered message and the
 perception results by sensor name, and immutable start and end summaries.
+
+With extra vehicles (``scenario.vehicles``) each one's sensors and autonomy tick every
+period (:class:`sim.surface_runner.SurfaceVehicleRunner`); with ``comms.acoustic`` on, the
+acoustic link (:class:`sim.comms.vehicle_link.VehicleLink`) carries each frame's detections
+up to the surface world model and the surface vehicle's USBL fixes down to the AUV, whose
+navigation filter fuses them at their measurement time
+(:class:`autonomy.navigation.delayed.DelayedFixFilter`).
 """
 
 from __future__ import annotations
@@ -18,7 +25,7 @@ from __future__ import annotations
 import math
 import time
 from collections import Counter
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from types import MappingProxyType
 from typing import Any
 
@@ -26,10 +33,12 @@ import numpy as np
 
 from autonomy.control.setpoint import Setpoint
 from autonomy.messages import DvlMsg, NavEstimate, UsblMsg, WrenchCmdMsg
+from autonomy.navigation.delayed import DelayedFixFilter
 from scenarios.schema import Scenario
 from sim.mission_build import NAV_SOURCES, MissionParts, build_mission_parts
 from sim.physics import Physics
-from sim.records import MissionInfo, MissionObserver, MissionSummary, StepRecord
+from sim.comms.vehicle_link import VehicleLink
+from sim.records import MissionInfo, MissionObserver, MissionSummary, PerceptionResult, StepRecord
 from sim.sensors.base import SceneView, Sensor
 from sim.sonar_pipeline import FrameTicket, SonarPipeline
 from sim.stage_timer import NULL_TIMER, StageTimer
@@ -95,6 +104,8 @@ class Mission:
         #: The extra vehicles' sensors and autonomy (``scenario.vehicles``), ticked each period.
         self.surface_vehicles: dict[str, SurfaceVehicleRunner] = {
             name: SurfaceVehicleRunner(self.physics, name, cfg, seed) for name, cfg in self.scenario.vehicles.items()}
+        #: The acoustic link to the surface vehicle (None: ``comms.acoustic`` off), built by :meth:`reset`.
+        self.link: VehicleLink | None = None
 
     # -- read-only views ---------------------------------------------------------------
     @property
@@ -147,6 +158,8 @@ class Mission:
             vehicle_envelope_m=tuple(float(x) for x in self.physics.params.envelope_m),
             sensors=MappingProxyType({n: s.kind for n, s in self.parts.sensors.items()}),
             sensor_mounts=MappingProxyType({n: s.mount for n, s in self.parts.sensors.items()}),
+            vehicle_envelopes_m=MappingProxyType({n: tuple(float(x) for x in e.params.envelope_m)
+                                                  for n, e in self.physics.extras.items()}),
         )
 
     # -- stepping API ----------------------------------------------------------------
@@ -161,10 +174,20 @@ class Mission:
         self.physics.reset(init_pos, init_rpy)
         for runner in self.surface_vehicles.values():
             runner.reset()
+        if scn.comms.acoustic.enabled:  # a fresh channel and surface world model
+            perception = self.parts.perception
+            self.link = VehicleLink(scn, self.surface_vehicles[scn.comms.surface.vehicle],
+                                    None if perception is None else perception.pmha,
+                                    None if perception is None else perception.region_ned,
+                                    () if perception is None else perception.class_names, self.parts.seed,
+                                    footprint=None if perception is None else perception.sonar_footprint())
         self.thruster_cmd = np.zeros(self.physics.params.n_thrusters)
         self.wrench_body = np.zeros(6)
         parts.scheduler.reset(0.0)
         self.nav_filter = parts.make_nav_filter(scn)
+        if self.link is not None and scn.comms.surface.usbl_fixes and scn.comms.surface.fuse_usbl_fixes:
+            self.nav_filter = DelayedFixFilter(self.nav_filter, snapshot_every_s=0.25,
+                                               gate_chi2=scn.autonomy.navigation.gps_gate_chi2)
         self._by_type: dict[type, list[Callable[[Any], Any]]] = {}
         for msg_type, handler in self.nav_filter.message_handlers().items():
             self._by_type.setdefault(msg_type, []).append(handler)
@@ -194,11 +217,14 @@ class Mission:
         self._wall_start = time.perf_counter()
         self._wall_s = 0.0
         self._delivered: Counter[str] = Counter()
+        #: (vehicle, vehicle) -> autonomy periods that ended with their hulls touching.
+        self.vehicle_contacts: Counter[tuple[str, str]] = Counter()
         self._started = True
         info = self.info()
         for obs in self.observers:
             obs.on_start(info)
         self._truth = self.physics.truth()
+        self._others = self._other_truths()
         return self._record(self._truth, self.nav_filter.estimate(), "idle")
 
     @property
@@ -227,11 +253,24 @@ class Mission:
         if self.surface_vehicles:
             with timer.stage("surface_vehicles"):
                 for runner in self.surface_vehicles.values():
-                    # Follow the AUV's true position for now; the buoy's USBL fixes replace it
-                    # once the acoustic link delivers them.
-                    runner.tick(truth.pos_ned)
+                    # a vessel with a USBL follows its own fixes of the AUV, else the AUV's true position
+                    runner.tick(truth.pos_ned, auv_truth=truth)
+                self._others = self._other_truths()
+                for pair in physics.vehicles_in_contact():
+                    self.vehicle_contacts[pair] += 1
         for name, msg in scheduler.pop_ready(physics.t_s):
             self._deliver(name, msg)
+        if self.link is not None:
+            with timer.stage("link"):
+                fixes = self.link.tick(physics.t_s, truth, self._others[self.link.node], timer)
+            if isinstance(self.nav_filter, DelayedFixFilter):
+                with timer.stage("nav_late_fix"):  # the re-processing is the link's cost
+                    for fix in fixes:
+                        self.nav_filter.on_late_fix(fix)
+            with timer.stage("observers"):
+                for fix in fixes:
+                    for obs in self.observers:
+                        obs.on_message(fix.source, fix)
         parts = self.parts
         with timer.stage("nav_filter"):
             self.nav_filter.predict(physics.t_s)
@@ -296,6 +335,8 @@ class Mission:
                     bar.set_postfix_str(self.fsm.mode)
                     last = self.t_s
         self.flush()
+        if self.link is not None:
+            self.link.finish(self.t_s)
         summary = self.summary()
         for obs in self.observers:
             obs.on_end(summary)
@@ -336,13 +377,24 @@ class Mission:
         self._to_observers(((name, msg, result),))
 
     def _to_observers(self, ready) -> None:
-        """Hand ``(name, message, result or None)`` triples to every observer, in order."""
+        """Hand ``(name, message, result or None)`` triples to every observer, in order; with
+        the acoustic link, perception results' detections go to the AUV's modem first."""
+        ready = list(ready)
+        link = self.link
+        if link is not None and (self.parts.fsm.mode != "idle" or self.scenario.comms.surface.send_while_idle):
+            with self.timer.stage("link"):
+                for _, _, result in ready:
+                    if isinstance(result, PerceptionResult):
+                        link.send_detections(self.physics.t_s, result.localized)
         with self.timer.stage("observers"):
             for name, msg, result in ready:
                 for obs in self.observers:
                     obs.on_message(name, msg)
                     if result is not None:
                         obs.on_message(name, result)
+
+    def _other_truths(self) -> Mapping[str, VehicleTruth]:
+        return MappingProxyType({name: self.physics.truth(name) for name in self.surface_vehicles})
 
     def _record(self, truth: VehicleTruth, nav: NavEstimate, mode: str) -> StepRecord:
         sp = self._setpoint
@@ -354,6 +406,7 @@ class Mission:
             setpoint_altitude_m=(sp.altitude_m if sp and sp.altitude_m is not None else nan),
             setpoint_depth_m=(sp.depth_m if sp and sp.depth_m is not None else nan),
             wrench_body=self.wrench_body.copy(), thruster_cmd=self.thruster_cmd.copy(), mode=mode,
+            others=self._others,
         )
         with self.timer.stage("observers"):
             for obs in self.observers:

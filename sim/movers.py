@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 
 from scenarios.config.movers import MoverConfig
 from sim.rng import component_rng
-from sim.target_motion import PARKED_NED, BubblePlumes, ManoeuvreTrajectory
+from sim.target_motion import PARKED_NED, BubblePlumes, ManoeuvreTrajectory, WaterDrift, plume_slots
 
 FloatArray = NDArray[np.float64]
 DIVER_RADIUS_M = 0.2  # capsule: a prone diver 1.8 m long (with fins), 0.4 m across
@@ -63,7 +63,7 @@ def add_mover_bodies(spec: mujoco.MjSpec, movers: tuple[MoverConfig, ...], acous
         out.append(MoverGeom(geom, body_name, m.name, m.class_name, True, m.kind, radius, height, m.reflectivity))
         if m.bubbles.enabled:
             b = m.bubbles
-            n = int(math.ceil(b.lifetime_s / b.breath_period_s)) * b.per_breath
+            n = plume_slots(b) * b.per_breath
             for i in range(n):
                 bname = f"mover:{m.name}/bubble{i}"
                 bb = spec.worldbody.add_body(name=bname, mocap=True, pos=PARKED_NED.tolist())
@@ -84,10 +84,16 @@ class MovingBodies:
         seed: root seed (each mover draws from ``component_rng(seed, "mover:<name>")``, its
             plume from ``"bubbles:<name>"``).
         duration_s: mission length to draw manoeuvres for, s.
+        current: the water current (``velocity_tuple``, ``mean_ned``, ``sigma_mps`` as
+            :class:`sim.current.OceanCurrent`) that carries the bubbles; None: still water.
     """
 
-    def __init__(self, model: mujoco.MjModel, movers: tuple[MoverConfig, ...], seed: int, duration_s: float) -> None:
+    def __init__(self, model: mujoco.MjModel, movers: tuple[MoverConfig, ...], seed: int, duration_s: float,
+                 current=None) -> None:
         self.movers = movers
+        self.drift = WaterDrift()
+        self._current = None
+        self.set_current(current)
         self.trajectories: dict[str, ManoeuvreTrajectory] = {}
         self.plumes: dict[str, BubblePlumes] = {}
         self._slots: list[tuple[int, str]] = []  # mocap id of each mover body
@@ -98,18 +104,29 @@ class MovingBodies:
             bid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f"mover:{m.name}")
             self._slots.append((int(model.body_mocapid[bid]), m.name))
             if m.bubbles.enabled:
-                plume = BubblePlumes(m.bubbles, traj, component_rng(seed, f"bubbles:{m.name}"), duration_s)
+                plume = BubblePlumes(m.bubbles, traj, component_rng(seed, f"bubbles:{m.name}"), duration_s,
+                                     drift=self.drift)
                 self.plumes[m.name] = plume
                 ids = [int(model.body_mocapid[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY,
                                                                    f"mover:{m.name}/bubble{i}")])
                        for i in range(plume.n_bubbles)]
                 self._bubble_slots[m.name] = np.array(ids, dtype=np.intp)
 
+    def set_current(self, current) -> None:
+        """Carry the bubbles with ``current`` from now on (its mean exactly, its varying part as
+        :meth:`apply` sees it at each step)."""
+        mean = np.zeros(3) if current is None else np.asarray(current.mean_ned, dtype=float)
+        self.drift.mean_ned_mps[:] = mean
+        self._current = current if current is not None and current.sigma_mps > 0.0 else None
+
     def __bool__(self) -> bool:
         return bool(self.movers)
 
     def apply(self, data: mujoco.MjData, t_s: float) -> None:
-        """Set every mover's and bubble's mocap pose to its pose at ``t_s``."""
+        """Set every mover's and bubble's mocap pose to its pose at ``t_s`` (and note the
+        current in force from ``t_s`` for the bubbles' drift)."""
+        if self._current is not None and self._bubble_slots:
+            self.drift.record(t_s, self._current.velocity_tuple)
         for mid, name in self._slots:
             pos, course = self.trajectories[name].pose_at(t_s)
             data.mocap_pos[mid] = pos

@@ -18,6 +18,7 @@ from autonomy.frames import euler_from_rot
 from autonomy.localization import fls_visibility, localize
 from autonomy.messages import NavEstimate
 from autonomy.world_model import CLASS_NAMES, PMHA
+from autonomy.world_model.surface import SonarFootprint
 from scenarios.schema import Scenario
 from sim.evaluation.world_model_score import score_world_model
 from sim.records import PerceptionResult
@@ -46,6 +47,9 @@ class Perception:
         self.nav_source = nav_source
         auto = scenario.autonomy
         self.detector = build_detector(auto.atr)
+        #: The ATR's class labels (the class table of the detection messages).
+        self.class_names: tuple[str, ...] = tuple(getattr(self.detector, "class_names", None)
+                                                  or (getattr(self.detector, "class_name", "target"),))
         self.loc_cfg = auto.localization
         self.wm_cfg = auto.world_model
         self.truth_targets = np.array([t.pos_ned for t in scenario.world.targets if t.is_target], dtype=float)
@@ -95,6 +99,13 @@ class Perception:
         return PerceptionResult(t_s=frame.t_s, detections=tuple(detections), localized=tuple(localized),
                                 world_objects=tuple(self.pmha.world_model()))
 
+    def sonar_footprint(self) -> SonarFootprint:
+        """The sonar's mount and field of view, as the surface world model places it."""
+        g = self.fls.geometry
+        return SonarFootprint(tuple(float(v) for v in self.fls.mount_pos_body_m),
+                              tuple(float(v) for v in self.fls.mount_rpy_rad), g.window_near_m, g.window_far_m,
+                              g.fov_rad, g.vertical_beamwidth_rad)
+
     # -- results --------------------------------------------------------------------------
     def world_objects(self) -> list[Any]:
         return self.pmha.world_model()
@@ -104,18 +115,29 @@ class Perception:
 
     def target_objects(self) -> list[Any]:
         """World objects the world model classifies as targets (most probable class)."""
-        return [o for o in self.world_objects() if o.class_name == TARGET_CLASS]
+        return target_objects(self.world_objects())
 
     def world_model_metrics(self) -> dict[str, Any]:
-        """Targets of the world model scored against the true targets (optimal assignment
-        within 2 m, GOSPA c = 2 m, p = 1, alpha = 2). Objects the world model itself
-        classifies as not-targets are counted apart, not as false targets."""
-        targets = self.target_objects()
-        est = np.array([o.pos_ned for o in targets], dtype=float).reshape(-1, 3)
-        s = score_world_model(est, self.truth_targets, match_radius_m=2.0, gospa_c_m=2.0, gospa_p=1.0)
-        out = {k: v for k, v in s.items() if k in ("objects", "matched", "missed", "false", "mean_position_error_m",
-                                                     "gospa", "pairs")}
-        out["objects_not_target"] = len(self.world_objects()) - len(targets)
-        for pair in out["pairs"]:
-            pair["estimate_id"] = targets[pair["estimate"]].id
-        return out
+        """The onboard world model scored against the true targets (:func:`world_model_metrics`)."""
+        return world_model_metrics(self.world_objects(), self.truth_targets)
+
+
+def target_objects(objects: list[Any]) -> list[Any]:
+    """The world objects classified as targets (most probable class)."""
+    return [o for o in objects if o.class_name == TARGET_CLASS]
+
+
+def world_model_metrics(objects: list[Any], truth_targets: np.ndarray) -> dict[str, Any]:
+    """Targets of a world model (its :class:`autonomy.world_model.WorldObject` list) scored
+    against the true targets ((k, 3) NED m): optimal assignment within 2 m, GOSPA c = 2 m,
+    p = 1, alpha = 2. Objects the world model itself classifies as not-targets are counted
+    apart, not as false targets."""
+    targets = target_objects(objects)
+    est = np.array([o.pos_ned for o in targets], dtype=float).reshape(-1, 3)
+    s = score_world_model(est, truth_targets, match_radius_m=2.0, gospa_c_m=2.0, gospa_p=1.0)
+    out = {k: v for k, v in s.items() if k in ("objects", "matched", "missed", "false", "mean_position_error_m",
+                                                 "gospa", "pairs")}
+    out["objects_not_target"] = len(objects) - len(targets)
+    for pair in out["pairs"]:
+        pair["estimate_id"] = targets[pair["estimate"]].id
+    return out

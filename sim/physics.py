@@ -91,7 +91,8 @@ class Physics:
         """New current from the scenario's config with ``component_rng(seed, "current")``, and
         new mover trajectories (``component_rng(seed, "mover:<name>")``)."""
         self.set_current(self.scenario.world.current, component_rng(int(seed), "current"))
-        self.movers = MovingBodies(self.model, self.scenario.world.movers, int(seed), self.scenario.duration_s)
+        self.movers = MovingBodies(self.model, self.scenario.world.movers, int(seed), self.scenario.duration_s,
+                                   current=self.current)
 
     def set_current(self, cfg: CurrentConfig, rng: np.random.Generator | None) -> OceanCurrent:
         """Replace the current (e.g. one drawn per episode); the vehicle uses it from the next step.
@@ -103,6 +104,8 @@ class Physics:
         self.vehicle.set_current(self.current)
         for extra in self._extra_list:
             extra.set_current(self.current)
+        if getattr(self, "movers", None) is not None:
+            self.movers.set_current(self.current)  # the bubbles drift with the water
         return self.current
 
     def reset(self, pos_ned: ArrayLike, rpy_rad: ArrayLike) -> None:

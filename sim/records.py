@@ -30,6 +30,7 @@ class StepRecord:
         wrench_body: (6,) desired body wrench from the autopilots, N and N m.
         thruster_cmd: (n_thr,) normalised thruster commands in [-1, 1].
         mode: mission state-machine mode.
+        others: true state of each extra vehicle (``scenario.vehicles``) by name.
     """
 
     t_s: float
@@ -42,6 +43,7 @@ class StepRecord:
     wrench_body: NDArray[np.float64]
     thruster_cmd: NDArray[np.float64]
     mode: str
+    others: Mapping[str, VehicleTruth] = field(default_factory=dict)
 
 
 @dataclass(frozen=True, slots=True)
@@ -77,6 +79,7 @@ class MissionInfo:
         sensor_mounts: entry name -> :class:`sim.sensors.base.Mount` of every sensor built
             (``pos_body_m`` (3,) FRD offset from the body origin, m; ``rpy_rad`` (3,) sensor
             axes -> body, rad).
+        vehicle_envelopes_m: extra vehicle name -> (3,) its hull bounding box, m.
     """
 
     scenario: Any
@@ -88,6 +91,7 @@ class MissionInfo:
     vehicle_envelope_m: tuple[float, ...]
     sensors: Mapping[str, str] = field(default_factory=dict)
     sensor_mounts: Mapping[str, Any] = field(default_factory=dict)
+    vehicle_envelopes_m: Mapping[str, tuple[float, ...]] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)

@@ -173,7 +173,7 @@ class PMHA:
         t_s = float(t_s)
         if t_s < self.t_s:
             raise ValueError(f"PMHA.update: time went backwards ({t_s} < {self.t_s})")
-        measurements = self._cluster_scan(measurements)
+        measurements = self.cluster_scan(measurements)
         m = len(measurements)
         uids = list(range(self._next_uid, self._next_uid + m))
         self._next_uid += m
@@ -358,7 +358,7 @@ class PMHA:
         self.t_s = t_s
         self.n_scans += 1
 
-    def _cluster_scan(self, measurements: Sequence[LocalizedDetection]) -> list[LocalizedDetection]:
+    def cluster_scan(self, measurements: Sequence[LocalizedDetection]) -> list[LocalizedDetection]:
         """The scan with detections consistent with one point fused into one measurement
         (:mod:`autonomy.estimation.clustering`; visited by decreasing ATR score). A fused
         measurement's class score is its members' mean. Order: by each cluster's first

@@ -80,7 +80,44 @@ class AcousticLinkConfig(StrictModel):
                 * (1.0 - self.noise_loss_prob(speed_dst_mps)))
 
 
+class SurfaceLinkConfig(StrictModel):
+    """What the AUV and the surface vehicle exchange over the acoustic link (paper 000
+    section VII, docs/references.md [P000]): the AUV sends each geolocated detection up, the
+    surface vehicle runs its own world model on what arrives and sends its USBL fixes of
+    the AUV down, which the AUV's navigation filter fuses at their measurement time.
+
+    Medium access is a fixed time-division cycle of ``cycle_s``: the surface vehicle talks
+    in the first ``surface_slot_s`` of each cycle (its latest USBL fix), the AUV in the rest
+    (its queued detections, one packet at a time, only when the packet, its travel time and
+    ``guard_s`` end before the next surface slot). Half-duplex modems then never talk over
+    each other; losses are the channel's.
+    """
+
+    vehicle: str = Field("buoy", min_length=1, description="the surface vehicle (a key of vehicles:)")
+    detections: bool = Field(True, description="send the AUV's detections up")
+    send_while_idle: bool = Field(
+        False, description="also send the detections taken before the mission starts (at rest at the surface, "
+        "where the surface vehicle cannot tell which way the sonar looks)")
+    usbl_fixes: bool = Field(True, description="send the surface vehicle's USBL fixes of the AUV down")
+    fuse_usbl_fixes: bool = Field(True, description="the AUV's navigation filter fuses the fixes it receives")
+    cycle_s: float = Field(2.0, gt=0.2, le=600.0, description="time-division cycle, s")
+    surface_slot_s: float = Field(0.6, gt=0.0, le=600.0, description="surface vehicle's slot at each cycle's start, s")
+    guard_s: float = Field(0.05, ge=0.0, le=10.0, description="margin after a packet's arrival before the other slot, s")
+    max_detection_age_s: float = Field(30.0, gt=0.0, le=3600.0,
+                                       description="queued detections older than this are dropped unsent, s")
+    epoch_unix_s: float = Field(1_688_169_600.0, ge=0.0, le=4_102_444_800.0,
+                                description="UNIX time of mission time 0 (messages carry absolute time), s")
+
+    @model_validator(mode="after")
+    def _slot_fits(self) -> "SurfaceLinkConfig":
+        if self.surface_slot_s >= self.cycle_s:
+            raise ValueError(f"comms.surface.surface_slot_s ({self.surface_slot_s}) must be shorter than "
+                             f"cycle_s ({self.cycle_s})")
+        return self
+
+
 class CommsConfig(StrictModel):
     """Communication channels of the scene (``comms:``); every one is off by default."""
 
     acoustic: AcousticLinkConfig = AcousticLinkConfig()
+    surface: SurfaceLinkConfig = SurfaceLinkConfig()

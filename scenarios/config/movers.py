@@ -14,15 +14,26 @@ from scenarios.config.base import NonNegFloat, PositiveFloat, Probability, Stric
 
 
 class BubbleConfig(StrictModel):
-    """Regulator exhaust: a cluster of small strong scatterers released every breath, rising
-    and dispersing (rise speed of ~5 mm bubbles: 0.2-0.3 m/s)."""
+    """Regulator exhaust: a cluster of small strong scatterers released at the regulator every
+    breath (every ``breath_period_s``, each interval jittered), rising (rise speed of 2-6 mm
+    bubbles: 0.2-0.3 m/s, docs/references.md [BubbleRise]) and spreading horizontally (each
+    scatterer keeps a horizontal spread velocity, so the cluster's radius grows linearly
+    with its age), carried by the water current and, for a moment, by the diver's wake
+    (a ``wake_fraction`` of the diver's speed through the water, decaying with
+    ``wake_decay_s``); they stay where released while the diver swims on."""
 
     enabled: bool = True
-    breath_period_s: PositiveFloat = Field(4.0, ge=1.0, le=30.0)
+    breath_period_s: PositiveFloat = Field(4.5, ge=1.0, le=30.0, description="mean time between breaths, s")
+    breath_jitter_s: NonNegFloat = Field(0.5, le=10.0, description="sigma of each breath interval, s "
+                                         "(intervals clipped to 0.6-1.4 x breath_period_s)")
     per_breath: int = Field(5, ge=1, le=20)
     rise_speed_mps: PositiveFloat = Field(0.25, le=1.0)
     rise_speed_sigma_mps: NonNegFloat = Field(0.03, le=0.5)
-    dispersion_mps: NonNegFloat = Field(0.06, le=1.0, description="horizontal spread speed sigma")
+    dispersion_mps: NonNegFloat = Field(0.06, le=1.0, description="horizontal spread speed sigma, m/s "
+                                        "(a spreading half-angle of atan(0.06 / 0.25) = 13 deg)")
+    wake_fraction: NonNegFloat = Field(0.3, le=1.0, description="share of the diver's speed through the "
+                                       "water given to a breath at release (estimate)")
+    wake_decay_s: PositiveFloat = Field(1.5, le=30.0, description="time constant of the wake's push, s (estimate)")
     radius_m: PositiveFloat = Field(0.06, le=0.5, description="scatterer size (a bubble group)")
     lifetime_s: PositiveFloat = Field(10.0, le=120.0)
     reflectivity: Probability = 1.0

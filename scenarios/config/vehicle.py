@@ -4,11 +4,12 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import Field
+from pydantic import Field, field_validator
 
 from autonomy.surface.config import SurfaceAutonomyConfig
 from scenarios.config.base import StrictModel, Vec2, Vec3
 from scenarios.config.nav_sensors import GpsConfig, ImuConfig
+from scenarios.config.usbl import UsblConfig
 
 
 class ThrusterOverrides(StrictModel):
@@ -46,6 +47,11 @@ class SurfaceVehicleConfig(StrictModel):
     ``behaviour``: ``station_keep`` holds ``station_ne_m`` (default: the start point);
     ``follow`` holds the AUV's position plus ``offset_m``: (along, across) the AUV's course
     with ``offset_frame: track`` ((-5, 0): 5 m behind it), (north, east) with ``ned``.
+
+    ``usbl``: a USBL head under the hull (the preset's ``usbl`` mount) whose transponder is
+    the AUV (``transponder: auv``); when given, a following vehicle follows its own USBL fixes
+    of the AUV instead of the AUV's true position, and with ``comms.acoustic`` on the fixes
+    are sent down to the AUV (``comms.surface``).
     """
 
     preset: Literal["surface_buoy"] = "surface_buoy"
@@ -57,4 +63,12 @@ class SurfaceVehicleConfig(StrictModel):
     offset_frame: Literal["track", "ned"] = "track"
     gnss: GpsConfig = GpsConfig(noise_m=0.7, dropout_prob=0.0)
     compass: ImuConfig = ImuConfig(rate_hz=10.0, heading_source="ahrs")
+    usbl: UsblConfig | None = Field(None, description="USBL head fixing the AUV (transponder: auv)")
+
+    @field_validator("usbl")
+    @classmethod
+    def _usbl_fixes_the_auv(cls, value: UsblConfig | None) -> UsblConfig | None:
+        if value is not None and value.transponder != "auv":
+            raise ValueError(f"usbl.transponder must be 'auv' (the buoy's USBL fixes the AUV), got {value.transponder!r}")
+        return value
     autonomy: SurfaceAutonomyConfig = SurfaceAutonomyConfig()

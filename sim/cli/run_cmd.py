@@ -30,6 +30,15 @@ def print_summary(metrics: dict, out: str) -> None:
         print(f"world model: {wm['objects']} targets ({wm.get('objects_not_target', 0)} more objects classified "
               f"not target), {wm['matched']} matched, {wm['missed']} missed, {wm['false']} false, "
               f"mean error {_fmt(wm.get('mean_position_error_m'), '.2f', ' m')}, GOSPA {_fmt(wm.get('gospa'), '.2f')}")
+    if "surface_world_model" in metrics:
+        wm = metrics["surface_world_model"]
+        print(f"surface world model: {wm['objects']} targets, {wm['matched']} matched, {wm['missed']} missed, "
+              f"{wm['false']} false, mean error {_fmt(wm.get('mean_position_error_m'), '.2f', ' m')}")
+    if "link" in metrics:
+        up, down = metrics["link"]["uplink_detections"], metrics["link"]["downlink_usbl_fixes"]
+        for name, st in (("detections up", up), ("USBL fixes down", down)):
+            print(f"link, {name}: {st['sent']} sent, {st['delivered']} delivered, {st['lost']} lost, latency mean "
+                  f"{_fmt(st.get('mean_latency_s'), '.2f', ' s')}, p95 {_fmt(st.get('p95_latency_s'), '.2f', ' s')}")
     if "tracking" in metrics:
         tr = metrics["tracking"]
         errs = ", ".join(f"{k} {_fmt(v.get('mean_m'), '.2f')} +- {_fmt(v.get('std_m'), '.2f')} m"

@@ -31,7 +31,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from autonomy.tracking.onboard import MODES, TrackingStack
-from sim.movers import DIVER_HALF_LENGTH_M, VEHICLE_HALF_SIZE_M
+from sim.movers import DIVER_HALF_LENGTH_M, DIVER_RADIUS_M, VEHICLE_HALF_SIZE_M
 
 FloatArray = NDArray[np.float64]
 ERROR_SETS = ("sonar", "sonar_when_available", "usbl", "fused")
@@ -52,11 +52,17 @@ class TrackingEvaluation:
             (near, far) m, vertical beam).
         warmup_s: ticks before this time are not scored (the filters start), s.
         match_m: cluster-to-truth labelling distance, m.
+        breaths_at: t_s -> (ages (K,) s, bubble positions (K, m, 3) NED m, in water (K, m))
+            of the plume's breaths (None: no plume view figures).
+        plume_apart_m: how far (in the sonar's plane) a bubble must lie from the target's
+            body axis for the detector to see it as a cluster of its own (the target's half
+            width, the detector's clustering distance and the bubble's size), m.
     """
 
     def __init__(self, stack: TrackingStack, target_pos_at, bubbles_at, sonar_mount_body_m: FloatArray,
                  R_bs: FloatArray, fov_rad: float, window_m: tuple[float, float], vertical_beam_rad: float,
-                 warmup_s: float = 10.0, match_m: float = 0.6, target_axis_at=None) -> None:
+                 warmup_s: float = 10.0, match_m: float = 0.6, target_axis_at=None, breaths_at=None,
+                 plume_apart_m: float = 0.76) -> None:
         self.stack = stack
         self.target_pos_at = target_pos_at
         self.target_axis_at = target_axis_at or (lambda t: np.repeat(np.atleast_2d(target_pos_at(t)), 2, axis=0))
@@ -72,6 +78,10 @@ class TrackingEvaluation:
         self.n_bubble = self.n_bubble_rejected = self.n_target = self.n_target_kept = 0
         self.n_bubble_not_chosen = self.n_frames_with_target = self.n_target_chosen = 0
         self.n_bubble_outside = 0
+        self.breaths_at, self.plume_apart_m = breaths_at, float(plume_apart_m)
+        self.n_frames = self.n_breath_in_view = self.n_breath_apart = 0
+        self._breath_view_age: dict[float, float] = {}  # release time -> oldest age seen in view
+        self._breath_apart_m: list[float] = []  # each in-view breath's nearest bubble to the body, per frame
 
     # observer interface
     def on_start(self, info: Any) -> None:
@@ -97,6 +107,7 @@ class TrackingEvaluation:
         results = self.stack.results[self._n_results:]
         self._n_results = len(self.stack.results)
         for res in results:
+            self._plume_view(res)
             self._label(res)
         tgt = np.asarray(self.target_pos_at(t), dtype=float)
         errs, errs_h = [], []
@@ -114,28 +125,65 @@ class TrackingEvaluation:
         self.rows.append((t, *errs, float(sonar_avail), float(fused_sonar), float(in_fov),
                           float(np.linalg.norm(tgt - truth.pos_ned)), *errs_h))
 
+    def _pose_at(self, t_s: float) -> tuple[FloatArray, FloatArray]:
+        pose = self._poses.get(int(round(t_s * 1000)))
+        if pose is None:  # nearest recorded tick
+            keys = np.array(list(self._poses))
+            pose = self._poses[int(keys[np.argmin(np.abs(keys - t_s * 1000))])]
+        return pose
+
+    def _plane_xy(self, points: FloatArray, pos: FloatArray, R_nb: FloatArray) -> FloatArray:
+        """(k, 2) NED points (k, 3) in the sonar's (range, azimuth) plane, m."""
+        sp = self._sonar_polar(points, pos, R_nb)
+        return np.c_[sp[:, 0] * np.cos(sp[:, 1]), sp[:, 0] * np.sin(sp[:, 1])]
+
+    def _axis_distance(self, xy: FloatArray, t_s: float, pos: FloatArray, R_nb: FloatArray) -> FloatArray:
+        """(k,) distance (m) of sonar-plane points (k, 2) to the target's body axis in that plane."""
+        a, b = self._plane_xy(np.asarray(self.target_axis_at(t_s), dtype=float), pos, R_nb)
+        ab = b - a
+        u = np.clip((xy - a) @ ab / max(float(ab @ ab), 1e-12), 0.0, 1.0)
+        return np.linalg.norm(xy - (a + u[:, None] * ab), axis=1)
+
+    def _plume_view(self, res: Any) -> None:
+        """Which breaths the sonar sees on this frame (a bubble inside its azimuth, range window
+        and vertical beam) and whether all of those bubbles lie ``plume_apart_m`` or more from
+        the target's body in the sonar's plane (so the detector could see the breath apart;
+        an upper bound: breaths can still chain to the body through one another)."""
+        if self.breaths_at is None:
+            return
+        self.n_frames += 1
+        ages, pts, wet = self.breaths_at(res.t_s)
+        if not len(ages):
+            return
+        pos, R_nb = self._pose_at(res.t_s)
+        k, m = wet.shape
+        flat = pts.reshape(-1, 3)
+        r, a, e = self._sonar_polar(flat, pos, R_nb).T
+        seen = (wet.ravel() & (np.abs(a) <= 0.5 * self.fov_rad) & (r >= self.window_m[0]) & (r <= self.window_m[1])
+                & (np.abs(e) <= 0.5 * self.vbeam_rad)).reshape(k, m)
+        if not seen.any():
+            return
+        d = np.where(seen.ravel(), self._axis_distance(self._plane_xy(flat, pos, R_nb), res.t_s, pos, R_nb),
+                     np.inf).reshape(k, m).min(axis=1)
+        in_view = seen.any(axis=1)
+        for i in np.nonzero(in_view)[0]:
+            key = round(res.t_s - float(ages[i]), 6)
+            self._breath_view_age[key] = max(self._breath_view_age.get(key, 0.0), float(ages[i]))
+            self._breath_apart_m.append(float(d[i]))
+        self.n_breath_in_view += int(in_view.sum())
+        self.n_breath_apart += int((in_view & (d >= self.plume_apart_m)).sum())
+
     def _label(self, res: Any) -> None:
         if not res.candidates or res.roi["fused"] is None:
             return
-        pose = self._poses.get(int(round(res.t_s * 1000)))
-        if pose is None:  # nearest recorded tick
-            keys = np.array(list(self._poses))
-            pose = self._poses[int(keys[np.argmin(np.abs(keys - res.t_s * 1000))])]
-        pos, R_nb = pose
+        pos, R_nb = self._pose_at(res.t_s)
         cr = np.array([c.range_m for c in res.candidates])
         ca = np.array([c.azimuth_rad for c in res.candidates])
         c_xy = np.c_[cr * np.cos(ca), cr * np.sin(ca)]
 
-        def plane_xy(points: FloatArray) -> FloatArray:  # (k, 2) in the sonar's (range, azimuth) plane
-            sp = self._sonar_polar(points, pos, R_nb)
-            return np.c_[sp[:, 0] * np.cos(sp[:, 1]), sp[:, 0] * np.sin(sp[:, 1])]
-
-        a, b = plane_xy(np.asarray(self.target_axis_at(res.t_s), dtype=float))
-        ab = b - a
-        u = np.clip((c_xy - a) @ ab / max(float(ab @ ab), 1e-12), 0.0, 1.0)
-        d_tgt = np.linalg.norm(c_xy - (a + u[:, None] * ab), axis=1)
+        d_tgt = self._axis_distance(c_xy, res.t_s, pos, R_nb)
         bub = self.bubbles_at(res.t_s) if self.bubbles_at is not None else None
-        d_bub = (np.linalg.norm(c_xy[:, None, :] - plane_xy(bub)[None, :, :], axis=2).min(axis=1)
+        d_bub = (np.linalg.norm(c_xy[:, None, :] - self._plane_xy(bub, pos, R_nb)[None, :, :], axis=2).min(axis=1)
                  if bub is not None and len(bub) else np.full(len(cr), np.inf))
         is_tgt = d_tgt <= self.match_m
         is_bub = ~is_tgt & (d_bub <= self.match_m)
@@ -187,9 +235,25 @@ class TrackingEvaluation:
                     "bubble_not_chosen_fraction": self.n_bubble_not_chosen / self.n_bubble if self.n_bubble else math.nan,
                     "target_chosen_fraction": self.n_target_chosen / self.n_frames_with_target
                     if self.n_frames_with_target else math.nan},
+            "plume": self.plume_metrics(),
             "target_in_fov_fraction": float(a[:, 6].mean()) if len(a) else math.nan,
             "min_distance_m": float(a[:, 7].min()) if len(a) else math.nan,
         }
+
+    def plume_metrics(self) -> dict[str, Any]:
+        """What the sonar could see of the plume: sonar frames, (frame, breath) pairs with a
+        bubble in view and those whose in-view bubbles all lie ``plume_apart_m`` or more from
+        the target's body in the sonar's plane, breaths seen, how old a breath was when last
+        in view (s: mean, max) and the median distance of each in-view breath's nearest
+        bubble to the body (m)."""
+        ages = np.array(list(self._breath_view_age.values()), dtype=float)
+        apart = np.array(self._breath_apart_m, dtype=float)
+        return {"frames": self.n_frames, "breath_frames_in_view": self.n_breath_in_view,
+                "breath_frames_apart": self.n_breath_apart, "apart_m": self.plume_apart_m,
+                "breaths_seen": int(ages.size),
+                "last_in_view_age_mean_s": float(ages.mean()) if ages.size else math.nan,
+                "last_in_view_age_max_s": float(ages.max()) if ages.size else math.nan,
+                "nearest_to_body_median_m": float(np.median(apart)) if apart.size else math.nan}
 
     def plot(self, error_png: Path, box_png: Path, title: str = "") -> None:
         """Error over time (PNG) and the box plot of the four error sets (PNG)."""
@@ -252,6 +316,7 @@ def evaluation_for(mission: Any, warmup_s: float = 10.0) -> TrackingEvaluation:
     plume = movers.plumes.get(name)
     kind = next(m.kind for m in movers.movers if m.name == name)
     half_length_m = DIVER_HALF_LENGTH_M if kind == "diver" else VEHICLE_HALF_SIZE_M[0]
+    half_width_m = DIVER_RADIUS_M if kind == "diver" else VEHICLE_HALF_SIZE_M[1]
 
     def axis_at(t_s: float) -> FloatArray:
         pos, course = traj.pose_at(t_s)
@@ -262,8 +327,15 @@ def evaluation_for(mission: Any, warmup_s: float = 10.0) -> TrackingEvaluation:
         pos, alive = plume.positions_at(t_s)
         return pos[alive]
 
+    def breaths_at(t_s: float):
+        _, ages, pts, wet = plume.breaths_at(t_s)
+        return ages, pts, wet
+
     sonar = mission.parts.sonar
     g = sonar.geometry
     return TrackingEvaluation(stack, lambda t: traj.pose_at(t)[0], bubbles_at if plume is not None else None,
                               sonar.mount.pos_body_m, sonar.mount.R_bs, g.fov_rad, (g.window_near_m, g.window_far_m),
-                              g.vertical_beamwidth_rad, warmup_s=warmup_s, target_axis_at=axis_at)
+                              g.vertical_beamwidth_rad, warmup_s=warmup_s, target_axis_at=axis_at,
+                              breaths_at=breaths_at if plume is not None else None,
+                              plume_apart_m=half_width_m + stack.detector.cfg.cluster_distance_m
+                              + (plume.cfg.radius_m if plume is not None else 0.0))

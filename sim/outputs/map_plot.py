@@ -109,6 +109,8 @@ def build_map_figure(
     title: str = "",
     overlay=None,
     extent_points_ne: NDArray | None = None,
+    other_paths: Sequence[tuple[str, NDArray]] = (),
+    surface_estimates_ned: Sequence[NDArray] = (),
 ):
     """Plan-view map as a matplotlib ``Figure`` on an Agg canvas (no pyplot state to close).
 
@@ -124,6 +126,8 @@ def build_map_figure(
         overlay: optional ``draw(ax)`` adding artists (x east, y north, metres; labelled
             artists join the legend; their points do not change the extent).
         extent_points_ne: (m, 2) more north/east points the map must show (an overlay's).
+        other_paths: (name, (n, 3) NED path) of each extra vehicle (the surface buoy's track).
+        surface_estimates_ned: (3,) NED positions of the surface world model's targets.
 
     Returns:
         matplotlib.figure.Figure, its size set from the map's aspect (``axes_size_in``) plus
@@ -147,6 +151,8 @@ def build_map_figure(
     pts += [np.asarray(p, dtype=float)[None, :2] for p in rejected_ned]
     if extent_points_ne is not None:
         pts.append(np.asarray(extent_points_ne, dtype=float).reshape(-1, 2))
+    pts += [np.asarray(p, dtype=float).reshape(-1, 3)[:, :2] for _, p in other_paths]
+    pts += [np.asarray(p, dtype=float)[None, :2] for p in surface_estimates_ned]
     (n0, n1), (e0, e1) = map_extent_ne(np.concatenate(pts, axis=0))
 
     ax_w, ax_h = axes_size_in(e1 - e0, n1 - n0)
@@ -169,6 +175,14 @@ def build_map_figure(
     if est_pos_ned is not None and len(est_pos_ned):
         ax.plot(est_pos_ned[:, 1], est_pos_ned[:, 0], "-", color="tab:orange", lw=1.0, alpha=0.9,
                 zorder=2.6, label="estimated path")
+    for name, path in other_paths:
+        path = np.asarray(path, dtype=float).reshape(-1, 3)
+        ax.plot(path[:, 1], path[:, 0], "-", color="tab:green", lw=0.9, alpha=0.8, zorder=2.4,
+                label=f"{name} track (true)")
+    if len(surface_estimates_ned):
+        ne = np.array([np.asarray(p, dtype=float)[:2] for p in surface_estimates_ned])
+        ax.plot(ne[:, 1], ne[:, 0], ls="none", marker="+", color="tab:green", ms=9, mew=1.4, zorder=6.5,
+                label="surface world model target")
     if len(true_pos_ned):
         ax.plot(true_pos_ned[:1, 1], true_pos_ned[:1, 0], ls="none", label=STYLES["start"].label,
                 **style("start"))

@@ -15,9 +15,11 @@ from typing import Any
 
 import numpy as np
 
+from autonomy.geodesy import GeodeticOrigin, ned_to_lat_lon_depth
 from scenarios.schema import Scenario
 from sim.outputs.map_plot import plot_map
 from sim.evaluation.detection_scoring import DetectionScorer
+from sim.perception import target_objects, world_model_metrics
 from sim.mission import Mission
 from sim.movers import BUBBLE_CLASS
 from sim.outputs.progress import MissionProgress
@@ -52,6 +54,20 @@ def write_json(path: Path, data: Any, decimals: int | None = None) -> None:
     """Write ``data`` as indented standard JSON (NaN -> null), floats rounded to ``decimals``."""
     plain = json.loads(json.dumps(data, default=_json_default))
     path.write_text(json.dumps(_clean(plain, decimals), indent=2) + "\n")
+
+
+def with_geodetic(world_model: dict[str, Any], origin: GeodeticOrigin) -> dict[str, Any]:
+    """A world model's JSON (:meth:`autonomy.world_model.PMHA.to_json`) with each object's
+    ``lat_deg``, ``lon_deg`` and ``depth_m`` (below the origin's height) beside its
+    ``pos_ned`` (paper 000 section VII reports objects in latitude / longitude / depth)."""
+    out = dict(world_model)
+    out["origin"] = origin.model_dump()
+    objects = []
+    for obj in world_model.get("objects", []):
+        lat, lon, depth = (float(v) for v in ned_to_lat_lon_depth(obj["pos_ned"], origin))
+        objects.append({**obj, "lat_deg": lat, "lon_deg": lon, "depth_m": depth})
+    out["objects"] = objects
+    return out
 
 
 def planned_length_s(mission: Mission) -> float:
@@ -102,6 +118,29 @@ def collect_metrics(mission: Mission, log: TrajectoryLog, scorer: DetectionScore
                       f"{n_all - n_targets} it classifies as not targets (rocks, clutter) are listed there "
                       "but not scored")
         metrics["world_model"] = wm
+    others = log.other_paths_ned()
+    if others:
+        t_auv, p_auv, t_others = log.t_s, log.true_pos_ned, log.other_paths_t_s()
+        auv = np.column_stack([np.interp(t_others, t_auv, p_auv[:, k]) for k in range(3)])
+        metrics["vehicles"] = {
+            "contact_periods": {"-".join(pair): n for pair, n in mission.vehicle_contacts.items()},
+            "min_separation_m": {name: float(np.min(np.linalg.norm(path - auv, axis=1))) for name, path in others.items()},
+            "note": "contact periods: autonomy periods ending with hulls touching (every period checked); "
+                    "least separation of the body origins, sampled once a second",
+        }
+    if mission.link is not None:
+        metrics["link"] = mission.link.metrics()
+        nav = mission.nav_filter
+        if hasattr(nav, "n_late_fused"):
+            metrics["link"]["usbl_fixes_fused"] = nav.n_late_fused
+            metrics["link"]["usbl_fixes_refused"] = nav.n_late_gated + nav.n_late_too_old
+        surface = mission.link.surface_world_model
+        if surface is not None and mission.perception is not None:
+            sw = world_model_metrics(surface.world_model(), mission.perception.truth_targets)
+            sw["world_model_json_objects"] = len(surface.world_model())
+            sw["note"] = ("the world model on the surface vehicle, from the detections the acoustic link delivered "
+                          "(surface_world_model.json); scored as world_model")
+            metrics["surface_world_model"] = sw
     return metrics
 
 
@@ -175,7 +214,9 @@ def run_mission(
     progress: bool = True, overwrite: bool = False, rosbag: bool | None = None, rosbag_fls_every: int | None = None,
     score_detections: bool = True, workers: int = 1,
 ) -> dict[str, Any]:
-    """Run ``scenario`` and write metrics.json, trajectory.csv, world_model.json, map.png
+    """Run ``scenario`` and write metrics.json, trajectory.csv, world_model.json (objects in NED
+    and latitude / longitude / depth), map.png (with an acoustic link, also
+    surface_world_model.json and the link statistics under ``link`` in metrics.json)
     (with target tracking also tracking_error.png and tracking_boxplot.png, and the
     trackers' figures under ``tracking`` in metrics.json; and recording.rrd; with ``rosbag``, a
     ROS 2 bag folder ``rosbag/`` in MCAP storage, :class:`sim.ros2bag.recorder.RosbagRecorder`,
@@ -254,17 +295,24 @@ def run_mission(
         log.write_csv(partial / "trajectory.csv")
         layers = map_layers(mission, tracking, metrics["sim_time_s"], overlay, extent)
         estimates, rejected = [], []
+        origin = scenario.world.origin
+        surface_targets = []
         if mission.perception is not None:
-            write_json(partial / "world_model.json", mission.perception.world_model_json())
+            write_json(partial / "world_model.json", with_geodetic(mission.perception.world_model_json(), origin))
             targets = mission.perception.target_objects()
             estimates = [(f"{o.id}", o.pos_ned, o.cov_ned) for o in targets]
             target_ids = {o.id for o in targets}
             rejected = [o.pos_ned for o in mission.perception.world_objects() if o.id not in target_ids]
+        if mission.link is not None and mission.link.surface_world_model is not None:
+            surface = mission.link.surface_world_model
+            write_json(partial / "surface_world_model.json", with_geodetic(surface.to_json(), origin))
+            surface_targets = [o.pos_ned for o in target_objects(surface.world_model())]
         plot_map(
             partial / "map.png",
             true_pos_ned=log.true_pos_ned, est_pos_ned=log.est_pos_ned, estimates=estimates, rejected_ned=rejected,
             title=(f"{scenario.name} seed {mission.seed} (nav: {nav_source})"
                    + _outcome_suffix(metrics, runs_to_duration=tracking is not None)),
+            other_paths=list(log.other_paths_ned().items()), surface_estimates_ned=surface_targets,
             **layers,
         )
         if tracking is not None:

@@ -75,6 +75,7 @@ class RerunRecorder:
         self.path_every_s = float(path_every_s)
         self._rec = rr.RecordingStream("auvsim")
         self._true: list[np.ndarray] = []
+        self._others: dict[str, list[np.ndarray]] = {}
         self._est: list[np.ndarray] = []
         self._last_path_t = -np.inf
         self._n_fls = 0
@@ -116,6 +117,9 @@ class RerunRecorder:
                                                            albedo_factor=color), static=True)
         env = info.vehicle_envelope_m
         rec.log("world/vehicle/hull", rr.Boxes3D(half_sizes=[0.5 * np.asarray(env)], colors=[[240, 220, 40]]), static=True)
+        for name, env in info.vehicle_envelopes_m.items():  # extra vehicles (the surface buoy)
+            rec.log(f"world/vehicles/{name}/hull", rr.Boxes3D(half_sizes=[0.5 * np.asarray(env)],
+                                                              colors=[[60, 200, 90]]), static=True)
         rec.log("world/waypoints", rr.LineStrips3D([np.c_[info.waypoints_ne, np.full(len(info.waypoints_ne), 0.0)]],
                                                    colors=[[150, 150, 150]]), static=True)
 
@@ -130,8 +134,14 @@ class RerunRecorder:
         rec.log("nav/horizontal_error_m", rr.Scalars(err))
         rec.log("nav/sigma_horizontal_m", rr.Scalars(float(np.sqrt(np.trace(r.nav.cov_pos_ned[:2, :2])))))
         rec.log("nav/depth_error_m", rr.Scalars(float(tr.pos_ned[2] - r.nav.pos_ned[2])))
+        for name, other in r.others.items():
+            rec.log(f"world/vehicles/{name}", rr.Transform3D(translation=other.pos_ned,
+                                                             quaternion=_xyzw(quat_from_rot(other.R_nb))))
+            self._others.setdefault(name, []).append(np.asarray(other.pos_ned, dtype=float))
         if r.t_s - self._last_path_t >= self.path_every_s:
             self._last_path_t = r.t_s
+            for name, path in self._others.items():
+                rec.log(f"world/path/{name}", rr.LineStrips3D([np.asarray(path)], colors=[[60, 200, 90]]))
             rec.log("world/path/true", rr.LineStrips3D([np.asarray(self._true)], colors=[[40, 120, 220]]))
             rec.log("world/path/estimated", rr.LineStrips3D([np.asarray(self._est)], colors=[[240, 140, 30]]))
 

@@ -46,7 +46,8 @@ def read_marker(folder: Path) -> dict | None:
     return data if isinstance(data, dict) else None
 
 
-RUN_FILES = frozenset({"metrics.json", "trajectory.csv", "world_model.json", "map.png", "recording.rrd", "rosbag",
+RUN_FILES = frozenset({"metrics.json", "trajectory.csv", "world_model.json", "surface_world_model.json", "map.png",
+                       "recording.rrd", "rosbag",
                        "tracking_error.png", "tracking_boxplot.png"})
 
 

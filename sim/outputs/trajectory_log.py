@@ -25,6 +25,9 @@ COLUMNS = (
 )
 
 
+#: Sampling of the extra vehicles' paths kept for the map, s.
+OTHERS_EVERY_S = 1.0
+
 class TrajectoryLog:
     """Observer logging the trajectory at the autonomy rate, with memory flat over the mission.
 
@@ -45,6 +48,8 @@ class TrajectoryLog:
         self._width = 0
         self._mode_names: list[str] = []
         self._mode_code: dict[str, int] = {}
+        self._others: dict[str, list[tuple[float, ...]]] = {}  # extra vehicles' path, one point a second
+        self._others_next_s = 0.0
 
     def on_start(self, info: MissionInfo) -> None:
         if self._spool is not None:
@@ -52,9 +57,14 @@ class TrajectoryLog:
         self._spool, self._n_spooled, self._block, self._n_block = None, 0, None, 0
         self._mode_names.clear()
         self._mode_code.clear()
+        self._others, self._others_next_s = {}, 0.0
 
     def on_step(self, r: StepRecord) -> None:
         tr, nav = r.truth, r.nav
+        if r.others and r.t_s >= self._others_next_s:
+            self._others_next_s = r.t_s + OTHERS_EVERY_S
+            for name, other in r.others.items():
+                self._others.setdefault(name, []).append((r.t_s, *other.pos_ned.tolist()))
         if self._block is None:
             self._width = len(COLUMNS) + len(r.thruster_cmd)  # numeric columns, mode code, thrusters
             self._block = np.empty((self.block_rows, self._width))
@@ -129,6 +139,15 @@ class TrajectoryLog:
     @property
     def est_pos_ned(self) -> NDArray[np.float64]:
         return np.c_[self.column("est_n_m"), self.column("est_e_m"), self.column("est_d_m")]
+
+    def other_paths_ned(self) -> dict[str, NDArray[np.float64]]:
+        """Extra vehicle name -> its (n, 3) true NED path, m, one point every ``OTHERS_EVERY_S``."""
+        return {name: np.asarray(p, dtype=float).reshape(-1, 4)[:, 1:] for name, p in self._others.items()}
+
+    def other_paths_t_s(self) -> NDArray[np.float64]:
+        """(n,) times of the points of :meth:`other_paths_ned`, s."""
+        first = next(iter(self._others.values()), [])
+        return np.asarray([p[0] for p in first], dtype=float)
 
     def distance_travelled_m(self) -> float:
         p = self.true_pos_ned

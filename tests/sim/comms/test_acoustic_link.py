@@ -251,7 +251,8 @@ def test_config_limits_and_scenario_default():
 
     sc = load_scenario("cssn_lawnmower")
     assert sc.comms.acoustic.enabled is False
-    on = load_scenario("cssn_lawnmower", ["comms.acoustic.enabled=true", "comms.acoustic.bit_rate_bps=500"])
+    # the link needs its surface vehicle (comms.surface.vehicle): the sea trial has it
+    on = load_scenario("cssn_sea_trial", ["comms.acoustic.bit_rate_bps=500"])
     assert on.comms.acoustic.bit_rate_bps == 500.0
 
 
