@@ -163,7 +163,7 @@ class SideScanSonar(Sensor[SssRender]):
                            scene.require_caster("SideScanSonar"), scene.objects, noise=noise)
 
     # -- rendering --------------------------------------------------------------------------
-    def side_segments(self, origin_ned: FloatArray, R_nb: FloatArray, caster: RayCaster,
+    def echo_intervals(self, origin_ned: FloatArray, R_nb: FloatArray, caster: RayCaster,
                       objects: Sequence[SceneObjectLike],
                       spheres: dict[int, tuple[FloatArray, float]] | None = None) -> tuple[EchoSegments, float]:
         """Echo intervals of both sides (line 0 port, 1 starboard), along-track columns summed
@@ -228,7 +228,7 @@ class SideScanSonar(Sensor[SssRender]):
             objects = [o for o in objects
                        if sphere_in_window(np.asarray(spheres[int(o.id)][0], dtype=float) - origin,
                                            spheres[int(o.id)][1], 0.0, rmax)]
-        seg, altitude = self.side_segments(origin, R, caster, objects, spheres)
+        seg, altitude = self.echo_intervals(origin, R, caster, objects, spheres)
         altitude = altitude if np.isfinite(altitude) else float("nan")
         mean = self.echo.mean_intensity(seg.lines(2, self.n_bins, dtype=np.float32))
         labels, _ = label_bins(seg, 2, self.n_bins)
