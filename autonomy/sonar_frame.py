@@ -81,5 +81,14 @@ def sonar_to_spherical(p_sonar: ArrayLike) -> tuple[FloatArray, FloatArray, Floa
 
 
 def ray_directions_sonar(azimuth_rad: ArrayLike, elevation_rad: ArrayLike) -> FloatArray:
-    """Unit ray directions (..., 3) in the sonar frame for broadcast azimuths and elevations (rad)."""
-    return spherical_to_sonar(1.0, azimuth_rad, elevation_rad)
+    """Unit ray directions (..., 3) in the sonar frame for broadcast azimuths and elevations (rad).
+
+    :func:`spherical_to_sonar` at unit range (the same products, written into one array).
+    """
+    a, e = np.broadcast_arrays(np.asarray(azimuth_rad, dtype=float), np.asarray(elevation_rad, dtype=float))
+    out = np.empty(a.shape + (3,))
+    ce = np.cos(e)
+    np.multiply(np.cos(a), ce, out=out[..., 0])
+    np.multiply(np.sin(a), ce, out=out[..., 1])
+    np.sin(e, out=out[..., 2])
+    return out

@@ -96,38 +96,25 @@ class MujocoRayCaster:
                               for k in np.unique(self.geom_object_id[self.geom_object_id >= 0])}
         self._isolated_group = np.zeros(6, dtype=np.uint8)
         self._isolated_group[5] = 1
-        self._n = 0
-        self._alloc(1024)
-
-    def _alloc(self, n: int) -> None:
-        self._n = n
-        self._vec = np.zeros(3 * n)
-        self._geomid = np.zeros(n, dtype=np.int32)
-        self._dist = np.zeros(n)
-        self._normal = np.zeros(3 * n)
 
     def _raw(self, origin_ned: FloatArray, dirs_ned: FloatArray, max_range_m: float, geomgroup: NDArray[np.uint8],
-             body_exclude: int) -> int:
+             body_exclude: int) -> tuple[NDArray[np.int32], FloatArray, FloatArray]:
+        """``mj_multiRay`` into fresh result arrays: geom ids (N,), distances (N,), normals (N, 3)."""
         n = int(dirs_ned.shape[0])
-        if n > self._n:
-            self._alloc(max(n, 2 * self._n))
-        self._vec[:3 * n] = np.asarray(dirs_ned, dtype=float).reshape(-1)
-        pnt = np.ascontiguousarray(origin_ned, dtype=float).reshape(3)
-        self._mj.mj_multiRay(self.model, self.data, pnt, self._vec[:3 * n], geomgroup, 1, body_exclude,
-                             self._geomid[:n], self._dist[:n], self._normal[:3 * n], n, float(max_range_m))
-        return n
+        geomid, dist, normal = np.empty(n, dtype=np.int32), np.empty(n), np.empty((n, 3))
+        self._mj.mj_multiRay(self.model, self.data, np.ascontiguousarray(origin_ned, dtype=float).reshape(3),
+                             np.ascontiguousarray(dirs_ned, dtype=float).reshape(-1), geomgroup, 1, body_exclude,
+                             geomid, dist, normal.reshape(-1), n, float(max_range_m))
+        return geomid, dist, normal
 
     def cast(self, origin_ned: FloatArray, dirs_ned: FloatArray, max_range_m: float) -> RayHits:
         """Cast unit ``dirs_ned`` (N, 3) from ``origin_ned`` (3,); hits beyond ``max_range_m`` are misses."""
-        n = self._raw(origin_ned, dirs_ned, max_range_m, self.geomgroup, self.exclude_body_id)
-        gid = self._geomid[:n].astype(np.intp)
-        hit = gid >= 0
-        dist = np.where(hit, self._dist[:n], np.inf)
-        hit &= dist <= max_range_m
-        dist[~hit] = np.inf
-        gid[~hit] = -1
-        normal = self._normal[:3 * n].reshape(n, 3).copy()
-        normal[~hit] = 0.0
+        geomid, dist, normal = self._raw(origin_ned, dirs_ned, max_range_m, self.geomgroup, self.exclude_body_id)
+        gid = geomid.astype(np.intp)
+        miss = (gid < 0) | ~(dist <= max_range_m)
+        dist[miss] = np.inf
+        gid[miss] = -1
+        normal[miss] = 0.0
         return RayHits(dist_m=dist, normal_ned=normal, reflectivity=self._refl_lut[gid],
                        object_id=self._obj_lut[gid])
 
@@ -144,10 +131,10 @@ class MujocoRayCaster:
         try:
             self.model.geom_group[:] = 0
             self.model.geom_group[geoms] = 5
-            n = self._raw(origin_ned, dirs_ned, max_range_m, self._isolated_group, -1)
+            geomid, dist, _ = self._raw(origin_ned, dirs_ned, max_range_m, self._isolated_group, -1)
         finally:
             self.model.geom_group[:] = saved
-        d = np.where(self._geomid[:n] >= 0, self._dist[:n], np.inf)
+        d = np.where(geomid >= 0, dist, np.inf)
         d[d > max_range_m] = np.inf
         return d
 
@@ -155,6 +142,7 @@ class MujocoRayCaster:
         """Sphere about the object's geom centres enclosing their bounding spheres."""
         geoms = self._object_geoms[int(object_id)]
         pos = self.data.geom_xpos[geoms]
-        centre = pos.mean(axis=0)
-        radius = float(np.max(np.linalg.norm(pos - centre, axis=1) + self.model.geom_rbound[geoms]))
+        centre = np.add.reduce(pos, axis=0) / len(geoms)  # pos.mean(axis=0) without its overhead
+        d = pos - centre
+        radius = float((np.sqrt(np.add.reduce(d * d, axis=1)) + self.model.geom_rbound[geoms]).max())
         return centre, radius

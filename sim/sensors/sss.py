@@ -18,6 +18,7 @@ Labels come from the same echo intervals (:func:`sim.sensors.sonar.ground_truth.
 from __future__ import annotations
 
 from collections.abc import Sequence
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -33,8 +34,8 @@ from sim.sensors.sonar.beam_pattern import two_way_beam_power
 from sim.sensors.sonar.echo_chain import EchoChain
 from sim.sensors.sonar.echo_lines import EchoSegments, echo_segments, ray_strength
 from sim.sensors.sonar.ground_truth import SceneObjectLike, label_bins
-from sim.sensors.sonar.object_rays import add_object_rays
-from sim.sensors.sonar.ray_fan import RayFan
+from sim.sensors.sonar.object_rays import add_object_rays, sphere_in_window
+from sim.sensors.sonar.ray_fan import RayFan, RayTable
 from sim.truth import VehicleTruth
 
 FloatArray = NDArray[np.float64]
@@ -162,25 +163,48 @@ class SideScanSonar(Sensor[SssRender]):
                            scene.require_caster("SideScanSonar"), scene.objects, noise=noise)
 
     # -- rendering --------------------------------------------------------------------------
-    def side_segments(self, side: int, origin_ned: FloatArray, R_nb: FloatArray, caster: RayCaster,
-                      objects: Sequence[SceneObjectLike]) -> tuple[EchoSegments, float]:
-        """Echo intervals of one side (0 port, 1 starboard) on line ``side``, along-track columns
-        summed with their beam-pattern weights; and the range of its vertical ray (m, inf if none)."""
-        cfg = self.cfg
-        R_ns = R_nb @ self.R_bs[side]
+    def echo_intervals(self, origin_ned: FloatArray, R_nb: FloatArray, caster: RayCaster,
+                      objects: Sequence[SceneObjectLike],
+                      spheres: dict[int, tuple[FloatArray, float]] | None = None) -> tuple[EchoSegments, float]:
+        """Echo intervals of both sides (line 0 port, 1 starboard), along-track columns summed
+        with their beam-pattern weights; and the shorter range of the two vertical rays (m, inf
+        if none).
+
+        Each side casts its base rays and the finer rays over its objects; the edge bisection
+        and the echo intervals then run on both sides' rays at once (starboard columns offset by
+        ``n_cols``; one cast per bisection level for both).
+
+        ``spheres``: object id -> bounding sphere (centre (3,) NED m, radius m), shared by both
+        sides of a ping (default: asked of the caster)."""
+        cfg, fan = self.cfg, self.fan
+        R_ns = np.stack([R_nb @ R_bs for R_bs in self.R_bs])
         rmax = float(cfg.range_max_m)
-        base, _ = self.fan.cast(caster, origin_ned, R_ns, rmax)
-        sampled, _, pairs = add_object_rays(self.fan, base, caster, origin_ned, R_ns, objects, 0.0, rmax, rmax,
-                                            OBJECT_RAYS_ACROSS)
-        rays, segs = self.fan.refine_edges(caster, origin_ned, R_ns, sampled, rmax, rmax, cfg.edge_refine_iters,
-                                           pairs)
-        strength = ray_strength(rays, cfg.scattering_exponent, self.vertical_beamwidth_rad,
-                                self.fan.elevation_step_rad)
-        e = echo_segments(rays, segs, strength, self.fan.range_slope(rays, R_ns), 0.0, self.bin_size_m)
-        centre = self.fan.n_cols // 2
-        vertical = float(base.dist[centre * self.fan.n_el + self.fan.n_el - 1])
-        line = np.full(len(e.line), side, dtype=np.intp)
-        return EchoSegments(line, e.u0, e.u1, e.energy * self.column_weight[e.line], e.obj), vertical
+        tables, pairs_a, pairs_b, vertical = [], [], [], float("inf")
+        n_rows = 0
+        for side in (0, 1):
+            base, _ = fan.cast(caster, origin_ned, R_ns[side], rmax)
+            sampled, _, pairs = add_object_rays(fan, base, caster, origin_ned, R_ns[side], objects, 0.0, rmax, rmax,
+                                                OBJECT_RAYS_ACROSS, spheres=spheres)
+            pa, pb = fan.base_pairs if pairs is None else pairs
+            if side:
+                sampled = dataclasses.replace(sampled, col=sampled.col + fan.n_cols)
+            tables.append(sampled)
+            pairs_a.append(pa + n_rows)
+            pairs_b.append(pb + n_rows)
+            n_rows += len(sampled.dist)
+            centre = fan.n_cols // 2
+            vertical = min(vertical, float(base.dist[centre * fan.n_el + fan.n_el - 1]))
+        rays, segs = fan.refine_edges(caster, origin_ned, R_ns, RayTable.stack(tables), rmax, rmax,
+                                      cfg.edge_refine_iters, (np.concatenate(pairs_a), np.concatenate(pairs_b)))
+        strength = ray_strength(rays, cfg.scattering_exponent, self.vertical_beamwidth_rad, fan.elevation_step_rad)
+        side_of = rays.col // fan.n_cols
+        slope = np.empty(len(rays.dist))
+        for side in (0, 1):
+            rows = np.flatnonzero(side_of == side)
+            slope[rows] = fan.range_slope(rays.take(rows), R_ns[side])
+        e = echo_segments(rays, segs, strength, slope, 0.0, self.bin_size_m)
+        return EchoSegments(e.line // fan.n_cols, e.u0, e.u1, e.energy * self.column_weight[e.line % fan.n_cols],
+                            e.obj), vertical
 
     def render(self, t_s: float, pos_ned: ArrayLike, R_nb: ArrayLike, caster: RayCaster,
                objects: Sequence[SceneObjectLike] = (), *, noise: bool = True) -> SssRender:
@@ -196,10 +220,15 @@ class SideScanSonar(Sensor[SssRender]):
         """
         origin = np.asarray(pos_ned, dtype=float).reshape(3)
         R = np.asarray(R_nb, dtype=float).reshape(3, 3)
-        parts = [self.side_segments(s, origin, R, caster, objects) for s in (0, 1)]
-        seg = EchoSegments(*(np.concatenate([getattr(p[0], f) for p in parts])
-                             for f in ("line", "u0", "u1", "energy", "obj")))
-        altitude = min(parts[0][1], parts[1][1])
+        spheres = None
+        if objects and hasattr(caster, "object_bounding_sphere"):  # once per ping, not per side
+            spheres = {int(o.id): caster.object_bounding_sphere(int(o.id)) for o in objects}
+            # both sides share the range window: drop the objects out of range once
+            rmax = float(self.cfg.range_max_m)
+            objects = [o for o in objects
+                       if sphere_in_window(np.asarray(spheres[int(o.id)][0], dtype=float) - origin,
+                                           spheres[int(o.id)][1], 0.0, rmax)]
+        seg, altitude = self.echo_intervals(origin, R, caster, objects, spheres)
         altitude = altitude if np.isfinite(altitude) else float("nan")
         mean = self.echo.mean_intensity(seg.lines(2, self.n_bins, dtype=np.float32))
         labels, _ = label_bins(seg, 2, self.n_bins)

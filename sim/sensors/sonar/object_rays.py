@@ -52,8 +52,7 @@ def add_object_rays(fan: RayFan, base: RayTable, caster: RayCaster, origin_ned: 
     for o in objects:
         centre, radius = caster.object_bounding_sphere(int(o.id)) if spheres is None else spheres[int(o.id)]
         v = np.asarray(centre, dtype=float) - origin_ned
-        dist = float(np.linalg.norm(v))
-        if dist - radius <= window_far_m and dist + radius >= window_near_m:
+        if sphere_in_window(v, radius, window_near_m, window_far_m):
             near.append((int(o.id), R_ns.T @ v, float(radius)))
     strips = fan.strip_rays(near, rays_across, span_limit=span_limit)
     if strips.empty:
@@ -67,6 +66,13 @@ def add_object_rays(fan: RayFan, base: RayTable, caster: RayCaster, origin_ned: 
     rows = np.flatnonzero(chain)
     a, b = column_neighbours(sampled.col[rows], sampled.az[rows], sampled.phi[rows])
     return sampled, owner, (rows[a], rows[b])
+
+
+def sphere_in_window(offset_ned: FloatArray, radius_m: float, window_near_m: float, window_far_m: float) -> bool:
+    """Whether a sphere at ``offset_ned`` (3,) from the sonar (m) with ``radius_m`` reaches into
+    the range window ``[window_near_m, window_far_m]`` (m)."""
+    dist = float(np.sqrt(np.dot(offset_ned, offset_ned)))  # np.linalg.norm's own sum, without its overhead
+    return dist - radius_m <= window_far_m and dist + radius_m >= window_near_m
 
 
 def _cast_strips(fan: RayFan, base: RayTable, caster: RayCaster, origin_ned: FloatArray, R_ns: FloatArray,

@@ -206,6 +206,11 @@ class RayFan:
         self._pair_a = (np.arange(self.n_cols)[:, None] * self.n_el + e[None, :]).ravel()
 
     @property
+    def base_pairs(self) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+        """Rows (upper, lower) of the elevation neighbours among the base rays."""
+        return self._pair_a, self._pair_a + 1
+
+    @property
     def n_rays(self) -> int:
         """Base rays per cast."""
         return len(self.dirs_sonar)
@@ -250,7 +255,7 @@ class RayFan:
         n_sub: dict[int, int] = {}
         for oid, centre, radius in spheres:
             c = np.asarray(centre, dtype=float).reshape(3)
-            dist = float(np.linalg.norm(c))
+            dist = float(np.sqrt(np.dot(c, c)))  # np.linalg.norm's own sum, without its overhead
             if not dist > radius:
                 continue
             u = c / dist
@@ -312,8 +317,20 @@ class RayFan:
 
     def cast_rays(self, caster: RayCaster, origin_ned: FloatArray, R_ns: FloatArray, col: NDArray[np.intp],
                   az: FloatArray, phi: FloatArray, weight: FloatArray, max_range_m: float) -> RayTable:
-        """Cast rays (M,) of columns ``col`` at azimuths ``az`` and elevations ``phi`` (rad)."""
-        v = ray_directions_sonar(az, phi) @ R_ns.T
+        """Cast rays (M,) of columns ``col`` at azimuths ``az`` and elevations ``phi`` (rad).
+
+        ``R_ns`` is one sonar->NED rotation (3, 3), or one per block of ``n_cols`` columns
+        (B, 3, 3): column ``c`` then belongs to the sonar ``c // n_cols`` (several sonars at
+        one origin, e.g. the two sides of a side-scan, cast together).
+        """
+        if R_ns.ndim == 2:
+            v = ray_directions_sonar(az, phi) @ R_ns.T
+        else:
+            block = col // self.n_cols
+            v = np.empty((len(col), 3))
+            for b, R_b in enumerate(R_ns):
+                m = block == b
+                v[m] = ray_directions_sonar(az[m], phi[m]) @ R_b.T
         return RayTable.from_hits(caster.cast(origin_ned, v, max_range_m), v, col, az, phi, weight)
 
     def refine_edges(self, caster: RayCaster, origin_ned: FloatArray, R_ns: FloatArray, rays: RayTable,
@@ -331,7 +348,7 @@ class RayFan:
         Returns:
             The ray table with the refinement rays appended, and the intervals.
         """
-        pa, pb = (self._pair_a, self._pair_a + 1) if pairs is None else pairs
+        pa, pb = self.base_pairs if pairs is None else pairs
         same = rays.same_surface(pa, pb)
         both_miss = ~np.isfinite(rays.dist[pa]) & ~np.isfinite(rays.dist[pb])
         near_enough = np.minimum(rays.dist[pa], rays.dist[pb]) <= window_far_m

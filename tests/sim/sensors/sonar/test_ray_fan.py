@@ -180,3 +180,25 @@ def test_batched_bisection_matches_one_edge_at_a_time():
             np.testing.assert_allclose(got.dist[j], ref.dist[0], rtol=1e-12)
             np.testing.assert_allclose(got.normal[j], ref.normal[0], atol=1e-12)
             np.testing.assert_allclose(got.dirs[j], ref.dirs[0], atol=1e-12)
+
+
+def test_cast_rays_per_block_rotation_matches_each_sonar_alone():
+    """Two sonars at one origin (a side-scan's port and starboard, depressed 20 deg) cast
+    together with one rotation per column block give each sonar's own cast, row for row."""
+    from autonomy.sonar_frame import sonar_to_body_rotation
+
+    fan = RayFan([0.0], np.linspace(-0.3, 1.2, 12))
+    R = np.stack([sonar_to_body_rotation((0.0, np.deg2rad(20.0), yaw)) for yaw in (-0.5 * np.pi, 0.5 * np.pi)])
+    caster = AnalyticCaster(seabed_depth_m=4.0, spheres=(AnalyticSphere(np.array([0.0, 5.0, 3.0]), 0.8, 7),))
+    origin = np.zeros(3)
+    phi = np.tile(fan.elevations_rad, 2)
+    col = np.repeat([0, 1], fan.n_el)  # column 1 = the starboard sonar's column 0
+    az, w = np.zeros(2 * fan.n_el), np.ones(2 * fan.n_el)
+    both = fan.cast_rays(caster, origin, R, col, az, phi, w, 50.0)
+    for side in (0, 1):
+        rows = col == side
+        alone = fan.cast_rays(caster, origin, R[side], col[rows], az[rows], phi[rows], w[rows], 50.0)
+        for f in ("dirs", "dist", "normal", "obj"):
+            np.testing.assert_array_equal(getattr(both, f)[rows], getattr(alone, f))
+    # only the starboard sonar sees the sphere to starboard
+    assert (both.obj[col == 1] == 7).any() and not (both.obj[col == 0] == 7).any()
