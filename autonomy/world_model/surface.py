@@ -23,6 +23,14 @@ that frame, so a false object the sonar kept looking at without detecting is pen
 on board; the others, and every anchor when the track is too thin, get the PMHA's visibility
 floor (detected with probability ``p_detect * visibility_floor``), so an object is never
 penalised for a miss the surface cannot know about.
+
+A scan's own reports also tell where the fan was: a detection at ``z`` means the fan covered
+``z``, and the fan (metres to tens of metres across) is far larger than a detection's
+uncertainty, so an anchor within the association gate of a report of the scan
+(:func:`near_reports`) was in view too and is penalised if the scan does not assign it a
+detection. Without this, anchors near the shrunk fan's edge sit at the visibility floor and
+one object's detections, alternating between two anchors a few tenths of a metre apart, fit
+a pair better than one anchor at almost no miss cost (the twins of issue 20).
 """
 
 from __future__ import annotations
@@ -47,6 +55,24 @@ def unseen(points_ned: np.ndarray) -> np.ndarray:
     """Visibility for a PMHA that does not know the sonar's field of view: 0 for every point
     (the PMHA then uses its ``visibility_floor``)."""
     return np.zeros(len(points_ned))
+
+
+def near_reports(reports: Sequence[LocalizedDetection], gate_mahalanobis2: float) -> Callable[[np.ndarray], np.ndarray]:
+    """Visibility implied by one scan's reports: 1 for points within ``gate_mahalanobis2``
+    (squared Mahalanobis distance under the report's (3, 3) NED covariance, m^2) of a report,
+    else 0. ``points_ned`` (N, 3) NED m -> (N,) float."""
+    Z = np.stack([np.asarray(z.pos_ned, dtype=float) for z in reports]) if reports else np.zeros((0, 3))
+    W = np.stack([np.linalg.inv(np.asarray(z.cov_ned, dtype=float)) for z in reports]) if reports else np.zeros((0, 3, 3))
+
+    def visible(points_ned: np.ndarray) -> np.ndarray:
+        X = np.asarray(points_ned, dtype=float).reshape(-1, 3)
+        if not len(Z):
+            return np.zeros(len(X))
+        d = X[:, None, :] - Z[None, :, :]  # (N, M, 3)
+        m2 = np.einsum("nmi,mij,nmj->nm", d, W, d)
+        return (m2 <= gate_mahalanobis2).any(axis=1).astype(float)
+
+    return visible
 
 
 class FixTrack:
@@ -167,10 +193,16 @@ class SurfaceWorldModel:
         newest = max(self._pending)
         done = sorted(t for t in self._pending if final or t < newest or t <= t_now_s - self.hold_s)
         for t in done:
-            visible = unseen
+            scan = self._pending.pop(t)
+            in_fan = unseen
             if self.footprint is not None and self.track is not None:
-                visible = self.footprint.visibility(self.track.pose_at(t))
-            self.pmha.update(t, self._pending.pop(t), visible)
+                in_fan = self.footprint.visibility(self.track.pose_at(t))
+            near = near_reports(scan, self.pmha.cfg.gate_mahalanobis2)
+
+            def visible(points_ned: np.ndarray, in_fan=in_fan, near=near) -> np.ndarray:
+                return np.maximum(np.asarray(in_fan(points_ned), dtype=float), near(points_ned))
+
+            self.pmha.update(t, scan, visible)
             self.n_scans += 1
         return len(done)
 
