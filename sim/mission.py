@@ -299,10 +299,12 @@ class Mission:
         with timer.stage("control"):
             self.wrench_body = np.zeros(6) if sp is None else parts.autopilot.update(nav, sp, self.autonomy_dt_s)
             self.thruster_cmd = parts.allocator.allocate(self.wrench_body)
-        with timer.stage("nav_filter"):
-            cmd = WrenchCmdMsg(physics.t_s, self.wrench_body.copy())
-            for handler in self._by_type.get(WrenchCmdMsg, ()):
-                handler(cmd)  # the speed model of a DVL-free filter
+        wrench_handlers = self._by_type.get(WrenchCmdMsg)
+        if wrench_handlers:  # the speed model of a DVL-free filter; no message built for others
+            with timer.stage("nav_filter"):
+                cmd = WrenchCmdMsg(physics.t_s, self.wrench_body.copy())
+                for handler in wrench_handlers:
+                    handler(cmd)
         rec = self._record(truth, nav, parts.fsm.mode)
         if self._pipeline is not None and self._pipeline.busy:
             self._to_observers(self._pipeline.ready())
