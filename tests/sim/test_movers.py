@@ -99,3 +99,44 @@ def test_fls_echo_of_a_moving_diver_is_where_the_diver_is_at_ping_time():
     # the echo is strong there: the object bins outshine the water around them
     mean = render.mean_intensity
     assert np.median(mean[beams, bins]) > 10 * np.median(mean)
+
+
+@pytest.mark.parametrize("depth_m", [4.6, 5.0, 5.4])
+def test_fls_echo_of_a_diver_along_the_beam_stays_on_the_diver(depth_m):
+    """A diver lying along the beam (course straight away from the sonar), 12 m ahead, level
+    with the head or 0.4 m above or below it: the level rays graze its back, where the
+    surface slope dr/dphi is huge. Its labelled echo must lie where the capsule is, between
+    its near end (12 m - 0.7 m axis half-length - 0.2 m radius, from the head) and its far
+    end, to within the range resolution; the quadratic range extremum once drew a streak
+    of echo 4.5 m in front of it."""
+    diver = dict(name="diver", kind="diver", initial_pos_ned=(12.3, 0.0, depth_m), initial_course_deg=0.0,
+                 surge_mps=0.0, surge_sigma_mps=0.0, course_rate_sigma_dps=0.0, heave_sigma_mps=0.0,
+                 reflectivity=0.9, bubbles={"enabled": False})
+    scn = Scenario(name="along", duration_s=5.0, world={"seabed": {"depth_m": 30.0}, "movers": [diver]},
+                   vehicle={"model": "bluerov2_heavy", "initial_pos_ned": (0.0, 0.0, 5.0)},
+                   sensors={"fls": {"preset": "aris3000_lf", "tilt_deg": 0.0, "rate_hz": 6.0,
+                                    "range_window_m": (1.0, 15.0), "mount_pos_body_m": (0.3, 0.0, 0.0)}})
+    phys = Physics(scn)
+    phys.reset(scn.vehicle.initial_pos_ned, (0.0, 0.0, 0.0))
+    fls: FlsSensor = build_sensors({"fls": scn.sensors.fls}, phys.site_pos_body, 0)["fls"]
+    truth = phys.truth()
+    render = fls.measure(truth, phys.scene(), noise=False)
+    head = truth.point_ned(fls.mount_pos_body_m)
+    centre = np.array([12.3, 0.0, depth_m])
+    # nearest and farthest points of the capsule (axis north-south, half-length 0.7, radius 0.2)
+    axis = centre + np.outer(np.linspace(-0.7, 0.7, 1401), [1.0, 0.0, 0.0])
+    dist = np.linalg.norm(axis - head, axis=1)
+    near_m, far_m = dist.min() - 0.2, dist.max() + 0.2
+    (obj,) = [o for o in render.truth.objects if o.name == "diver"]
+    g = fls.geometry
+    _, bins = np.nonzero(render.truth.mask_polar == obj.id)
+    assert bins.size > 0
+    rng_m = g.window_near_m + bins * g.range_resolution_m
+    assert rng_m.min() >= near_m - 3 * g.range_resolution_m
+    assert rng_m.max() <= far_m + 3 * g.range_resolution_m
+    # the bright echo (the mean image, not only the labels) starts at the near end as well
+    mean = render.mean_intensity
+    beams_c = np.abs(g.beam_azimuths_rad()) < np.radians(3.0)
+    strong = mean[beams_c] > 10 * np.median(mean)
+    first = g.window_near_m + np.nonzero(strong.any(axis=0))[0].min() * g.range_resolution_m
+    assert first >= near_m - 3 * g.range_resolution_m

@@ -96,6 +96,7 @@ def echo_segments(rays: RayTable, segments: Segments, strength: FloatArray, rang
     fold = (sa * sb < 0.0) & (t_ext > 0.0) & (t_ext < 1.0)
     t_ext = np.where(fold, t_ext, 1.0)
     r_ext = np.where(fold, ra + lin * t_ext + quad * t_ext ** 2, rb)
+    r_ext = _clamp_to_end_tangents(r_ext, fold, ra, rb, sa, sb)
     f = np.flatnonzero(fold)
     # first part a -> extremum (the whole segment where there is no fold), then extremum -> b
     seg_r0 = np.concatenate([ra, r_ext[f]])
@@ -118,6 +119,32 @@ def echo_segments(rays: RayTable, segments: Segments, strength: FloatArray, rang
     ub = (r1 - window_near_m) / range_resolution_m
     ok = (r0 > 0.0) & (r1 > 0.0) & (energy > 0.0)
     return EchoSegments(rows[ok], ua[ok], ub[ok], energy[ok], obj[ok])
+
+
+def _clamp_to_end_tangents(r_ext: FloatArray, fold: NDArray[np.bool_], ra: FloatArray, rb: FloatArray,
+                           sa: FloatArray, sb: FloatArray) -> FloatArray:
+    """Bound each fold's range extremum ``r_ext`` (k,) by the tangents at the interval's ends.
+
+    Over the interval ``t`` in [0, 1] the ends' ranges are ``ra``, ``rb`` and their slopes
+    ``sa``, ``sb`` (m per interval, opposite signs at a fold). An arc that turns once lies
+    between its chord and its end tangents ``ra + sa t`` and ``rb + sb (t - 1)``: a range
+    minimum (``sa < 0``) is no nearer than where the tangents cross, ``r_T``, and no farther
+    than the nearer end; a maximum likewise the other way. Near grazing one slope is huge and
+    the quadratic through both ends can put its extremum metres off the surface (a diver
+    lying along the beam drew a streak of echo metres in front of itself); the clamp keeps
+    it on the arc. Where the tangents do not cross inside the interval the ends do not
+    support a fold and the extremum stays at the nearer (minimum) or farther (maximum) end.
+    Elsewhere (no fold) ``r_ext`` is returned as is.
+    """
+    is_min = sa < 0.0
+    near, far = np.minimum(ra, rb), np.maximum(ra, rb)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t_cross = (rb - sb - ra) / (sa - sb)
+    r_cross = ra + sa * t_cross
+    crosses = (t_cross > 0.0) & (t_cross < 1.0)
+    lo = np.where(is_min, np.where(crosses, r_cross, near), far)
+    hi = np.where(is_min, near, np.where(crosses, r_cross, far))
+    return np.where(fold, np.clip(r_ext, np.minimum(lo, hi), np.maximum(lo, hi)), r_ext)
 
 
 def spread_segments(n_rows: int, n_bins: int, row: NDArray[np.intp], u_a: FloatArray, u_b: FloatArray,

@@ -80,3 +80,31 @@ def test_sphere_cap_range_found_between_rays(offset):
     # energy kept: per column, the binned line holds the segments' energy
     lines = e.lines(1, int(30.0 / dr))
     assert lines.sum() == pytest.approx(e.energy.sum(), rel=1e-5)
+
+
+def test_fold_extremum_is_bounded_by_the_end_tangents():
+    """A range r(t) = r0 + A (t - t0)^2 over an interval: its true minimum r0 lies within the
+    bound and is kept; a wild extremum below is raised to where the end tangents cross, which
+    for a parabola is t = 1/2, r0 + A (t0^2 - t0) (closed form, independent of the code). The
+    grazing pair a diver's back gave (ra 10.976 m, rb 11.401 m, slopes -0.081 and 37.9 m per
+    interval, quadratic extremum 6.44 m) is raised to within 0.1 m of the nearer end."""
+    from sim.sensors.sonar.echo_lines import _clamp_to_end_tangents
+
+    r0 = 10.0
+    A = np.array([0.3, 2.0, 8.0])
+    t0 = np.array([0.2, 0.5, 0.9])
+    ra, rb = r0 + A * t0**2, r0 + A * (1 - t0) ** 2
+    sa, sb = -2 * A * t0, 2 * A * (1 - t0)
+    fold = np.ones(3, dtype=bool)
+    np.testing.assert_allclose(_clamp_to_end_tangents(np.full(3, r0), fold, ra, rb, sa, sb), r0)
+    np.testing.assert_allclose(_clamp_to_end_tangents(np.full(3, r0 - 5.0), fold, ra, rb, sa, sb),
+                               r0 + A * (t0**2 - t0))
+    # a maximum (the same parabola upside down) is lowered to its tangents' crossing likewise
+    np.testing.assert_allclose(_clamp_to_end_tangents(np.full(3, -r0 + 5.0), fold, -ra, -rb, -sa, -sb),
+                               -(r0 + A * (t0**2 - t0)))
+    # no fold: untouched
+    assert _clamp_to_end_tangents(np.array([3.0]), np.array([False]), np.array([10.0]), np.array([11.0]),
+                                  np.array([-1.0]), np.array([1.0]))[0] == 3.0
+    r = _clamp_to_end_tangents(np.array([6.439]), np.array([True]), np.array([10.976]), np.array([11.401]),
+                               np.array([-0.081]), np.array([37.897]))[0]
+    assert 10.976 - 0.1 < r < 10.976
