@@ -2,7 +2,8 @@
 
 Runs each tracking scenario over N seeds (no output files) and reports, per scenario, the
 mean over seeds of each error set's mean and spread (m), the fraction of filter steps with a
-sonar detection in the fused filter, the ROI gating of bubble clusters, and what the sonar
+sonar detection in the fused filter, the ROI gating of bubble clusters (counts, fractions and
+their exact 95 % binomial intervals), and what the sonar
 could see of the diver's bubble plume (breaths in its view, and apart from the diver's body
 in its plane: ``TrackingEvaluation.plume_metrics``); with
 ``--json`` also every run's figures; with ``--png DIR`` the box plot of the four error sets
@@ -30,7 +31,8 @@ from scenarios.load import load_scenario  # noqa: E402
 from sim.cli.app import run_script, script_parser  # noqa: E402
 from sim.cli.args import positive_float, positive_int  # noqa: E402
 from sim.cli.errors import CliError  # noqa: E402
-from sim.evaluation.tracking_eval import ERROR_SETS, error_boxplot_png, evaluation_for  # noqa: E402
+from sim.evaluation.tracking_eval import (  # noqa: E402
+    ERROR_SETS, error_boxplot_png, evaluation_for, proportion_ci95)
 from sim.mission import Mission  # noqa: E402
 
 
@@ -57,8 +59,10 @@ def summarise(runs: list[dict]) -> dict:
     for key in ("fused_sonar_step_fraction", "target_in_fov_fraction", "min_distance_m"):
         v = np.array([r[key] for r in runs], dtype=float)
         out[key] = {"mean": float(np.nanmean(v)), "min": float(np.nanmin(v)), "max": float(np.nanmax(v))}
-    roi = {"bubble_clusters": sum(r["roi"]["bubble_clusters"] for r in runs),
-           "target_clusters": sum(r["roi"]["target_clusters"] for r in runs)}
+    roi = {k: sum(r["roi"][k] for r in runs) for k in ("bubble_clusters", "bubble_rejected", "target_clusters",
+                                                        "target_kept")}
+    roi["bubble_rejected_ci95"] = proportion_ci95(roi["bubble_rejected"], roi["bubble_clusters"])
+    roi["target_kept_ci95"] = proportion_ci95(roi["target_kept"], roi["target_clusters"])
     for frac, count in (("bubble_rejected_fraction", "bubble_clusters"), ("bubble_not_chosen_fraction", "bubble_clusters"),
                         ("target_kept_fraction", "target_clusters"), ("target_chosen_fraction", "target_clusters")):
         w = np.array([r["roi"][count] for r in runs], dtype=float)

@@ -17,7 +17,9 @@ gating figures are the fraction of bubble clusters the fused filter's gate refus
 its ROI or failing the size gate; the window alone: ``bubble_outside_roi_fraction``) and of
 target clusters it accepts (kept), and, with the
 in-ROI scoring, the fraction of bubble clusters not chosen as the target and of frames
-showing the target whose target cluster was chosen. The sonar pose at ping time is the
+showing the target whose target cluster was chosen; each bubble cluster the gate accepted is
+recorded (``roi.accepted_bubbles``: time, where, its shape cues and score, whether chosen,
+its place in the ROI) to audit. The sonar pose at ping time is the
 truth at the nearest tick (the vehicle moves < 0.1 m between ticks).
 """
 
@@ -29,6 +31,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.stats import binomtest
 
 from autonomy.tracking.onboard import MODES, TrackingStack
 from sim.movers import DIVER_HALF_LENGTH_M, DIVER_RADIUS_M, VEHICLE_HALF_SIZE_M
@@ -78,6 +81,7 @@ class TrackingEvaluation:
         self.n_bubble = self.n_bubble_rejected = self.n_target = self.n_target_kept = 0
         self.n_bubble_not_chosen = self.n_frames_with_target = self.n_target_chosen = 0
         self.n_bubble_outside = 0
+        self.accepted_bubbles: list[dict[str, float]] = []  # each bubble cluster the fused gate accepted
         self.breaths_at, self.plume_apart_m = breaths_at, float(plume_apart_m)
         self.n_frames = self.n_breath_in_view = self.n_breath_apart = 0
         self._breath_view_age: dict[float, float] = {}  # release time -> oldest age seen in view
@@ -197,6 +201,16 @@ class TrackingEvaluation:
         self.n_bubble_not_chosen += int((is_bub & ~chosen).sum())
         self.n_frames_with_target += int(is_tgt.any())
         self.n_target_chosen += int((is_tgt & chosen).any())
+        roi = res.roi["fused"]
+        for i in np.nonzero(is_bub & inside)[0]:  # what each accepted bubble cluster was, for the audit
+            self.accepted_bubbles.append({
+                "t_s": float(res.t_s), "range_m": float(cr[i]), "azimuth_deg": math.degrees(ca[i]),
+                "score": float(res.candidates[i].score), "chosen": bool(chosen[i]),
+                "body_distance_m": float(d_tgt[i]), "bubble_distance_m": float(d_bub[i]),
+                "roi_centre_distance": float(roi.centre_distance(cr[i], ca[i])),
+                "roi_half_range_m": roi.half_range_m, "roi_half_azimuth_deg": math.degrees(roi.half_azimuth_rad),
+                "target_clusters_on_frame": int(is_tgt.sum()),
+                **{k: float(v[i]) for k, v in res.features.items()}})
 
     # results
     def error_sets(self, horizontal: bool = False) -> dict[str, FloatArray]:
@@ -226,7 +240,8 @@ class TrackingEvaluation:
             "errors": stats,
             "errors_horizontal": stats_h,
             "fused_sonar_step_fraction": float(scored[:, 5].mean()) if len(scored) else math.nan,
-            "roi": {"bubble_clusters": self.n_bubble, "bubble_rejected_fraction":
+            "roi": {"bubble_clusters": self.n_bubble, "bubble_rejected": self.n_bubble_rejected,
+                    "target_kept": self.n_target_kept, "bubble_rejected_fraction":
                     self.n_bubble_rejected / self.n_bubble if self.n_bubble else math.nan,
                     "target_clusters": self.n_target, "target_kept_fraction":
                     self.n_target_kept / self.n_target if self.n_target else math.nan,
@@ -234,7 +249,7 @@ class TrackingEvaluation:
                     self.n_bubble_outside / self.n_bubble if self.n_bubble else math.nan,
                     "bubble_not_chosen_fraction": self.n_bubble_not_chosen / self.n_bubble if self.n_bubble else math.nan,
                     "target_chosen_fraction": self.n_target_chosen / self.n_frames_with_target
-                    if self.n_frames_with_target else math.nan},
+                    if self.n_frames_with_target else math.nan, "accepted_bubbles": list(self.accepted_bubbles)},
             "plume": self.plume_metrics(),
             "target_in_fov_fraction": float(a[:, 6].mean()) if len(a) else math.nan,
             "min_distance_m": float(a[:, 7].min()) if len(a) else math.nan,
@@ -296,6 +311,18 @@ def error_boxplot_png(sets: dict[str, FloatArray], path: Path, title: str, ylabe
     ax.grid(alpha=0.3, axis="y")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
+
+
+def proportion_ci95(k: int, n: int) -> tuple[float, float]:
+    """Exact (Clopper-Pearson) two-sided 95 % confidence interval of a binomial proportion
+    ``k / n`` (scipy's ``binomtest``); (nan, nan) when ``n`` is 0. Raises ValueError for
+    ``k`` outside 0..n."""
+    if n == 0:
+        return math.nan, math.nan
+    if not 0 <= k <= n:
+        raise ValueError(f"proportion_ci95: k = {k} outside 0..{n}")
+    ci = binomtest(int(k), int(n)).proportion_ci(0.95, method="exact")
+    return float(ci.low), float(ci.high)
 
 
 def evaluation_for(mission: Any, warmup_s: float = 10.0) -> TrackingEvaluation:

@@ -42,3 +42,32 @@ def test_breaths_in_the_beam_and_apart_from_the_body():
     assert m["breaths_seen"] == 4 and m["last_in_view_age_max_s"] == 3.0
     # nearest in-view bubble to the body axis in the sonar plane: ~0.1 (over it), 0.5 and 0.8 (past the feet), 1.0 (beyond)
     assert abs(m["nearest_to_body_median_m"] - 0.65) < 0.02  # median of ~0.1, 0.5, 0.8, 1.0
+
+
+def test_gating_counts_and_the_accepted_bubble_record():
+    """Three clusters on one frame against hand geometry: the diver's (8 m, dead ahead), a
+    breath 1 m beyond it in range (inside the ROI, let through by the gate) and one 10 deg to
+    starboard (outside). Counted: two bubbles, one refused; one diver cluster, kept; the
+    accepted bubble is recorded where it is, 1.0 m from the body axis, at normalised distance
+    (1 / 1.5) / sqrt(2) from the ROI centre."""
+    from autonomy.messages import Detection
+    from autonomy.tracking.roi import PolarRoi
+
+    stb = 8.0 * np.array([math.cos(math.radians(10.0)), math.sin(math.radians(10.0))])
+    bubbles = np.array([[9.0, 0.0, 5.0], [stb[0], stb[1], 5.0]])
+    ev = _evaluation((np.zeros(0), np.zeros((0, 1, 3)), np.zeros((0, 1), dtype=bool)))
+    ev.bubbles_at = lambda t: bubbles
+    cands = tuple(Detection(1.0, "diver", s, (0.0, 0.0, 1.0, 1.0), r, math.radians(a))
+                  for r, a, s in [(8.0, 0.0, 0.9), (9.0, 0.0, 0.7), (8.0, 10.0, 0.8)])
+    roi = PolarRoi(8.0, 0.0, 1.5, math.radians(5.0), np.eye(2))
+    inside = roi.contains([8.0, 9.0, 8.0], np.radians([0.0, 0.0, 10.0]))
+    feats = {"extent_m": np.array([1.6, 0.9, 0.5]), "area_m2": np.array([0.5, 0.3, 0.1])}
+    res = SimpleNamespace(t_s=1.0, candidates=cands, roi={"fused": roi}, inside={"fused": inside},
+                          accepted={"fused": inside}, chosen={"fused": cands[0]}, features=feats)
+    ev._label(res)
+    assert (ev.n_bubble, ev.n_bubble_rejected, ev.n_target, ev.n_target_kept) == (2, 1, 1, 1)
+    (rec,) = ev.accepted_bubbles
+    assert rec["range_m"] == 9.0 and rec["azimuth_deg"] == 0.0 and not rec["chosen"]
+    assert abs(rec["body_distance_m"] - 1.0) < 1e-9 and rec["bubble_distance_m"] < 1e-9
+    assert abs(rec["roi_centre_distance"] - (1.0 / 1.5) / math.sqrt(2.0)) < 1e-9
+    assert rec["extent_m"] == 0.9 and rec["target_clusters_on_frame"] == 1
