@@ -31,8 +31,8 @@ from scenarios.load import load_scenario  # noqa: E402
 from sim.cli.app import run_script, script_parser  # noqa: E402
 from sim.cli.args import positive_float, positive_int  # noqa: E402
 from sim.cli.errors import CliError  # noqa: E402
-from sim.evaluation.tracking_eval import (  # noqa: E402
-    ERROR_SETS, error_boxplot_png, evaluation_for, proportion_ci95)
+from sim.evaluation.binomial_interval import proportion_ci95  # noqa: E402
+from sim.evaluation.tracking_eval import ERROR_SETS, error_boxplot_png, evaluation_for  # noqa: E402
 from sim.mission import Mission  # noqa: E402
 
 

@@ -31,7 +31,6 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.stats import binomtest
 
 from autonomy.tracking.onboard import MODES, TrackingStack
 from sim.movers import DIVER_HALF_LENGTH_M, DIVER_RADIUS_M, VEHICLE_HALF_SIZE_M
@@ -311,18 +310,6 @@ def error_boxplot_png(sets: dict[str, FloatArray], path: Path, title: str, ylabe
     ax.grid(alpha=0.3, axis="y")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
-
-
-def proportion_ci95(k: int, n: int) -> tuple[float, float]:
-    """Exact (Clopper-Pearson) two-sided 95 % confidence interval of a binomial proportion
-    ``k / n`` (scipy's ``binomtest``); (nan, nan) when ``n`` is 0. Raises ValueError for
-    ``k`` outside 0..n."""
-    if n == 0:
-        return math.nan, math.nan
-    if not 0 <= k <= n:
-        raise ValueError(f"proportion_ci95: k = {k} outside 0..{n}")
-    ci = binomtest(int(k), int(n)).proportion_ci(0.95, method="exact")
-    return float(ci.low), float(ci.high)
 
 
 def evaluation_for(mission: Any, warmup_s: float = 10.0) -> TrackingEvaluation:

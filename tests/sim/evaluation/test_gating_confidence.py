@@ -8,7 +8,7 @@ import math
 import pytest
 from scipy.stats import beta
 
-from sim.evaluation.tracking_eval import proportion_ci95
+from sim.evaluation.binomial_interval import proportion_ci95
 
 
 def test_all_refused_has_the_closed_form_lower_bound():
