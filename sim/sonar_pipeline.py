@@ -48,6 +48,7 @@ from sim.sonar_workers import perception_main, render_main
 from sim.truth import VehicleTruth
 
 RING_SLOTS = 4  # frames in flight between two processes
+CAPTURES_IN_FLIGHT = 2 * RING_SLOTS  # captures sent and not yet rendered before a capture waits
 STOP_TIMEOUT_S = 10.0  # wait for a worker to end before terminating it
 
 
@@ -98,7 +99,7 @@ class SonarPipeline:
         self._procs: list[Any] = []
         self._rings: list[FrameRing] = []
         self._render = self._perceive = self._frames_in = None
-        self._n_captured = 0
+        self._n_captured = self._n_rendered = 0
         self._pending: deque[tuple[str, int]] = deque()  # delivered, result not yet handed on
         self._results: dict[int, Any] = {}
         self._frames: dict[int, Any] = {}
@@ -155,7 +156,12 @@ class SonarPipeline:
     # -- the mission loop's calls ------------------------------------------------------------
     def capture(self, truth: VehicleTruth) -> FrameTicket:
         """Start rendering the frame captured now (call where the serial loop would measure,
-        after the scene is placed at the present time)."""
+        after the scene is placed at the present time). Waits, reading the workers' messages,
+        while :data:`CAPTURES_IN_FLIGHT` captures are not rendered yet: the mission process then
+        never blocks on a full connection while a worker blocks on it (no cycle of full pipes)."""
+        self._receive(block=False)
+        while self._n_captured - self._n_rendered >= CAPTURES_IN_FLIGHT:
+            self._receive(block=True)
         data = self.physics.data
         objects = self.physics.objects()
         k = self._n_captured
@@ -274,7 +280,9 @@ class SonarPipeline:
                     self._fail("a sonar pipeline worker ended unexpectedly")
                 if msg[0] == "error":
                     self._fail(f"sonar pipeline worker failed:\n{msg[1]}")
-                if msg[0] == "result":
+                if msg[0] == "rendered":
+                    self._n_rendered = msg[1] + 1
+                elif msg[0] == "result":
                     self._results[msg[1]] = msg[2]
                 elif msg[0] == "state" and want_state:
                     states.append((conn, msg))

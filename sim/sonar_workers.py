@@ -14,7 +14,8 @@ frame ``k`` exactly as the serial loop (same geom poses, same draws in the same 
 the perception's view of it (the frame; with ``nav_source='truth'`` also its truth) to the
 perception worker, and, when the mission's observers take frames, ``(k, render)`` to the
 mission process over a connection of its own, both through shared memory (:class:`sim.frame_transport.FrameRing`).
-``("state",)`` answers ``("state", noise generator state)``.
+``("rendered", k)`` then tells the mission process it is done with capture ``k`` (which bounds the
+captures in flight); ``("state",)`` answers ``("state", noise generator state)``.
 
 Perception worker (:func:`perception_main`): holds the mission's
 :class:`sim.perception.Perception` (its detector rebuilt from the ATR config). Messages in:
@@ -90,6 +91,7 @@ def render_main(conn: Any, to_perception: Any, ring_perception: FrameRing, to_ma
             ring_perception.put(to_perception, (k, view), shared_ids)
             if ring_main is not None:
                 ring_main.put(to_main, (k, render), shared_ids)
+            conn.send(("rendered", k))
     except BaseException:
         _report(conn)
     finally:

@@ -115,7 +115,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--detector", choices=["cnn", "classical", "none"], default=None,
                    help="override autonomy.atr.detector")
     p.add_argument("--workers", type=positive_int, default=1, metavar="N",
-                   help="threads for the loop (default 1: serial); 2 or more render the sonar and run "
-                        "perception on worker threads while physics and navigation advance (same results)")
+                   help="processes for the loop (default 1: serial); 2 or more render the sonar and run "
+                        "perception in two worker processes while physics and navigation advance (same results)")
     p.add_argument("--quiet", action="store_true", help="no progress display")
     p.set_defaults(func=_cmd_run)

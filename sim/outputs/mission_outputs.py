@@ -193,6 +193,8 @@ def map_layers(mission: Mission, tracking: Any, sim_time_s: float, overlay=None,
 class _ProgressObserver:
     """Feeds the mission's step records to a :class:`MissionProgress`."""
 
+    sonar_frames = False  # ignores the sonar's renders (the pipelined loop need not ship them)
+
     def __init__(self, progress: MissionProgress) -> None:
         self.progress = progress
 
@@ -224,7 +226,7 @@ def run_mission(
     ``outputs.rosbag_fls_every``) into ``out``. ``score_detections``: score the ATR against the
     frames' ground truth (:class:`sim.evaluation.detection_scoring.DetectionScorer`; its figures
     go under ``perception`` in metrics.json). ``workers`` > 1 pipelines the sonar and its
-    perception on worker threads (:class:`sim.mission.Mission`; same outputs). Returns the metrics.
+    perception in worker processes (:class:`sim.mission.Mission`; same outputs). Returns the metrics.
 
     Raises:
         OutputDirError: ``out`` is protected, a file, not creatable, or holds files that
