@@ -65,7 +65,9 @@ class Mission:
             nothing in the loop reads perception back (survey perception; not target tracking),
             with the serial loop's results bit for bit; observers get frames and perception
             results once ready, in order (frames only if an observer takes them: one without
-            ``sonar_frames = False``). Call :meth:`close` when done (it ends the workers).
+            ``sonar_frames = False``). Call :meth:`close` when done (it ends the workers). The
+            workers start with ``spawn``: a script that builds the mission needs the
+            ``if __name__ == "__main__":`` guard.
 
     Raises:
         ValueError: unknown ``nav_source``; ``workers`` < 1; a sensor mount site missing on the hull.

@@ -32,9 +32,11 @@ from __future__ import annotations
 
 import io
 import multiprocessing as mp
+import os
 import pickle
 from collections import deque
 from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from multiprocessing.connection import wait as wait_any
 from typing import Any
@@ -50,6 +52,7 @@ from sim.truth import VehicleTruth
 RING_SLOTS = 4  # frames in flight between two processes
 CAPTURES_IN_FLIGHT = 2 * RING_SLOTS  # captures sent and not yet rendered before a capture waits
 STOP_TIMEOUT_S = 10.0  # wait for a worker to end before terminating it
+THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
 
 
 class PipelineError(RuntimeError):
@@ -62,6 +65,22 @@ class FrameTicket:
 
     t_s: float
     k: int
+
+
+@contextmanager
+def _one_thread_per_library() -> Iterator[None]:
+    """Environment for the workers' start: their BLAS and OpenMP pools get one thread each (the
+    pipeline's processes are the parallelism; idle pool threads would spin on the same cores)."""
+    saved = {k: os.environ.get(k) for k in THREAD_VARIABLES}
+    os.environ.update({k: "1" for k in THREAD_VARIABLES})
+    try:
+        yield
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
 
 
 class _Persist(pickle.Pickler):
@@ -134,8 +153,9 @@ class SonarPipeline:
                         args=(perceive_end, between_r, self._rings[0], buf.getvalue())),
         ]
         try:
-            for p in self._procs:
-                p.start()
+            with _one_thread_per_library():
+                for p in self._procs:
+                    p.start()
         except BaseException:
             self.close()
             raise

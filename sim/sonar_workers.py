@@ -37,8 +37,12 @@ from typing import Any
 from sim.frame_transport import FrameRing, shared_objects
 
 
-def _quiet_sigint() -> None:
+def _worker_start() -> None:
+    """Ignore Ctrl-C (the mission process stops the worker) and keep OpenCV to one thread."""
+    import cv2
+
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    cv2.setNumThreads(1)
 
 
 def _report(conn: Any) -> None:
@@ -54,7 +58,7 @@ def render_main(conn: Any, to_perception: Any, ring_perception: FrameRing, to_ma
     ``to_main`` through ``ring_main`` (None: not wanted). ``setup``: the pickled dict ``sonar``, ``model``,
     ``geom_object_id``, ``geom_reflectivity``, ``vehicle_body_id``, ``geom_xpos``, ``geom_xmat``,
     ``moving_geoms``, ``objects``, ``truth_to_perception``."""
-    _quiet_sigint()
+    _worker_start()
     try:
         import dataclasses
 
@@ -104,7 +108,7 @@ def perception_main(conn: Any, from_render: Any, ring: FrameRing, setup: bytes) 
     """Perception-worker loop (see the module doc). ``setup``: the mission's ``Perception``
     pickled with its detector as the persistent id ``"detector"`` (rebuilt here from
     ``perception.scenario.autonomy.atr``)."""
-    _quiet_sigint()
+    _worker_start()
     try:
         import io
 
