@@ -127,10 +127,10 @@ class SonarPipeline:
         self._moving = np.flatnonzero(model.geom_bodyid != 0)
         self._static_objects = world.objects
         ctx = mp.get_context("spawn")
-        slot_bytes = self._frame_bytes(sonar)
-        self._rings = [FrameRing(ctx, slots, slot_bytes)]
+        to_perception, whole = self._frame_bytes(sonar)
+        self._rings = [FrameRing(ctx, slots, to_perception)]
         if self.frames:
-            self._rings.append(FrameRing(ctx, slots, slot_bytes))
+            self._rings.append(FrameRing(ctx, slots, whole))
         self._shared = shared_objects(sonar)
         render_setup = pickle.dumps({
             "sonar": sonar, "model": model, "geom_object_id": world.geom_object_id,
@@ -165,13 +165,16 @@ class SonarPipeline:
                     end.close()  # the workers hold them now: their ends close when they end
 
     @staticmethod
-    def _frame_bytes(sonar: Sensor) -> int:
-        """Bytes a slot needs for one render's images and intensities (+ margin)."""
+    def _frame_bytes(sonar: Sensor) -> tuple[int, int]:
+        """Slot bytes for the perception's view of a frame (its images; with
+        ``nav_source='truth'`` the truth's mask goes in band) and for a whole render (images,
+        mask, intensities), with a margin; a sensor without an FLS geometry: 16 MiB each."""
         g = getattr(sonar, "geometry", None)
         if g is None:
-            return 64 << 20
+            return 16 << 20, 16 << 20
         w, h = g.fan_size_px
-        return int(g.n_beams * g.n_bins * (1 + 2 + 4 + 4 + 8) + w * h * 2) + (1 << 20)
+        images = g.n_beams * g.n_bins + w * h
+        return images + (1 << 16), images + g.n_beams * g.n_bins * (2 + 4 + 4) + (1 << 20)
 
     # -- the mission loop's calls ------------------------------------------------------------
     def capture(self, truth: VehicleTruth) -> FrameTicket:
