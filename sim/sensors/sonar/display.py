@@ -115,24 +115,21 @@ _BILINEAR_WEIGHTS = (32 * np.stack([(32 - _I) * (32 - _J), (32 - _I) * _J, _I * 
 
 def _bilinear_gather(fixed_maps: tuple[NDArray[np.int16], NDArray[np.uint16]], polar_shape: tuple[int, int]
                      ) -> tuple[NDArray[np.int32], NDArray[np.int32], NDArray[np.uint16], NDArray[np.uint8]]:
-    """The fan pixels that read the polar image under ``cv2.remap``'s ``CV_16SC2`` maps, in
-    source order: flat destination index, flat index of the top-left neighbour, fractional
+    """The fan pixels that read the polar image under ``cv2.remap``'s ``CV_16SC2`` maps: flat
+    destination index, flat index of the top-left neighbour, fractional
     position (``map2``: 32 y_frac + x_frac) and which of the right / lower neighbours exist
     (bits 0 / 1; a missing one has zero weight: the maps are clipped to the image).
     Pixels whose four neighbours all fall outside the image take the border value (0)."""
     rows, cols = polar_shape
     xy, frac = fixed_maps
-    x = xy[..., 0].astype(np.int64).ravel()
-    y = xy[..., 1].astype(np.int64).ravel()
-    f = frac.astype(np.int64).ravel()
-    reads = ~((x >= cols) | (x + 1 < 0) | (y >= rows) | (y + 1 < 0))
-    if np.any((x[reads] < 0) | (y[reads] < 0)):
+    x = xy[..., 0].ravel().astype(np.int32)
+    y = xy[..., 1].ravel().astype(np.int32)
+    idx = np.flatnonzero((x < cols) & (x >= -1) & (y < rows) & (y >= -1))
+    x, y, f = x[idx], y[idx], frac.ravel()[idx]
+    if np.any((x < 0) | (y < 0)):
         raise ValueError("fan maps reach left of or above the polar image")
     dx_ok, dy_ok = x + 1 < cols, y + 1 < rows
-    if np.any(reads & ~dx_ok & (f % 32 != 0)) or np.any(reads & ~dy_ok & (f // 32 != 0)):
+    if np.any(~dx_ok & (f % 32 != 0)) or np.any(~dy_ok & (f // 32 != 0)):
         raise ValueError("fan maps weight a neighbour outside the polar image")
-    base = y * cols + x
-    idx = np.flatnonzero(reads)
-    idx = idx[np.argsort(base[idx], kind="stable")]  # read the polar image in memory order
-    step = (dx_ok[idx].astype(np.uint8) | (dy_ok[idx].astype(np.uint8) << 1)).astype(np.uint8)
-    return idx.astype(np.int32), base[idx].astype(np.int32), f[idx].astype(np.uint16), step
+    step = dx_ok.view(np.uint8) | (dy_ok.view(np.uint8) << 1)
+    return idx.astype(np.int32), y * cols + x, f, step

@@ -1,0 +1,88 @@
+"""The compiled passes give bit for bit what the numpy / OpenCV chains they replace give."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+from autonomy.sonar_geometry import FanGeometry
+from sim.sensors.sonar.display import FanRemap, to_uint8_db
+from sim.sensors.sonar.speckle import add_speckle_and_noise, complement_uniform_f32
+
+
+@pytest.mark.parametrize("shape", [(7, 5), (3, 4, 5), (1,), (2, 3)])
+@pytest.mark.parametrize("spare_word", [False, True])
+def test_complement_uniform_is_one_minus_generator_random(shape, spare_word):
+    a, b = np.random.default_rng(11), np.random.default_rng(11)
+    if spare_word:  # leave numpy's spare uint32 half buffered in both generators
+        a.random(3, dtype=np.float32)
+        b.random(3, dtype=np.float32)
+    for _ in range(3):
+        got = complement_uniform_f32(a, shape)
+        want = np.float32(1.0) - b.random(shape, dtype=np.float32)
+        assert got.dtype == np.float32 and got.shape == shape
+        assert np.array_equal(got, want)
+        assert a.bit_generator.state == b.bit_generator.state  # the next draws match too
+    assert np.array_equal(a.random(5), b.random(5)) and np.array_equal(a.integers(0, 99, 5), b.integers(0, 99, 5))
+
+
+def test_other_bit_generators_draw_through_generator_random():
+    a, b = np.random.Generator(np.random.Philox(3)), np.random.Generator(np.random.Philox(3))
+    assert np.array_equal(complement_uniform_f32(a, (4, 6)), np.float32(1.0) - b.random((4, 6), dtype=np.float32))
+
+
+def _speckle_reference(mean, rng, kind, noise_power, k_shape, clutter):
+    """The earlier numpy chain: (mean [* texture] + noise) * -log(1 - U)."""
+    if kind == "k":
+        tex = rng.standard_gamma(k_shape, mean.shape, dtype=np.float32)
+        tex *= np.float32(1.0 / k_shape)
+        np.copyto(tex, np.float32(1.0), where=~clutter)
+        out = np.multiply(mean, tex, out=tex)
+        out += np.float32(noise_power)
+    else:
+        out = np.add(mean, np.float32(noise_power), dtype=np.float32)
+    u = rng.random(mean.shape, dtype=np.float32)
+    e = cv2.log(np.float32(1.0) - u)
+    return out * -e
+
+
+@pytest.mark.parametrize("kind", ["rayleigh", "k"])
+def test_speckle_matches_the_numpy_chain(kind):
+    g = np.random.default_rng(2)
+    mean = (g.random((64, 301), dtype=np.float32) ** 6 * 1e-3).astype(np.float32)
+    clutter = g.random(mean.shape) < 0.5
+    a, b = np.random.default_rng(9), np.random.default_rng(9)
+    for _ in range(2):
+        got = add_speckle_and_noise(mean, a, kind, 1e-6, k_shape=1.7, clutter=clutter)
+        assert np.array_equal(got, _speckle_reference(mean, b, kind, 1e-6, 1.7, clutter))
+
+
+def test_display_matches_multiply_floor_log_chain():
+    g = np.random.default_rng(4)
+    x = (g.random((40, 257)) ** 8 * 10.0).astype(np.float32)
+    x[0, :5] = 0.0
+    gain = (g.random(257) * 1e4).astype(np.float32)
+    y = np.maximum(np.multiply(x, gain[None, :], dtype=np.float32), np.float32(1e-30))
+    db = cv2.log(y)
+    scale = 255.0 * 10.0 / np.log(10.0) / 60.0
+    want = cv2.addWeighted(db, scale, db, 0.0, 255.0 * (-5.0 + 60.0) / 60.0, dtype=cv2.CV_8U)
+    assert np.array_equal(to_uint8_db(x, gain, -5.0, 60.0), want)
+
+
+@pytest.mark.parametrize("size, window, n_beams, n_bins", [((894, 477), (1.0, 30.0), 722, 1142),
+                                                             ((401, 300), (3.0, 12.0), 96, 250)])
+def test_fan_image_is_cv2_remap(size, window, n_beams, n_bins):
+    fov = np.deg2rad(130.0)
+    fan = FanGeometry.fit(size[0], size[1], window[0], window[1], fov)
+    beams = (np.arange(n_beams) + 0.5) / n_beams * fov - 0.5 * fov
+    rm = FanRemap(fan, beams, window[0], (window[1] - window[0]) / n_bins, n_bins)
+    g = np.random.default_rng(0)
+    for polar in (g.integers(0, 256, (n_beams, n_bins), dtype=np.uint8),
+                  np.full((n_beams, n_bins), 255, np.uint8),
+                  (g.random((n_beams, n_bins)) ** 6 * 255).astype(np.uint8)):
+        want = cv2.remap(polar, rm._fixed[0], rm._fixed[1], cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
+                         borderValue=0)
+        assert np.array_equal(rm.image(polar), want)
+    as_float = g.random((n_beams, n_bins), dtype=np.float32)  # other types: cv2.remap itself
+    assert rm.image(as_float).dtype == np.float32
