@@ -70,5 +70,71 @@ def kernels() -> SimpleNamespace:
                    + np.int32(p[b + dy]) * wtab[t, 2] + np.int32(p[b + dy + dx]) * wtab[t, 3])
             dst_flat[dst_idx[i]] = (acc + 16384) >> 15
 
+    @nb.njit(cache=True, nogil=True)
+    def gather(src, dst_flat, dst_idx, src_idx):  # pragma: no cover - compiled
+        """``dst_flat[dst_idx] = src.ravel()[src_idx]`` (nearest-neighbour resampling)."""
+        p = src.ravel()
+        for i in range(dst_idx.size):
+            dst_flat[dst_idx[i]] = p[src_idx[i]]
+
+    @nb.njit(cache=True, nogil=True)
+    def spread_segments(n_rows, n_bins, row, u_a, u_b, energy, out):  # pragma: no cover - compiled
+        """:func:`sim.sensors.sonar.echo_lines.spread_segments` in three passes: the kinks in
+        the order ``np.bincount`` met them (so each bin's float64 sum adds the same terms in the
+        same order), then per row the prefix sums as ``cv2.integral`` forms them (running row
+        sum added to the previous row's integral) and their row differences in ``out``'s type,
+        floored at 0."""
+        stride = n_bins + 2
+        acc = np.zeros(n_rows * stride)
+        m = row.size
+        nb_f = float(n_bins)
+        # segments: +w at fl + 1, then the fractional terms (lower ends first, then upper ends)
+        for part in range(3):
+            for end in range(2):
+                for i in range(m):
+                    lo, hi = min(u_a[i], u_b[i]), max(u_a[i], u_b[i])
+                    length = hi - lo
+                    if length < 1e-9 or not (hi > 0.0) or not (lo < nb_f):
+                        continue
+                    density = energy[i] / length
+                    p = min(max(lo if end == 0 else hi, 0.0), nb_f)
+                    w = density if end == 0 else -density
+                    fl = np.floor(p)
+                    base = row[i] * stride + int(fl)
+                    if part == 0:
+                        acc[base + 1] += w
+                    else:
+                        off = w * (1.0 - (p - fl))
+                        if part == 1:
+                            acc[base] += off
+                        else:
+                            acc[base + 1] += -off
+        # points: +E at their bin, -E at the next
+        for part in range(2):
+            for i in range(m):
+                lo, hi = min(u_a[i], u_b[i]), max(u_a[i], u_b[i])
+                if not (hi - lo < 1e-9):
+                    continue
+                kp = np.floor(lo)
+                if not (kp >= 0.0 and kp < nb_f):
+                    continue
+                base = row[i] * stride + int(kp)
+                if part == 0:
+                    acc[base] += energy[i]
+                else:
+                    acc[base + 1] += -energy[i]
+        prev = np.zeros(stride)
+        zero = out.dtype.type(0)
+        for r in range(n_rows):
+            s = 0.0
+            for x in range(stride):
+                s += acc[r * stride + x]
+                cur = prev[x] + s
+                if x < n_bins:
+                    v = out.dtype.type(cur) - out.dtype.type(prev[x])
+                    out[r, x] = zero if v < zero else v
+                prev[x] = cur
+
     return SimpleNamespace(complement_uniform_f32=complement_uniform_f32, scale_by_neg=scale_by_neg,
-                           gain_floor=gain_floor, remap_bilinear_u8=remap_bilinear_u8)
+                           gain_floor=gain_floor, remap_bilinear_u8=remap_bilinear_u8, gather=gather,
+                           spread_segments=spread_segments)

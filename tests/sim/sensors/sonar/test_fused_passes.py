@@ -86,3 +86,46 @@ def test_fan_image_is_cv2_remap(size, window, n_beams, n_bins):
         assert np.array_equal(rm.image(polar), want)
     as_float = g.random((n_beams, n_bins), dtype=np.float32)  # other types: cv2.remap itself
     assert rm.image(as_float).dtype == np.float32
+
+
+def _spread_reference(n_rows, n_bins, row, u_a, u_b, energy, dtype):
+    """The earlier numpy chain: one ``bincount`` of kinks, ``cv2.integral`` row differences."""
+    lo, hi = np.minimum(u_a, u_b), np.maximum(u_a, u_b)
+    length = hi - lo
+    point = length < 1e-9
+    stride = n_bins + 2
+    kp = np.floor(lo[point])
+    okp = (kp >= 0) & (kp < n_bins)
+    base_p = row[point][okp] * stride + kp[okp].astype(np.intp)
+    e_p = energy[point][okp]
+    seg = ~point & (hi > 0.0) & (lo < n_bins)
+    r = row[seg]
+    density = energy[seg] / length[seg]
+    pos = np.concatenate([np.clip(lo[seg], 0.0, n_bins), np.clip(hi[seg], 0.0, n_bins)])
+    w = np.concatenate([density, -density])
+    fl = np.floor(pos)
+    base = np.concatenate([r, r]) * stride + fl.astype(np.intp)
+    off = w * (1.0 - (pos - fl))
+    idx = np.concatenate([base + 1, base, base + 1, base_p, base_p + 1])
+    weights = np.concatenate([w, off, -off, e_p, -e_p])
+    acc = np.bincount(idx, weights=weights, minlength=n_rows * stride).reshape(n_rows, stride)
+    integral = cv2.integral(acc, sdepth=cv2.CV_64F)
+    out = np.subtract(integral[1:, 1:n_bins + 1], integral[:-1, 1:n_bins + 1], dtype=dtype)
+    return np.maximum(out, 0, out=out)
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_spread_segments_matches_the_bincount_integral_chain(dtype):
+    from sim.sensors.sonar.echo_lines import spread_segments
+
+    g = np.random.default_rng(8)
+    n_rows, n_bins, m = 37, 211, 4000
+    row = g.integers(0, n_rows, m)
+    u_a = g.uniform(-20.0, n_bins + 20.0, m)
+    u_b = u_a + g.normal(0.0, 15.0, m)
+    u_b[::9] = u_a[::9]  # points
+    u_a[::13] = np.floor(u_a[::13])  # ends on bin edges
+    energy = g.random(m) ** 3
+    got = spread_segments(n_rows, n_bins, row, u_a, u_b, energy, dtype=dtype)
+    want = _spread_reference(n_rows, n_bins, row, u_a, u_b, energy, dtype)
+    assert got.dtype == dtype and np.array_equal(got, want)
