@@ -123,17 +123,43 @@ def kernels() -> SimpleNamespace:
                     acc[base] += energy[i]
                 else:
                     acc[base + 1] += -energy[i]
-        prev = np.zeros(stride)
+        prev = np.zeros(stride)  # the integral's previous row
         zero = out.dtype.type(0)
-        for r in range(n_rows):
-            s = 0.0
-            for x in range(stride):
-                s += acc[r * stride + x]
-                cur = prev[x] + s
-                if x < n_bins:
-                    v = out.dtype.type(cur) - out.dtype.type(prev[x])
-                    out[r, x] = zero if v < zero else v
-                prev[x] = cur
+        r = 0
+        while r + 4 <= n_rows:  # four rows at a time: four independent running sums
+            s0 = s1 = s2 = s3 = 0.0
+            a0, a1, a2, a3 = r * stride, (r + 1) * stride, (r + 2) * stride, (r + 3) * stride
+            for x in range(n_bins):
+                s0 += acc[a0 + x]
+                s1 += acc[a1 + x]
+                s2 += acc[a2 + x]
+                s3 += acc[a3 + x]
+                p = prev[x]
+                c0 = p + s0
+                c1 = c0 + s1
+                c2 = c1 + s2
+                c3 = c2 + s3
+                t = out.dtype.type(p)
+                t0 = out.dtype.type(c0)
+                t1 = out.dtype.type(c1)
+                t2 = out.dtype.type(c2)
+                t3 = out.dtype.type(c3)
+                v0, v1, v2, v3 = t0 - t, t1 - t0, t2 - t1, t3 - t2
+                out[r, x] = zero if v0 < zero else v0
+                out[r + 1, x] = zero if v1 < zero else v1
+                out[r + 2, x] = zero if v2 < zero else v2
+                out[r + 3, x] = zero if v3 < zero else v3
+                prev[x] = c3
+            r += 4
+        while r < n_rows:
+            s0 = 0.0
+            for x in range(n_bins):
+                s0 += acc[r * stride + x]
+                c0 = prev[x] + s0
+                v0 = out.dtype.type(c0) - out.dtype.type(prev[x])
+                out[r, x] = zero if v0 < zero else v0
+                prev[x] = c0
+            r += 1
 
     return SimpleNamespace(complement_uniform_f32=complement_uniform_f32, scale_by_neg=scale_by_neg,
                            gain_floor=gain_floor, remap_bilinear_u8=remap_bilinear_u8, gather=gather,
