@@ -62,6 +62,7 @@ class FanRemap:
         self._nearest = cv2.convertMaps(rbin, beam, cv2.CV_16SC2, nninterpolation=True)
         self._polar_shape = (n_beams, int(n_bins))
         self._gather = _bilinear_gather(self._fixed, self._polar_shape)
+        self._nearest_gather: tuple[NDArray[np.int32], NDArray[np.int32]] | None = None
 
     def image(self, polar: NDArray) -> NDArray:
         """Bilinear fan image (height_px, width_px) of a (n_beams, n_bins) polar image; zero
@@ -84,9 +85,22 @@ class FanRemap:
                          borderMode=cv2.BORDER_CONSTANT, borderValue=0)
 
     def labels(self, polar_labels: NDArray[np.int16], fill: int) -> NDArray[np.int16]:
-        """Nearest-neighbour fan image of a (n_beams, n_bins) label image; ``fill`` outside the fan."""
-        return cv2.remap(polar_labels, self._nearest[0], None, cv2.INTER_NEAREST,
-                         borderMode=cv2.BORDER_CONSTANT, borderValue=int(fill))
+        """Nearest-neighbour fan image of a (n_beams, n_bins) label image; ``fill`` outside the fan.
+
+        What ``cv2.remap`` with the nearest-neighbour maps gives, as one gather over the pixels
+        inside the fan (tables built on the first call)."""
+        if polar_labels.shape != self._polar_shape:
+            return cv2.remap(polar_labels, self._nearest[0], None, cv2.INTER_NEAREST,
+                             borderMode=cv2.BORDER_CONSTANT, borderValue=int(fill))
+        if self._nearest_gather is None:
+            xy = self._nearest[0]
+            rows, cols = self._polar_shape
+            x, y = xy[..., 0].ravel().astype(np.int32), xy[..., 1].ravel().astype(np.int32)
+            dst = np.flatnonzero((x >= 0) & (x < cols) & (y >= 0) & (y < rows))
+            self._nearest_gather = dst.astype(np.int32), y[dst] * cols + x[dst]
+        out = np.full((self.fan.height_px, self.fan.width_px), fill, dtype=polar_labels.dtype)
+        kernels().gather(np.ascontiguousarray(polar_labels), out.reshape(-1), *self._nearest_gather)
+        return out
 
     def box_px(self, beam0: int, bin0: int, beam1: int, bin1: int) -> FloatArray:
         """Fan-image box ``[x0, y0, x1, y1]`` (px, clipped to the image) of the annular sector

@@ -129,3 +129,16 @@ def test_spread_segments_matches_the_bincount_integral_chain(dtype):
     got = spread_segments(n_rows, n_bins, row, u_a, u_b, energy, dtype=dtype)
     want = _spread_reference(n_rows, n_bins, row, u_a, u_b, energy, dtype)
     assert got.dtype == dtype and np.array_equal(got, want)
+
+
+def test_fan_labels_are_cv2_nearest_remap():
+    fov = np.deg2rad(120.0)
+    fan = FanGeometry.fit(500, 300, 2.0, 40.0, fov)
+    beams = (np.arange(256) + 0.5) / 256 * fov - 0.5 * fov
+    rm = FanRemap(fan, beams, 2.0, 38.0 / 900, 900)
+    labels = np.random.default_rng(1).integers(-1, 5, (256, 900)).astype(np.int16)
+    for fill in (-1, 7):
+        want = cv2.remap(labels, rm._nearest[0], None, cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT,
+                         borderValue=fill)
+        got = rm.labels(labels, fill)
+        assert got.dtype == np.int16 and np.array_equal(got, want)
