@@ -47,8 +47,9 @@ class FanRemap:
         self.beam_azimuths_rad = np.asarray(beam_azimuths_rad, dtype=float)
         self.window_near_m = float(window_near_m)
         self.range_resolution_m = float(range_resolution_m)
-        ys, xs = np.mgrid[0:fan.height_px, 0:fan.width_px].astype(np.float64)
-        r, a = fan.pixel_to_polar(xs, ys)
+        # pixel centres as a row of x and a column of y: the (height, width) grid by broadcasting
+        r, a = fan.pixel_to_polar(np.arange(fan.width_px, dtype=np.float64)[None, :],
+                                  np.arange(fan.height_px, dtype=np.float64)[:, None])
         n_beams = len(beam_azimuths_rad)
         spacing = (beam_azimuths_rad[-1] - beam_azimuths_rad[0]) / max(n_beams - 1, 1)
         self.beam_spacing_rad = fan.fov_rad / n_beams
