@@ -161,6 +161,29 @@ def kernels() -> SimpleNamespace:
                 prev[x] = c0
             r += 1
 
+    @nb.njit(cache=True, nogil=True, inline="always")
+    def row_dot3(a, i, b, j):  # pragma: no cover - compiled
+        """``a[i] . b[j]`` of two (N, 3) arrays summed as ``np.einsum("ij,ij->i")`` sums three
+        terms: ``(a0 b0 + a2 b2) + a1 b1``."""
+        return (a[i, 0] * b[j, 0] + a[i, 2] * b[j, 2]) + a[i, 1] * b[j, 1]
+
+    @nb.njit(cache=True, nogil=True)
+    def same_surface(d_a, n_a, o_a, v_a, ia, d_b, n_b, o_b, v_b, ib, chord_sin):  # pragma: no cover
+        """:func:`sim.sensors.sonar.ray_fan.same_surface` of rows ``ia`` of the a arrays and
+        ``ib`` of the b arrays, with the same float64 operations."""
+        out = np.zeros(ia.size, dtype=np.bool_)
+        chord = np.empty((1, 3))
+        for k in range(ia.size):
+            i, j = ia[k], ib[k]
+            da, db = d_a[i], d_b[j]
+            if not (np.isfinite(da) and np.isfinite(db) and o_a[i] == o_b[j]):
+                continue
+            for c in range(3):
+                chord[0, c] = db * v_b[j, c] - da * v_a[i, c]
+            tol = chord_sin * np.sqrt(row_dot3(chord, 0, chord, 0)) + 1e-9
+            out[k] = abs(row_dot3(chord, 0, n_a, i)) <= tol and abs(row_dot3(chord, 0, n_b, j)) <= tol
+        return out
+
     return SimpleNamespace(complement_uniform_f32=complement_uniform_f32, scale_by_neg=scale_by_neg,
                            gain_floor=gain_floor, remap_bilinear_u8=remap_bilinear_u8, gather=gather,
-                           spread_segments=spread_segments)
+                           spread_segments=spread_segments, row_dot3=row_dot3, same_surface=same_surface)

@@ -142,3 +142,32 @@ def test_fan_labels_are_cv2_nearest_remap():
                          borderValue=fill)
         got = rm.labels(labels, fill)
         assert got.dtype == np.int16 and np.array_equal(got, want)
+
+
+def test_same_surface_matches_the_einsum_chain():
+    """The compiled test sums its dot products as ``np.einsum`` does (bit for bit)."""
+    from sim.sensors.sonar.fused_passes import kernels
+    from sim.sensors.sonar.ray_fan import SURFACE_CHORD_SIN, same_surface
+
+    g = np.random.default_rng(3)
+    a, b = g.normal(size=(200000, 3)) * 7.0, g.normal(size=(200000, 3))
+    dots = np.array([kernels().row_dot3(a, i, b, i) for i in range(2000)])
+    assert np.array_equal(dots, np.einsum("ij,ij->i", a[:2000], b[:2000]))
+
+    n = 50000
+    unit = lambda x: x / np.linalg.norm(x, axis=1, keepdims=True)  # noqa: E731
+    v_a, v_b = unit(g.normal(size=(n, 3))), unit(g.normal(size=(n, 3)))
+    n_a = unit(g.normal(size=(n, 3)))
+    n_b = np.where(g.random((n, 1)) < 0.5, n_a, unit(g.normal(size=(n, 3))))
+    d_a, d_b = g.uniform(1.0, 30.0, n), g.uniform(1.0, 30.0, n)
+    d_a[::17], d_b[::23] = np.inf, np.inf
+    o_a = g.integers(-2, 2, n)
+    o_b = np.where(g.random(n) < 0.8, o_a, g.integers(-2, 2, n))
+    # the earlier numpy chain
+    both = np.isfinite(d_a) & np.isfinite(d_b) & (o_a == o_b)
+    chord = np.where(both, d_b, 0.0)[:, None] * v_b
+    chord -= np.where(both, d_a, 0.0)[:, None] * v_a
+    tol = SURFACE_CHORD_SIN * np.sqrt(np.einsum("ij,ij->i", chord, chord)) + 1e-9
+    want = both & (np.abs(np.einsum("ij,ij->i", chord, n_a)) <= tol) & (np.abs(np.einsum("ij,ij->i", chord, n_b)) <= tol)
+    got = same_surface(d_a, n_a, o_a, v_a, d_b, n_b, o_b, v_b)
+    assert 0.05 < want.mean() < 0.95 and np.array_equal(got, want)
