@@ -32,6 +32,9 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         if key not in params:
             raise CliError(f"{flag}: only for bench {' and '.join(OPTION_BENCHES[key])}, not {args.name}")
         options[key] = value
+    if args.no_sonar and args.workers is not None and args.workers > 1:
+        raise CliError("--workers: times the pipelined sonar against the serial loop; not with --no-sonar "
+                       "(drop one of them)")
     if "scenario" in params:
         result = bench(scenario, **options)
     else:

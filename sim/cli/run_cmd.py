@@ -8,7 +8,7 @@ import sys
 from scenarios.load import load_scenario
 from sim.cli.args import non_negative_int, positive_int
 from sim.cli.errors import EXIT_MISSION_ABORTED, EXIT_OK, CliError
-from sim.cli.scenario_cmds import add_scenario_args
+from sim.cli.scenario_cmds import add_scenario_args, refuse_sweep_only
 
 
 def _fmt(value: float | None, spec: str, unit: str = "") -> str:
@@ -27,7 +27,8 @@ def print_summary(metrics: dict, out: str) -> None:
           f"final nav error {_fmt(nav.get('final_position_error_m'), '.2f', ' m')}")
     if "world_model" in metrics:
         wm = metrics["world_model"]
-        print(f"world model: {wm['objects']} targets ({wm.get('objects_not_target', 0)} more objects classified "
+        n_other = wm.get('objects_not_target', 0)
+        print(f"world model: {wm['objects']} targets ({n_other} more object{'' if n_other == 1 else 's'} classified "
               f"not target), {wm['matched']} matched, {wm['missed']} missed, {wm['false']} false, "
               f"mean error {_fmt(wm.get('mean_position_error_m'), '.2f', ' m')}, GOSPA {_fmt(wm.get('gospa'), '.2f')}")
     if "surface_world_model" in metrics:
@@ -55,7 +56,7 @@ def print_summary(metrics: dict, out: str) -> None:
               f"{det['clutter_per_tile']:.2f} false per tile; {maps}")
     if "msis_localization" in metrics:
         ml = metrics["msis_localization"]
-        print(f"msis localisation: {ml['n_fixes']} sonar position fixes, horizontal RMS error "
+        print(f"msis localisation: {ml['n_fixes']} sonar position fix{'' if ml['n_fixes'] == 1 else 'es'}, horizontal RMS error "
               f"{_fmt(ml.get('rms_fused_m'), '.2f', ' m')} (dead reckoning alone "
               f"{_fmt(ml.get('rms_dead_reckoning_m'), '.2f', ' m')})")
     print(f"results in {out}")
@@ -69,6 +70,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         overrides.append(f"seed={args.seed}")
     if args.detector is not None:
         overrides.append(f"autonomy.atr.detector={args.detector}")
+    refuse_sweep_only(args.scenario, "run")
     scenario = load_scenario(args.scenario, overrides)
     rosbag = args.rosbag or scenario.outputs.rosbag
     if rosbag:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -279,6 +280,9 @@ def run_mission(
             mcm_obs = McmFullObserver(scenario)
             mission.observers.append(mcm_obs)
         mission.reset()
+        if workers > 1 and not mission.pipelined:
+            print(f"{scenario.name}: --workers {workers}: this mission runs the serial loop (the pipeline takes the "
+                  "FLS frames of a mission with perception and no tracker)", file=sys.stderr, flush=True)
         try:
             mission.run(progress=False)
         finally:
@@ -324,7 +328,7 @@ def run_mission(
 
             mcm_result = mcm_obs.results(mission.seed)
             write_json(partial / "mcm.json", mcm_result)
-            write_figures(partial, [mcm_result])
+            write_figures(partial, [mcm_result], scenario=f"{scenario.name} seed {mission.seed}")
             metrics["mcm"] = {**summarise([mcm_result]), "detector": mcm_result["detector"]}
         write_json(partial / "metrics.json", metrics, decimals=METRICS_DECIMALS)
         staged.commit()
