@@ -51,10 +51,15 @@ def _clean(obj: Any, decimals: int | None) -> Any:
     return obj
 
 
+def standard_json(data: Any, decimals: int | None = None) -> Any:
+    """``data`` as plain JSON values (numpy converted, NaN/inf -> None, which ``json`` would
+    write as the non-standard ``NaN``), floats rounded to ``decimals`` when given."""
+    return _clean(json.loads(json.dumps(data, default=_json_default)), decimals)
+
+
 def write_json(path: Path, data: Any, decimals: int | None = None) -> None:
     """Write ``data`` as indented standard JSON (NaN -> null), floats rounded to ``decimals``."""
-    plain = json.loads(json.dumps(data, default=_json_default))
-    path.write_text(json.dumps(_clean(plain, decimals), indent=2) + "\n")
+    path.write_text(json.dumps(standard_json(data, decimals), indent=2) + "\n")
 
 
 def with_geodetic(world_model: dict[str, Any], origin: GeodeticOrigin) -> dict[str, Any]:
