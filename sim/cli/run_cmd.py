@@ -48,7 +48,9 @@ def print_summary(metrics: dict, out: str) -> None:
         print(f"tracking ({tr['mode']}; 3-D error, horizontal in metrics.json): {errs}; sonar used in "
               f"{_fmt(100 * tr['fused_sonar_step_fraction'], '.0f')} % "
               f"of steps; target in view {_fmt(100 * tr['target_in_fov_fraction'], '.0f')} %")
-    if "mcm" in metrics:
+    if "mcm" in metrics and "note" in metrics["mcm"]:
+        print(metrics["mcm"]["note"])
+    elif "mcm" in metrics:
         mcm, det = metrics["mcm"], metrics["mcm"]["detector"]
         maps = ", ".join(f"{k} GOSPA {_fmt(v['final_gospa_mean'], '.1f')} ({v['final_cardinality_mean']:.0f} objects)"
                          for k, v in mcm.items() if isinstance(v, dict) and "final_gospa_mean" in v)

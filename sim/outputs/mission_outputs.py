@@ -328,7 +328,11 @@ def run_mission(
             metrics["tracking"] = tracking.metrics()
             tracking.plot(partial / "tracking_error.png", partial / "tracking_boxplot.png",
                           title=f"{scenario.name} seed {mission.seed}")
-        if mcm_obs is not None:
+        if mcm_obs is not None and not mcm_obs.tiles:  # too short a run: its other outputs still count
+            from sim.mcm.full_mode import no_tile_message
+
+            metrics["mcm"] = {"tiles": 0, "note": no_tile_message(scenario)}
+        elif mcm_obs is not None:
             from sim.mcm.figures import summarise, write_figures
 
             mcm_result = mcm_obs.results(mission.seed)

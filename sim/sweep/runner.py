@@ -317,6 +317,20 @@ def _connect_ray(address: str | None):
     return ray, True
 
 
+def _worker_init() -> None:
+    """A pool worker's set-up. Ctrl-C is the parent's to handle (it stops the pool and says
+    what is kept; a worker would print a traceback of its own), and tqdm (the mission loop's
+    progress bar, disabled in a sweep) takes a thread lock, not its default cross-process
+    semaphore, which a stopped worker would leave behind (a ``leaked semaphore`` warning)."""
+    import signal
+    import threading
+
+    from tqdm import tqdm
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    tqdm.set_lock(threading.RLock())
+
+
 def _execute(job: Callable, args: list[tuple], workers: int, use_ray: bool, address: str | None
              ) -> Iterator[dict]:
     if not args:  # a finished sweep resumed: nothing to start
@@ -338,8 +352,12 @@ def _execute(job: Callable, args: list[tuple], workers: int, use_ray: bool, addr
     else:
         import multiprocessing as mp
 
-        with mp.get_context("spawn").Pool(min(workers, len(args))) as pool:
+        with mp.get_context("spawn").Pool(min(workers, len(args)), initializer=_worker_init) as pool:
             yield from pool.imap_unordered(job, args)
+            # let the workers exit on their own (leaving the block terminates them), so what
+            # they hold is released and not reported as leaked at shutdown
+            pool.close()
+            pool.join()
 
 
 def _is_grid_folder(path: Path) -> bool:
@@ -388,7 +406,7 @@ def run_sweep(out: str | os.PathLike[str], spec: SweepSpec, *, workers: int = 1,
         probe_ray_address(ray_address)
     runs_dir = folder / "runs"
     spec_path = folder / "sweep.json"
-    if spec_path.exists():
+    if spec_path.exists() and any(runs_dir.glob("run_*.json")):  # no finished run: new arguments are fine
         old = json.loads(spec_path.read_text())
         if {**old, "runs": spec.runs} != spec.as_json():
             raise OutputDirError(f"--out {out}: holds a sweep of other arguments ({_describe(old)}); resume it "
@@ -417,9 +435,10 @@ def run_sweep(out: str | os.PathLike[str], spec: SweepSpec, *, workers: int = 1,
                 eta = el / n_done * (len(todo) - n_done)
                 print(f"{label}: {done_before + n_done}/{spec.runs} runs ({el:.0f} s, ETA {eta:.0f} s)",
                       file=sys.stderr, flush=True)
-    except BaseException:  # Ctrl-C, SIGTERM or a failed run: say what is kept
-        print(f"{label}: stopped; {done_before + n_done} of {spec.runs} runs are kept in {out} "
-              "(the same command resumes)", file=sys.stderr, flush=True)
+    except BaseException as exc:  # Ctrl-C, SIGTERM or a failed run: say what is kept
+        resumes = " (the same command resumes)" if not isinstance(exc, Exception) else ""
+        print(f"{label}: stopped; {done_before + n_done} of {spec.runs} runs are kept in {out}{resumes}",
+              file=sys.stderr, flush=True)
         raise
     results = [json.loads((runs_dir / f"run_{i:05d}.json").read_text()) for i in range(spec.runs)]
     _write_atomic(folder / "results.jsonl", "".join(json.dumps(r) + "\n" for r in results))
