@@ -43,18 +43,21 @@ def _runs_text(n: int) -> str:
     return "1 run" if n == 1 else f"{n} runs"
 
 
-def write_figures(folder: Path, results: list[dict], *, scenario: str = "mcm_survey") -> list[Path]:
-    """Write the three PNGs into ``folder`` (titled with ``scenario`` and the run count);
-    returns their paths. Curves of few tile steps are drawn with markers, so a short run's
-    single step shows."""
+def write_figures(folder: Path, results: list[dict], *, scenario: str = "mcm_survey",
+                  title: str | None = None) -> list[Path]:
+    """Write the three PNGs into ``folder``, titled ``title`` (default: ``scenario`` and the
+    run count); returns their paths. Curves of few tile steps are drawn with markers, so a
+    short run's single step shows."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import MaxNLocator
 
     paths = []
     modes = _modes(results)
-    title = f"{scenario}, {_runs_text(len(results))}" + (" (mean)" if len(results) > 1 else "")
+    if title is None:
+        title = f"{scenario}, {_runs_text(len(results))}" + (" (mean)" if len(results) > 1 else "")
     for key, name, ylabel in (("gospa", "gospa.png", "GOSPA [m]"), ("cardinality", "cardinality.png",
                                                                       "confirmed objects")):
         fig, ax = plt.subplots(figsize=(6, 4))
@@ -65,6 +68,11 @@ def write_figures(folder: Path, results: list[dict], *, scenario: str = "mcm_sur
             if "n_objects" in results[0]:
                 ax.axhline(results[0]["n_objects"], color="k", lw=0.5, ls="--", label="true objects")
         ax.set_xlabel("tiles processed")
+        n_steps = len(results[0][modes[0]][key]) if modes else 0
+        if 0 < n_steps < 20:
+            ax.set_xticks(range(1, n_steps + 1))
+        else:
+            ax.xaxis.set_major_locator(MaxNLocator(integer=True))
         ax.set_ylabel(ylabel)
         ax.set_title(title)
         ax.legend()
@@ -107,7 +115,7 @@ def write_grid_figure(path: Path, scenario: str, rows: list[dict], runs: int) ->
     ax.set_xticks(x, labels, fontsize=8)
     ax.set_ylabel("mean final GOSPA [m]")
     ax.set_title(f"{scenario} grid, {_runs_text(runs)} per point")
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.0, 1.0))
     fig.tight_layout()
     fig.savefig(path, dpi=100)
     plt.close(fig)

@@ -337,7 +337,7 @@ def run_mission(
 
             mcm_result = mcm_obs.results(mission.seed)
             write_json(partial / "mcm.json", mcm_result)
-            write_figures(partial, [mcm_result], scenario=f"{scenario.name} seed {mission.seed}")
+            write_figures(partial, [mcm_result], title=f"{scenario.name} seed {mission.seed}")
             metrics["mcm"] = {**summarise([mcm_result]), "detector": mcm_result["detector"]}
         write_json(partial / "metrics.json", metrics, decimals=METRICS_DECIMALS)
         staged.commit()

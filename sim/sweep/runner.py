@@ -148,7 +148,7 @@ def run_grid(out: str | os.PathLike[str], spec: SweepSpec, grid: dict[str, list[
         def emit_point(line: str, tag: str = tag) -> None:
             emit(line[:-1] + f', "grid_point": {tag}}}' if line.endswith("}") else line)
 
-        label = f"sweep, grid point {n}/{len(points)} ({point_folder_name(point)})"
+        label = f"sweep, grid point {n}/{len(points)} ({', '.join(f'{k}={json.dumps(v)}' for k, v in point.items())})"
         summary = run_sweep(folder / point_folder_name(point), sub, emit=emit_point, label=label, **kwargs)
         rows.append({"point": point, "folder": point_folder_name(point), "summary": summary})
     _write_atomic(folder / "grid_summary.json", json.dumps({"grid": grid, "points": rows}, indent=1))
