@@ -33,9 +33,10 @@ FloatArray = NDArray[np.float64]
 
 def no_tile_message(scenario: Scenario) -> str:
     """Why a run formed no tile and what to change (``duration_s``)."""
+    period = scenario.mcm.tile.tile_period_s
     return (f"mcm: the run formed no side-scan tile in its {scenario.duration_s:g} s (duration_s; a tile pair "
-            f"closes every mcm.tile.tile_period_s = {scenario.mcm.tile.tile_period_s:g} s once the survey has "
-            "begun): raise duration_s")
+            f"closes every mcm.tile.tile_period_s = {period:g} s of mission time while the side-scan pings, the "
+            f"first at {period:g} s): raise duration_s above {period:g}")
 
 
 class SssTileProcessor:
