@@ -6,6 +6,7 @@ import argparse
 import importlib
 import inspect
 import json
+import sys
 
 from scenarios.load import load_scenario
 from sim.bench import BENCHES
@@ -35,6 +36,9 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     if args.no_sonar and args.workers is not None and args.workers > 1:
         raise CliError("--workers: times the pipelined sonar against the serial loop; not with --no-sonar "
                        "(drop one of them)")
+    what = f" on {scenario.name}" if "scenario" in params else ""
+    print(f"bench {args.name}{what}: running; its figures come at the end (minutes for mission and gym on a "
+          "loaded machine)", file=sys.stderr, flush=True)
     if "scenario" in params:
         result = bench(scenario, **options)
     else:
