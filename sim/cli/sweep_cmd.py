@@ -17,7 +17,8 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         summary = run_grid(args.out, spec, parse_grid(args.grid), **kwargs)
     else:
         summary = run_sweep(args.out, spec, **kwargs)
-    print(f"sweep: wrote {args.out} ({summary['runs']} runs)")
+    n = summary["runs"]
+    print(f"sweep: wrote {args.out} ({n} run{'' if n == 1 else 's'})")
     return 0
 
 
