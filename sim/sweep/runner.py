@@ -226,11 +226,37 @@ def _mcm_full_config(spec: SweepSpec):
     try:
         scenario = load_scenario(spec.scenario, items)
     except ScenarioError as exc:
-        raise SweepError(str(exc)) from None
+        hint = _dotted_key_hint(spec)
+        raise SweepError(str(exc).splitlines()[0] + hint if hint else str(exc)) from None
     if scenario.mcm.mode != "full":
         raise SweepError(f"{spec.scenario}: has no Monte Carlo runner (mcm.mode is {scenario.mcm.mode!r}; "
                          f"sweepable: {', '.join(sweepable_names())}, or a scenario file with mcm.mode: full)")
     return scenario
+
+
+def _dotted_key_hint(spec: SweepSpec) -> str:
+    """For flat ``--set`` keys (``n_particles``, as ``mcm_survey`` takes them) on a scenario
+    file: ``; did you mean mcm.mapper.n_particles?`` naming the scenario's dotted keys of
+    that leaf name under ``mcm`` (empty when there are none)."""
+    from scenarios.load import ScenarioError, load_scenario
+
+    flat = [k for k in spec.overrides if "." not in k]
+    if not flat:
+        return ""
+    try:
+        base = load_scenario(spec.scenario).model_dump(mode="json")
+    except ScenarioError:
+        return ""
+
+    def leaves(node: Any, prefix: str) -> Iterator[str]:
+        if isinstance(node, dict):
+            for k, v in node.items():
+                yield from leaves(v, f"{prefix}.{k}")
+        else:
+            yield prefix
+
+    found = [path for path in leaves(base.get("mcm", {}), "mcm") for k in flat if path.endswith(f".{k}")]
+    return f"; did you mean {' or '.join(found)}?" if found else ""
 
 
 def sweepable_names() -> list[str]:

@@ -99,6 +99,7 @@ def test_grid_progress_names_the_point(tmp_path, capsys):
     (["mcm_survey", "--grid", "pd=0.5,abc"], ["--grid", 'pd="abc"']),
     (["mcm_surevy"], ["did you mean mcm_survey?", "mcm_survey_full"]),
     (["cssn_lawnmower"], ["no Monte Carlo runner", "mcm_survey_full"]),
+    (["mcm_survey_full", "--set", "n_particles=50"], ["did you mean mcm.mapper.n_particles?"]),
 ])
 def test_bad_names_exit_2_naming_them(tmp_path, capsys, argv, needles):
     code = main(["sweep", *argv, "--runs", "1", "--out", str(tmp_path / "s"), "--no-progress"])
