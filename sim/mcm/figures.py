@@ -120,3 +120,22 @@ def write_grid_figure(path: Path, scenario: str, rows: list[dict], runs: int) ->
     fig.savefig(path, dpi=100)
     plt.close(fig)
     return path
+
+
+def confirmed_objects_overlay(result: dict, mode: str = "spa"):
+    """A ``map.png`` overlay (``draw(ax)``, East on x, North on y) of the objects ``mode``'s
+    mapper confirmed at the end of a full-mode run (``result``: :func:`sim.mcm.survey.map_and_score`'s
+    layout): mine-like as red crosses, others as black pluses; None when it has none."""
+    pos = np.asarray(result.get(mode, {}).get("objects_ne_m", []), dtype=float).reshape(-1, 2)
+    cls = np.asarray(result.get(mode, {}).get("objects_class", []), dtype=int)
+    if not len(pos):
+        return None
+
+    def draw(ax) -> None:
+        for k, (marker, colour, name) in enumerate((("x", "tab:red", "mine-like"), ("+", "k", "other"))):
+            sel = pos[cls == k]
+            if len(sel):
+                ax.scatter(sel[:, 1], sel[:, 0], marker=marker, s=90, c=colour, linewidths=2, zorder=6,
+                           label=f"{LABELS.get(mode, mode)} confirmed: {name}")
+
+    return draw

@@ -301,6 +301,11 @@ def run_mission(
             metrics["msis_localization"] = msis_obs.rms()
             overlay = msis_overlay(msis_obs, scenario.world.basin, msis.localizer)
             extent = basin_outline_ne(scenario.world.basin)
+        mcm_result = mcm_obs.results(mission.seed) if mcm_obs is not None and mcm_obs.tiles else None
+        if mcm_result is not None:
+            from sim.mcm.figures import confirmed_objects_overlay
+
+            overlay = confirmed_objects_overlay(mcm_result)
         log.write_csv(partial / "trajectory.csv")
         layers = map_layers(mission, tracking, metrics["sim_time_s"], overlay, extent)
         estimates, rejected = [], []
@@ -332,10 +337,9 @@ def run_mission(
             from sim.mcm.full_mode import no_tile_message
 
             metrics["mcm"] = {"tiles": 0, "note": no_tile_message(scenario)}
-        elif mcm_obs is not None:
+        elif mcm_result is not None:
             from sim.mcm.figures import summarise, write_figures
 
-            mcm_result = mcm_obs.results(mission.seed)
             write_json(partial / "mcm.json", mcm_result)
             write_figures(partial, [mcm_result], title=f"{scenario.name} seed {mission.seed}")
             metrics["mcm"] = {**summarise([mcm_result]), "detector": mcm_result["detector"]}

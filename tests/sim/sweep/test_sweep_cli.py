@@ -48,6 +48,9 @@ def test_console_lines_carry_scalars_and_the_run_files_the_curves(tmp_path, caps
     assert line["ins_filter"]["final_gospa"] == stored["ins_filter"]["final_gospa"]
     assert isinstance(stored["ins_filter"]["gospa"], list) and "gospa" not in line["ins_filter"]
     assert not any(isinstance(v, list) for v in line.values())
+    # the objects confirmed at the end are stored for the map: as many as the final cardinality
+    spa = stored["ins_filter"]
+    assert len(spa["objects_ne_m"]) == len(spa["objects_class"]) == spa["cardinality"][-1]
 
 
 def test_grid_and_plain_sweep_folders_refuse_each_other(tmp_path, capsys):
