@@ -41,7 +41,11 @@ def print_summary(metrics: dict, out: str) -> None:
             pending = f", {st['pending']} still queued or in flight at the end" if st.get("pending") else ""
             print(f"link, {name}: {st['sent']} sent, {st['delivered']} delivered, {st['lost']} lost{pending}, latency mean "
                   f"{_fmt(st.get('mean_latency_s'), '.2f', ' s')}, p95 {_fmt(st.get('p95_latency_s'), '.2f', ' s')}")
-    if "tracking" in metrics:
+    if "tracking" in metrics and not any(v.get("n") for v in metrics["tracking"]["errors"].values()):
+        tr = metrics["tracking"]
+        print(f"tracking ({tr['mode']}): nothing scored (errors count from {tr.get('scored_from_s', 0):g} s into the "
+              "run, once the filters have started); raise duration_s")
+    elif "tracking" in metrics:
         tr = metrics["tracking"]
         errs = ", ".join(f"{k} {_fmt(v.get('mean_m'), '.2f')} +- {_fmt(v.get('std_m'), '.2f')} m"
                          for k, v in tr["errors"].items())

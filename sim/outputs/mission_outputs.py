@@ -197,16 +197,18 @@ def map_layers(mission: Mission, tracking: Any, sim_time_s: float, overlay=None,
 
 
 class _ProgressObserver:
-    """Feeds the mission's step records to a :class:`MissionProgress`."""
+    """Feeds the mission's step records to a :class:`MissionProgress`; a buddy mission (whose
+    survey state machine stays ``idle``) shows its behaviour instead (``buddy follow``)."""
 
-    def __init__(self, progress: MissionProgress) -> None:
+    def __init__(self, progress: MissionProgress, buddy: str | None = None) -> None:
         self.progress = progress
+        self.buddy = buddy
 
     def on_start(self, info: Any) -> None:
         self.progress.start()
 
     def on_step(self, record: Any) -> None:
-        self.progress.update(record.t_s, record.mode)
+        self.progress.update(record.t_s, f"buddy {self.buddy}" if self.buddy else record.mode)
 
     def on_message(self, name: str, msg: Any) -> None:
         pass
@@ -270,8 +272,10 @@ def run_mission(
 
             msis_obs = LocalizationErrorObserver(mission)
             mission.observers.append(msis_obs)
+        buddy = scenario.autonomy.guidance.buddy
         mission.observers.append(_ProgressObserver(MissionProgress(scenario.name, planned_length_s(mission),
-                                                                   enabled=progress)))
+                                                                   enabled=progress),
+                                                   buddy=buddy.behaviour if buddy.enabled else None))
         tracking = None
         if mission.parts.tracking is not None:
             from sim.evaluation.tracking_eval import evaluation_for
