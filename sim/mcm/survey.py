@@ -66,7 +66,7 @@ class McmSurveyConfig(StrictModel):
     sigma_lin_mps2: float = Field(0.5, ge=0.0, description="mapper's NCT process noise, linear")
     sigma_ang_degps2: float = Field(20.0, ge=0.0, description="mapper's NCT process noise, angular")
     confirm_threshold: float = Field(0.8, gt=0.0, lt=1.0)
-    modes: tuple[MapperMode, ...] = MODES
+    modes: tuple[MapperMode, ...] = Field(MODES, min_length=1, description="the mappers to run (at least one)")
     gospa_cutoff_m: float = Field(50.0, gt=0.0)
     correct_within_m: float = Field(20.0, gt=0.0)
     max_tiles: int | None = Field(None, ge=1, description="stop after this many tiles (None: the survey)")

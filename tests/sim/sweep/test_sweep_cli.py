@@ -99,6 +99,7 @@ def test_grid_progress_names_the_point(tmp_path, capsys):
     (["mcm_survey", "--set", "nope=3"], ["nope", "unknown key", "n_particles"]),
     (["mcm_survey", "--set", "a.b=3"], ["a.b", "no dots"]),
     (["mcm_survey", "--set", "n_particles=abc"], ['n_particles="abc"']),
+    (["mcm_survey", "--set", "modes=[]"], ["modes=[]", "at least 1"]),
     (["mcm_survey", "--grid", "pd=0.5,abc"], ["--grid", 'pd="abc"']),
     (["mcm_surevy"], ["did you mean mcm_survey?", "mcm_survey_full"]),
     (["cssn_lawnmower"], ["no Monte Carlo runner", "mcm_survey_full"]),
