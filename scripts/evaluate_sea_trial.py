@@ -15,7 +15,6 @@ from __future__ import annotations
 import json
 import sys
 import time
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
 import numpy as np
@@ -27,6 +26,7 @@ from scenarios.load import load_scenario  # noqa: E402
 from sim.cli.app import run_script, script_parser  # noqa: E402
 from sim.cli.errors import CliError  # noqa: E402
 from sim.outputs.mission_outputs import standard_json  # noqa: E402
+from sim.sweep.runner import run_jobs  # noqa: E402
 
 #: Stages counted as the cost of the link and of the second vehicle.
 LINK_STAGES = ("link", "nav_late_fix")
@@ -157,11 +157,8 @@ def plot(runs: list[dict], path: Path) -> None:
     fig.savefig(path, dpi=110)
 
 
-def _worker_init() -> None:
-    """Ctrl-C is the parent's to handle (a worker would print a traceback of its own)."""
-    import signal
-
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
+def _seed_job(job: tuple[int, str, tuple[str, ...]]) -> dict:
+    return run_seed(*job)
 
 
 def check_args(args) -> list[int]:
@@ -195,24 +192,22 @@ def evaluate(args) -> int:
     out = Path(args.out)
     runs: list[dict] = []
     t0 = time.perf_counter()
-    with ProcessPoolExecutor(max_workers=args.workers, initializer=_worker_init) as pool:
-        futures = [pool.submit(run_seed, s, args.scenario, tuple(args.set)) for s in seeds]
-        for k, fut in enumerate(as_completed(futures), 1):
-            r = fut.result()
-            runs.append(r)
-            n_true = r["surface"]["matched"] + r["surface"]["missed"]
-            print(f"[{k}/{len(seeds)}] seed {r['seed']}: surface {r['surface']['matched']}/{n_true} "
-                  f"false {r['surface']['false']} err {r['surface']['mean_position_error_m']} m | onboard "
-                  f"{r['onboard']['matched']}/{n_true} false {r['onboard']['false']} err "
-                  f"{r['onboard']['mean_position_error_m']} m"
-                  f" | nav fused {r['nav_mean_error_survey_m']['usbl_fused']:.3f} m vs DVL-only "
-                  f"{r['nav_mean_error_survey_m']['dvl_only']:.3f} m | link {r['wall_time_share']['link']:.1%} "
-                  f"buoy {r['wall_time_share']['second_vehicle']:.1%} surface WM "
-                  f"{r['wall_time_share']['surface_world_model']:.1%} | {time.perf_counter() - t0:.0f} s elapsed",
-                  flush=True)
-            runs.sort(key=lambda r: r["seed"])
-            result = {"scenario": args.scenario, "overrides": args.set, "summary": summarise(runs), "runs": runs}
-            (out / "sea_trial_eval.json").write_text(json.dumps(standard_json(result), indent=2) + "\n")
+    jobs = [(s, args.scenario, tuple(args.set)) for s in seeds]
+    for k, r in enumerate(run_jobs(_seed_job, jobs, args.workers), 1):
+        runs.append(r)
+        n_true = r["surface"]["matched"] + r["surface"]["missed"]
+        print(f"[{k}/{len(seeds)}] seed {r['seed']}: surface {r['surface']['matched']}/{n_true} "
+              f"false {r['surface']['false']} err {r['surface']['mean_position_error_m']} m | onboard "
+              f"{r['onboard']['matched']}/{n_true} false {r['onboard']['false']} err "
+              f"{r['onboard']['mean_position_error_m']} m"
+              f" | nav fused {r['nav_mean_error_survey_m']['usbl_fused']:.3f} m vs DVL-only "
+              f"{r['nav_mean_error_survey_m']['dvl_only']:.3f} m | link {r['wall_time_share']['link']:.1%} "
+              f"buoy {r['wall_time_share']['second_vehicle']:.1%} surface WM "
+              f"{r['wall_time_share']['surface_world_model']:.1%} | {time.perf_counter() - t0:.0f} s elapsed",
+              flush=True)
+        runs.sort(key=lambda r: r["seed"])
+        result = {"scenario": args.scenario, "overrides": args.set, "summary": summarise(runs), "runs": runs}
+        (out / "sea_trial_eval.json").write_text(json.dumps(standard_json(result), indent=2) + "\n")
     plot(runs, out / "sea_trial_eval.png")
     print(json.dumps(standard_json(summarise(runs)), indent=2))
     return 0

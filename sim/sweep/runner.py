@@ -343,7 +343,7 @@ def _connect_ray(address: str | None):
     return ray, True
 
 
-def _worker_init() -> None:
+def pool_worker_init() -> None:
     """A pool worker's set-up. Ctrl-C is the parent's to handle (it stops the pool and says
     what is kept; a worker would print a traceback of its own), and tqdm (the mission loop's
     progress bar, disabled in a sweep) takes a thread lock, not its default cross-process
@@ -357,8 +357,15 @@ def _worker_init() -> None:
     tqdm.set_lock(threading.RLock())
 
 
-def _execute(job: Callable, args: list[tuple], workers: int, use_ray: bool, address: str | None
+def run_jobs(job: Callable, args: list[tuple], workers: int = 1, use_ray: bool = False, address: str | None = None
              ) -> Iterator[dict]:
+    """``job(a)`` for each of ``args``, yielded as they finish: in this process (one worker),
+    in ``workers`` spawned processes (:func:`pool_worker_init`; leaving early, Ctrl-C
+    included, stops them at once) or on Ray (a local instance, or the cluster at ``address``).
+
+    Raises:
+        SweepError: Ray missing or unreachable.
+    """
     if not args:  # a finished sweep resumed: nothing to start
         return
     if use_ray:
@@ -378,7 +385,7 @@ def _execute(job: Callable, args: list[tuple], workers: int, use_ray: bool, addr
     else:
         import multiprocessing as mp
 
-        with mp.get_context("spawn").Pool(min(workers, len(args)), initializer=_worker_init) as pool:
+        with mp.get_context("spawn").Pool(min(workers, len(args)), initializer=pool_worker_init) as pool:
             yield from pool.imap_unordered(job, args)
             # let the workers exit on their own (leaving the block terminates them), so what
             # they hold is released and not reported as leaked at shutdown
@@ -453,7 +460,7 @@ def run_sweep(out: str | os.PathLike[str], spec: SweepSpec, *, workers: int = 1,
     cfg_json = cfg.model_dump(mode="json")
     n_done = 0
     try:
-        for n_done, res in enumerate(_execute(job, [(cfg_json, i) for i in todo], workers, use_ray, ray_address), 1):
+        for n_done, res in enumerate(run_jobs(job, [(cfg_json, i) for i in todo], workers, use_ray, ray_address), 1):
             _write_atomic(runs_dir / f"run_{int(res['run']):05d}.json", json.dumps(res))
             emit(json.dumps(_scalars(res)))
             if progress:
