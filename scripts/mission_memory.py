@@ -6,8 +6,11 @@ pseudo-terminal, so its progress bar redraws twice a second with the simulated t
 ``--sample-s`` wall seconds the child's ``VmRSS`` (``/proc/PID/status``, Linux) is recorded
 with the latest simulated time. At the end the samples after ``--warmup-s`` simulated seconds
 are fitted with a straight line (least squares) and the line is extrapolated to 86400 s.
+Samples after the simulated time stopped advancing (the run writing its outputs) are left out.
 
-Writes into ``--out``: ``rss.csv`` (wall_s, sim_s, rss_mb), ``rss.json`` (the fit, the 24 h
+Writes into ``--out``: ``rss.csv`` (wall_s, sim_s, rss_mb; a row per sample as it is taken,
+so a run stopped early keeps its samples; stopping the child ``auvsim run`` ends the
+measurement and still writes the fit), ``rss.json (the fit, the 24 h
 extrapolation, the command) and ``rss.png`` (RSS vs simulated time, the fit drawn over it);
 the run's own outputs go to ``--out/run``.
 
@@ -17,7 +20,7 @@ the run's own outputs go to ``--out/run``.
         --set autonomy.guidance.survey.width_m=53 --set autonomy.guidance.survey.leg_spacing_m=1 \\
         --set autonomy.guidance.survey.min_turn_radius_m=0.4
 
-Exit status: the child's (0 done, 3 mission aborted), 2 on bad arguments.
+Exit status: the child's (0 done, 3 mission aborted); 2 on bad input (one line, before any run).
 """
 
 from __future__ import annotations
@@ -36,6 +39,13 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from scenarios.load import load_scenario  # noqa: E402
+from sim.cli.app import run_script, script_parser  # noqa: E402
+from sim.cli.args import non_negative_float, positive_float  # noqa: E402
+from sim.cli.errors import CliError  # noqa: E402
+
 DAY_S = 86400.0
 _SIM_TIME = re.compile(rb"\((\d+) s, ")
 
@@ -122,24 +132,18 @@ def plot(path: Path, sim_s: np.ndarray, rss_mb: np.ndarray, fit: dict[str, float
     plt.close(fig)
 
 
-def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("scenario", nargs="?", default="cssn_lawnmower")
-    p.add_argument("--out", required=True, type=Path, help="new folder for rss.csv/json/png and the run")
-    p.add_argument("--duration-s", type=float, default=9000.0, help="simulated mission length, s")
-    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
-                   help="scenario override passed to auvsim run (repeatable)")
-    p.add_argument("--sample-s", type=float, default=2.0, help="wall seconds between RSS samples")
-    p.add_argument("--warmup-s", type=float, default=600.0, help="simulated seconds left out of the fit")
-    p.add_argument("--run-arg", action="append", default=[], metavar="ARG",
-                   help="extra argument for auvsim run, e.g. --run-arg=--no-rerun (repeatable)")
-    args = p.parse_args(argv)
+def measure(args: argparse.Namespace) -> int:
+    """Run and sample (see the module docstring); returns the child's exit status.
+
+    Raises:
+        CliError: ``--out`` exists, no ``/proc``; ScenarioError: the scenario or an override
+            does not load (checked before the run starts).
+    """
     if args.out.exists():
-        p.error(f"--out {args.out}: exists; give a new folder")
-    if args.sample_s <= 0 or args.duration_s <= 0 or args.warmup_s < 0:
-        p.error("--sample-s and --duration-s must be > 0, --warmup-s >= 0")
+        raise CliError(f"--out {args.out}: exists; give a new folder")
     if not Path("/proc/self/status").exists():
-        p.error("needs Linux /proc to read VmRSS")
+        raise CliError("mission_memory.py: needs Linux /proc to read VmRSS")
+    load_scenario(args.scenario, [f"duration_s={args.duration_s:g}", *args.overrides])  # bad input: one line, now
     args.out.mkdir(parents=True)
     cmd = [sys.executable, "-m", "sim.cli", "run", args.scenario, "--out", str(args.out / "run"),
            "--set", f"duration_s={args.duration_s:g}"]
@@ -155,19 +159,23 @@ def main(argv: list[str] | None = None) -> int:
     rows: list[tuple[float, float, float]] = []
     t0 = time.perf_counter()
     next_print = 0.0
-    while child.poll() is None:
-        rss = _rss_mb(child.pid)
-        if rss is not None:
-            wall = time.perf_counter() - t0
-            rows.append((wall, clock.sim_s, rss))
-            if wall >= next_print:
-                print(f"wall {wall:7.0f} s  sim {clock.sim_s:7.0f} s  RSS {rss:6.1f} MB", flush=True)
-                next_print = wall + 60.0
-        time.sleep(args.sample_s)
+    with open(args.out / "rss.csv", "w", encoding="ascii") as csv:
+        csv.write("wall_s,sim_s,rss_mb\n")
+        while child.poll() is None:
+            rss = _rss_mb(child.pid)
+            if rss is not None and clock.sim_s > 0.0:
+                wall = time.perf_counter() - t0
+                rows.append((wall, clock.sim_s, rss))
+                csv.write(f"{wall:.3f},{clock.sim_s:.3f},{rss:.3f}\n")
+                csv.flush()
+                if wall >= next_print:
+                    print(f"wall {wall:7.0f} s  sim {clock.sim_s:7.0f} s  RSS {rss:6.1f} MB", flush=True)
+                    next_print = wall + 60.0
+            time.sleep(args.sample_s)
     rc = child.wait()
     os.close(master)
-    data = np.array([r for r in rows if r[1] > 0.0] or [(0.0, 0.0, 0.0)], dtype=float)
-    np.savetxt(args.out / "rss.csv", data, delimiter=",", header="wall_s,sim_s,rss_mb", comments="", fmt="%.3f")
+    data = np.array(rows or [(0.0, 0.0, 0.0)], dtype=float)
+    data = data[:int(np.argmax(data[:, 1])) + 1]  # the mission only: not the output writing at its end
     result: dict = {"command": cmd, "returncode": rc}
     try:
         result["fit"] = fit_growth(data[:, 1], data[:, 2], args.warmup_s)
@@ -184,6 +192,21 @@ def main(argv: list[str] | None = None) -> int:
     else:
         print(result["fit_error"], file=sys.stderr)
     return rc
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = script_parser("mission_memory.py", __doc__.splitlines()[0])
+    p.add_argument("scenario", nargs="?", default="cssn_lawnmower")
+    p.add_argument("--out", required=True, type=Path, help="new folder for rss.csv/json/png and the run")
+    p.add_argument("--duration-s", type=positive_float, default=9000.0, help="simulated mission length, s")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="scenario override passed to auvsim run (repeatable)")
+    p.add_argument("--sample-s", type=positive_float, default=2.0, help="wall seconds between RSS samples")
+    p.add_argument("--warmup-s", type=non_negative_float, default=600.0,
+                   help="simulated seconds left out of the fit")
+    p.add_argument("--run-arg", action="append", default=[], metavar="ARG",
+                   help="extra argument for auvsim run, e.g. --run-arg=--no-rerun (repeatable)")
+    return run_script(p, measure, argv)
 
 
 if __name__ == "__main__":
