@@ -175,7 +175,8 @@ def measure(args: argparse.Namespace) -> int:
     rc = child.wait()
     os.close(master)
     data = np.array(rows or [(0.0, 0.0, 0.0)], dtype=float)
-    data = data[:int(np.argmax(data[:, 1])) + 1]  # the mission only: not the output writing at its end
+    if np.any(data[:, 1] < data[-1, 1]):  # the mission only: not the output writing at its final time
+        data = data[data[:, 1] < data[-1, 1]]
     result: dict = {"command": cmd, "returncode": rc}
     try:
         result["fit"] = fit_growth(data[:, 1], data[:, 2], args.warmup_s)
