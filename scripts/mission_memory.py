@@ -14,11 +14,13 @@ measurement and still writes the fit), ``rss.json (the fit, the 24 h
 extrapolation, the command) and ``rss.png`` (RSS vs simulated time, the fit drawn over it);
 the run's own outputs go to ``--out/run``.
 
-    # 2.2 h CSSN-like survey with sonar, CNN ATR and world model: 54 legs of 70 m
+    # 2.2 h CSSN-like survey with sonar, CNN ATR and world model: 54 legs of 70 m (the
+    # mission's own time limit, 1 h by default, raised with it)
     python scripts/mission_memory.py --out /tmp/mem --duration-s 9000 \\
         --set autonomy.guidance.survey.origin_ne_m=[24,-18] --set autonomy.guidance.survey.length_m=70 \\
         --set autonomy.guidance.survey.width_m=53 --set autonomy.guidance.survey.leg_spacing_m=1 \\
-        --set autonomy.guidance.survey.min_turn_radius_m=0.4
+        --set autonomy.guidance.survey.min_turn_radius_m=0.4 \\
+        --set autonomy.guidance.mission.max_mission_time_s=9000
 
 Exit status: the child's (0 done, 3 mission aborted); 2 on bad input (one line, before any run).
 """
