@@ -44,8 +44,11 @@ def _mission(r: dict) -> str:
 
 def _mission_workers(r: dict) -> str:
     w = r["workers"]
-    return (f"{_x(w['real_time_factor'])} real time, {w['workers_speedup']:.2f}x the serial loop of the same run "
-            f"({_x(w['serial_real_time_factor'])})")
+    out = (f"{_x(w['real_time_factor'])} real time, {w['workers_speedup']:.2f}x the serial loop of the same run "
+           f"({_x(w['serial_real_time_factor'])})")
+    if "cores_bound_real_time_factor" in w:  # what the processes' CPU times allow on the idle cores
+        out += f"; CPU times allow {_x(w['cores_bound_real_time_factor'])}"
+    return out
 
 
 def _gym(variant: str) -> Callable[[dict], str]:

@@ -60,11 +60,14 @@ class Mission:
             are still rendered at their rate when the sonar is enabled, but not processed).
         timer: a :class:`sim.stage_timer.StageTimer` to time the loop's stages (benchmarks);
             default: none.
-        workers: threads the loop may use. 1: the serial loop. 2 or more: the sonar's frames
-            and their perception run on worker threads (:mod:`sim.sonar_pipeline`) when nothing
-            in the loop reads perception back (survey perception; not target tracking), with
-            the serial loop's results bit for bit; observers get frames and perception results
-            once ready, in order.
+        workers: processes the loop may use. 1: the serial loop. 2 or more: the sonar's frames
+            and their perception run in two worker processes (:mod:`sim.sonar_pipeline`) when
+            nothing in the loop reads perception back (survey perception; not target tracking),
+            with the serial loop's results bit for bit; observers get frames and perception
+            results once ready, in order (frames only if an observer takes them: one without
+            ``sonar_frames = False``). Call :meth:`close` when done (it ends the workers). The
+            workers start with ``spawn``: a script that builds the mission needs the
+            ``if __name__ == "__main__":`` guard.
 
     Raises:
         ValueError: unknown ``nav_source``; ``workers`` < 1; a sensor mount site missing on the hull.
@@ -130,9 +133,18 @@ class Mission:
         return self.parts.sonar
 
     @property
+    def pipelined(self) -> bool:
+        """Whether the sonar and its perception run on worker threads (``workers`` > 1 and a
+        mission that allows it: FLS perception, no tracker); known after :meth:`reset`."""
+        return self._pipeline is not None
+
+    @property
     def perception(self):
-        """The perception chain (None without one); pipelined frames are finished first."""
+        """The perception chain (None without one); pipelined frames are finished first and the
+        workers' world model copied into it."""
         self.flush()
+        if self._pipeline is not None:
+            self._pipeline.sync()
         return self.parts.perception
 
     @property
@@ -211,7 +223,8 @@ class Mission:
         # scheduler gets a ticket, not the frame, to time the delivery by)
         if (self.workers > 1 and parts.perception is not None and parts.tracking is None
                 and type(parts.sonar).latency_s is Sensor.latency_s):
-            self._pipeline = SonarPipeline(self.physics, parts.sonar, parts.perception.process, self.workers)
+            self._pipeline = SonarPipeline(self.physics, parts.sonar, parts.perception,
+                                           frames=any(getattr(o, "sonar_frames", True) for o in self.observers))
         self.last_dvl_lock = True
         self._setpoint: Setpoint | None = None
         self._wall_start = time.perf_counter()
@@ -320,7 +333,8 @@ class Mission:
             self._wall_s = time.perf_counter() - self._wall_start
 
     def close(self) -> None:
-        """Stop the pipeline's worker threads, if any (frames not yet delivered are dropped)."""
+        """Stop the pipeline's worker processes, if any, after copying their state back (frames
+        delivered but not yet handed to the observers are dropped; :meth:`flush` first)."""
         if self._pipeline is not None:
             self._pipeline.close()
             self._pipeline = None
@@ -396,7 +410,8 @@ class Mission:
         with self.timer.stage("observers"):
             for name, msg, result in ready:
                 for obs in self.observers:
-                    obs.on_message(name, msg)
+                    if msg is not None:  # None: a pipelined frame no observer takes
+                        obs.on_message(name, msg)
                     if result is not None:
                         obs.on_message(name, result)
 

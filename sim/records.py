@@ -122,6 +122,10 @@ class MissionObserver(Protocol):
     made of it under the same name (with target tracking, the
     :class:`autonomy.tracking.onboard.TrackingFrameResult` instead, once the frame is
     processed: at the first vehicle pose at or after its ping).
+
+    An observer that ignores the sonar's renders may set ``sonar_frames = False``: the
+    pipelined loop (:mod:`sim.sonar_pipeline`) then does not ship them from its render worker
+    when no observer takes them, and passes only the perception results.
     """
 
     def on_start(self, info: MissionInfo) -> None: ...

@@ -1,123 +1,318 @@
-"""Sonar frames and their perception on worker threads while physics and navigation advance.
+"""Sonar frames and their perception in worker processes while physics and navigation advance.
 
 In the mission loop the forward-looking sonar's frames feed only the perception chain (ATR ->
 geolocalisation -> world model), whose results nothing in the loop reads back: guidance flies
 the survey plan and the navigation filter fuses no perception result. So frame ``k`` can be
-rendered from a copy of the scene taken at its capture time, and processed with the navigation
-estimate taken at its delivery time (capture + latency), on other threads, while the main
-thread steps on. The results are the serial loop's bit for bit:
+rendered from the scene as it was at its capture, and processed with the navigation estimate
+of its delivery time (capture + latency), in other processes, while the mission process steps
+on. Processes, not threads: the render and the perception are largely Python and small numpy
+operations that hold the GIL, so threads of one process take turns on one core.
 
-* the render sees the capture-time state: ``mujoco.mj_copyData`` of the live ``MjData`` into a
-  slot with its own ray caster (casters keep scratch buffers, so a slot is used by one render at
-  a time), the true state and the scene objects (immutable snapshots);
-* frames are rendered in capture order on one thread, so the sonar's noise generator is drawn
-  in the same order; perception runs in delivery order on one thread with the estimate the
-  serial loop would have passed;
-* observers receive each frame and its perception result in the same order as in the serial
-  loop, on the main thread, once they are ready (later relative to the step records; the
-  outputs written from step records and from the world model are unchanged).
+Two ``spawn``-started workers (:mod:`sim.sonar_workers`): one renders, one perceives; with the
+mission process that makes three busy processes, which a two-core machine's scheduler shares
+out. The results are the serial loop's bit for bit:
 
-With two workers a single thread renders and processes (two cores: the main loop and it);
-with three or more, rendering and perception get a thread each.
+* the render worker holds a copy of the ``MjModel`` with its own ``MjData`` and the sonar
+  with its noise generator; at each capture it gets the poses of the geoms on moving bodies
+  (what the ray casts read; the static geoms are sent once) and the true vehicle state, and
+  renders the frames in capture order, so the noise is drawn in the same order;
+* the perception worker holds the mission's perception (world model included; the detector
+  rebuilt from its config) and processes the frames in delivery order, each with the estimate
+  the serial loop would pass, sent at its delivery;
+* frames go from worker to worker through shared memory (:class:`sim.frame_transport.FrameRing`);
+  they come back to the mission process only when an observer takes them (an observer sets
+  ``sonar_frames = False`` when it ignores the sonar's renders); results come back in order
+  and reach the observers on the mission process, in the serial loop's order, once ready;
+* :meth:`SonarPipeline.sync` copies the workers' state back (the world model and frame count
+  into the mission's perception, the noise generator's state into its sonar), so the mission
+  reads the same world model and continues the same noise stream as the serial loop.
 """
 
 from __future__ import annotations
 
-import queue
+import io
+import multiprocessing as mp
+import os
+import pickle
 from collections import deque
 from collections.abc import Iterator
-from concurrent.futures import Future, ThreadPoolExecutor
+from contextlib import contextmanager
 from dataclasses import dataclass
+from multiprocessing.connection import wait as wait_any
 from typing import Any
 
-import mujoco
+import numpy as np
 
+from sim.frame_transport import FrameRing, shared_objects
 from sim.physics import Physics
-from sim.sensors.base import SceneView, Sensor
-from sim.sensors.raycast import MujocoRayCaster
+from sim.sensors.base import Sensor
+from sim.sonar_workers import perception_main, render_main
 from sim.truth import VehicleTruth
+
+RING_SLOTS = 4  # frames in flight between two processes
+CAPTURES_IN_FLIGHT = 2 * RING_SLOTS  # captures sent and not yet rendered before a capture waits
+STOP_TIMEOUT_S = 10.0  # wait for a worker to end before terminating it
+THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
+
+
+class PipelineError(RuntimeError):
+    """A worker process failed (its traceback is in the message) or ended unexpectedly."""
 
 
 @dataclass(frozen=True)
 class FrameTicket:
-    """What the scheduler queues in place of a sonar frame being rendered."""
+    """What the scheduler queues in place of a sonar frame being rendered (frame ``k``)."""
 
     t_s: float
-    frame: Future
+    k: int
 
 
-class _Slot:
-    """A scene copy and a ray caster over it."""
+@contextmanager
+def _one_thread_per_library() -> Iterator[None]:
+    """Environment for the workers' start: their BLAS and OpenMP pools get one thread each (the
+    pipeline's processes are the parallelism; idle pool threads would spin on the same cores)."""
+    saved = {k: os.environ.get(k) for k in THREAD_VARIABLES}
+    os.environ.update({k: "1" for k in THREAD_VARIABLES})
+    try:
+        yield
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
 
-    def __init__(self, physics: Physics) -> None:
-        self.data = mujoco.MjData(physics.model)
-        w = physics.world
-        self.caster = MujocoRayCaster(physics.model, self.data, w.geom_object_id, w.geom_reflectivity,
-                                      w.vehicle_body_id)
+
+class _Persist(pickle.Pickler):
+    """Pickles the perception with its detector (an inference session) left out."""
+
+    def __init__(self, file, detector: Any) -> None:
+        super().__init__(file, protocol=pickle.HIGHEST_PROTOCOL)
+        self._detector = detector
+
+    def persistent_id(self, obj: Any) -> Any:
+        return "detector" if obj is self._detector else None
 
 
 class SonarPipeline:
-    """Renders ``sonar``'s frames and runs ``perception`` on them off the main thread.
+    """Renders ``sonar``'s frames and runs ``perception`` on them in two worker processes.
 
     Args:
-        physics: the mission's world (its ``MjData`` is copied at each capture).
-        sonar: the sensor whose frames are pipelined.
-        process: ``(frame, nav) -> result``, the perception of one delivered frame.
-        workers: total threads the loop may use, main thread included (>= 2).
-        slots: scene copies in flight (a capture waits for a free one).
+        physics: the mission's world (its model is copied to the render worker once; the poses
+            of its moving geoms at each capture).
+        sonar: the sensor whose frames are pipelined (copied with its noise state).
+        perception: the mission's :class:`sim.perception.Perception` (copied with its state).
+        frames: send each rendered frame back to this process (observers that read them).
+        slots: frames in flight in each shared-memory ring.
 
     Raises:
-        ValueError: fewer than 2 workers.
+        ValueError: ``slots`` < 1.
     """
 
-    def __init__(self, physics: Physics, sonar: Sensor, process: Any, workers: int, slots: int = 3) -> None:
-        if workers < 2:
-            raise ValueError(f"SonarPipeline needs workers >= 2, got {workers}")
-        self.physics, self.sonar, self.process = physics, sonar, process
-        self._render_pool = ThreadPoolExecutor(1, thread_name_prefix="auvsim-sonar-render")
-        self._process_pool = (ThreadPoolExecutor(1, thread_name_prefix="auvsim-perception") if workers >= 3
-                              else self._render_pool)
-        self._free: queue.SimpleQueue[_Slot] = queue.SimpleQueue()
-        for _ in range(max(int(slots), 1)):
-            self._free.put(_Slot(physics))
-        self._pending: deque[tuple[str, Future]] = deque()
-
-    def capture(self, truth: VehicleTruth) -> FrameTicket:
-        """Start rendering the frame captured now (call where the serial loop would measure)."""
-        slot = self._free.get()  # waits while every copy is being rendered
-        mujoco.mj_copyData(slot.data, self.physics.model, self.physics.data)
-        scene = SceneView(self.physics.t_s, slot.caster, self.physics.objects())
-        return FrameTicket(truth.t_s, self._render_pool.submit(self._render, slot, truth, scene))
-
-    def _render(self, slot: _Slot, truth: VehicleTruth, scene: SceneView) -> Any:
+    def __init__(self, physics: Physics, sonar: Sensor, perception: Any, *, frames: bool = True,
+                 slots: int = RING_SLOTS) -> None:
+        if slots < 1:
+            raise ValueError(f"SonarPipeline needs slots >= 1, got {slots}")
+        self.physics, self.sonar, self.perception = physics, sonar, perception
+        self.frames = bool(frames)
+        self._procs: list[Any] = []
+        self._rings: list[FrameRing] = []
+        self._render = self._perceive = self._frames_in = None
+        self._n_captured = self._n_rendered = 0
+        self._pending: deque[tuple[str, int]] = deque()  # delivered, result not yet handed on
+        self._results: dict[int, Any] = {}
+        self._frames: dict[int, Any] = {}
+        self._closed = False
+        model, data, world = physics.model, physics.data, physics.world
+        self._moving = np.flatnonzero(model.geom_bodyid != 0)
+        self._static_objects = world.objects
+        ctx = mp.get_context("spawn")
+        to_perception, whole = self._frame_bytes(sonar)
+        self._rings = [FrameRing(ctx, slots, to_perception)]
+        if self.frames:
+            self._rings.append(FrameRing(ctx, slots, whole))
+        self._shared = shared_objects(sonar)
+        render_setup = pickle.dumps({
+            "sonar": sonar, "model": model, "geom_object_id": world.geom_object_id,
+            "geom_reflectivity": world.geom_reflectivity, "vehicle_body_id": world.vehicle_body_id,
+            "geom_xpos": data.geom_xpos.copy(), "geom_xmat": data.geom_xmat.copy(), "moving_geoms": self._moving,
+            "objects": physics.objects(), "truth_to_perception": getattr(perception, "nav_source", "") == "truth",
+        }, protocol=pickle.HIGHEST_PROTOCOL)
+        buf = io.BytesIO()
+        _Persist(buf, getattr(perception, "detector", None)).dump(perception)
+        self._render, render_end = ctx.Pipe()
+        self._perceive, perceive_end = ctx.Pipe()
+        between_r, between_w = ctx.Pipe(duplex=False)
+        frames_r, frames_w = ctx.Pipe(duplex=False) if self.frames else (None, None)
+        self._frames_in = frames_r
+        self._procs = [
+            ctx.Process(target=render_main, name="auvsim-sonar-render", daemon=True,
+                        args=(render_end, between_w, self._rings[0], frames_w,
+                              self._rings[1] if self.frames else None, render_setup)),
+            ctx.Process(target=perception_main, name="auvsim-perception", daemon=True,
+                        args=(perceive_end, between_r, self._rings[0], buf.getvalue())),
+        ]
         try:
-            return self.sonar.measure(truth, scene)
+            with _one_thread_per_library():
+                for p in self._procs:
+                    p.start()
+        except BaseException:
+            self.close()
+            raise
         finally:
-            self._free.put(slot)
+            for end in (render_end, perceive_end, between_r, between_w, frames_w):
+                if end is not None:
+                    end.close()  # the workers hold them now: their ends close when they end
+
+    @staticmethod
+    def _frame_bytes(sonar: Sensor) -> tuple[int, int]:
+        """Slot bytes for the perception's view of a frame (its images; with
+        ``nav_source='truth'`` the truth's mask goes in band) and for a whole render (images,
+        mask, intensities), with a margin; a sensor without an FLS geometry: 16 MiB each."""
+        g = getattr(sonar, "geometry", None)
+        if g is None:
+            return 16 << 20, 16 << 20
+        w, h = g.fan_size_px
+        images = g.n_beams * g.n_bins + w * h
+        return images + (1 << 16), images + g.n_beams * g.n_bins * (2 + 4 + 4) + (1 << 20)
+
+    # -- the mission loop's calls ------------------------------------------------------------
+    def capture(self, truth: VehicleTruth) -> FrameTicket:
+        """Start rendering the frame captured now (call where the serial loop would measure,
+        after the scene is placed at the present time). Waits, reading the workers' messages,
+        while :data:`CAPTURES_IN_FLIGHT` captures are not rendered yet: the mission process then
+        never blocks on a full connection while a worker blocks on it (no cycle of full pipes)."""
+        self._receive(block=False)
+        while self._n_captured - self._n_rendered >= CAPTURES_IN_FLIGHT:
+            self._receive(block=True)
+        data = self.physics.data
+        objects = self.physics.objects()
+        k = self._n_captured
+        self._send(self._render, ("capture", k, truth, data.geom_xpos[self._moving], data.geom_xmat[self._moving],
+                                  None if objects is self._static_objects else objects))
+        self._n_captured += 1
+        return FrameTicket(truth.t_s, k)
 
     def deliver(self, name: str, ticket: FrameTicket, nav: Any) -> None:
         """Queue perception of a delivered frame with the estimate ``nav`` of its delivery time."""
-        self._pending.append((name, self._process_pool.submit(self._perceive, ticket.frame, nav)))
-
-    def _perceive(self, frame: Future, nav: Any) -> tuple[Any, Any]:
-        msg = frame.result()
-        return msg, self.process(msg, nav)
+        self._send(self._perceive, ("nav", ticket.k, nav))
+        self._pending.append((name, ticket.k))
 
     def ready(self, wait: bool = False) -> Iterator[tuple[str, Any, Any]]:
-        """``(name, frame, result)`` of the delivered frames processed so far, in delivery order
-        (``wait``: all of them, waiting for the workers). Re-raises a worker's exception."""
-        while self._pending and (wait or self._pending[0][1].done()):
-            name, fut = self._pending.popleft()
-            msg, result = fut.result()
-            yield name, msg, result
+        """``(name, frame or None, result)`` of the delivered frames processed so far, in delivery
+        order (``wait``: all of them, waiting for the workers); the frame is None unless
+        ``frames``.
+
+        Raises:
+            PipelineError: a worker failed or ended.
+        """
+        while self._pending:
+            k = self._pending[0][1]
+            self._receive(block=False)
+            while wait and (k not in self._results or (self.frames and k not in self._frames)):
+                self._receive(block=True)
+            if k not in self._results or (self.frames and k not in self._frames):
+                return
+            name, _ = self._pending.popleft()
+            yield name, self._frames.pop(k, None), self._results.pop(k)
 
     @property
     def busy(self) -> bool:
         return bool(self._pending)
 
-    def close(self) -> None:
-        """Stop the threads (frames not yet delivered are dropped)."""
-        self._render_pool.shutdown(wait=True, cancel_futures=True)
-        if self._process_pool is not self._render_pool:
-            self._process_pool.shutdown(wait=True, cancel_futures=True)
-        self._pending.clear()
+    def sync(self) -> None:
+        """Copy the workers' state into the mission's objects (waits for the frames delivered
+        so far): the perception's world model and frame count, the sonar's noise state.
+
+        Raises:
+            PipelineError: a worker failed or ended.
+        """
+        self._send(self._perceive, ("state",))
+        self._send(self._render, ("state",))
+        perception_state = render_state = None
+        while perception_state is None or render_state is None:
+            for conn, msg in self._receive(block=True, want_state=True):
+                if conn is self._perceive:
+                    perception_state = msg
+                else:
+                    render_state = msg
+        _, self.perception.pmha, self.perception.n_frames = perception_state
+        self.sonar.rng.bit_generator.state = render_state[1]
+
+    def close(self, sync: bool = True) -> None:
+        """Stop the workers (frames delivered but not yet handed on are dropped); ``sync``
+        first copies their state back (:meth:`sync`) when they are sound. Idempotent."""
+        if self._closed:
+            return
+        self._closed = True
+        try:
+            if sync and self._procs and all(p.is_alive() for p in self._procs):
+                self.sync()
+        finally:
+            for conn in (self._render, self._perceive):
+                try:
+                    if conn is not None:
+                        conn.send(("stop",))
+                except (OSError, ValueError):
+                    pass
+            for p in self._procs:
+                if p.pid is not None:
+                    p.join(STOP_TIMEOUT_S)
+                if p.is_alive():
+                    p.terminate()
+                    p.join()
+            for conn in (self._render, self._perceive, self._frames_in):
+                if conn is not None:
+                    conn.close()
+            for ring in self._rings:
+                ring.close()
+                ring.unlink()
+            self._pending.clear()
+
+    @property
+    def pids(self) -> list[int]:
+        """The worker processes' ids."""
+        return [p.pid for p in self._procs]
+
+    # -- internals ---------------------------------------------------------------------------
+    def _send(self, conn: Any, msg: tuple) -> None:
+        try:
+            conn.send(msg)
+        except (OSError, ValueError) as e:
+            self._fail(f"cannot reach the {'render' if conn is self._render else 'perception'} worker: {e}")
+
+    def _receive(self, block: bool, want_state: bool = False) -> list[tuple[Any, Any]]:
+        """Read what the workers sent (``block``: wait for at least one message); results and
+        frames are kept by frame index; ``state`` replies are returned as (connection, message)."""
+        sources = [c for c in (self._render, self._perceive, self._frames_in) if c is not None]
+        states = []
+        got = False
+        while True:
+            ready = wait_any(sources, timeout=None if (block and not got) else 0)
+            if not ready:
+                return states
+            for conn in ready:
+                try:
+                    if conn is self._frames_in:
+                        k, render = self._rings[1].get(conn, self._shared)
+                        self._frames[k] = render
+                        got = True
+                        continue
+                    msg = conn.recv()
+                except EOFError:
+                    self._fail("a sonar pipeline worker ended unexpectedly")
+                if msg[0] == "error":
+                    self._fail(f"sonar pipeline worker failed:\n{msg[1]}")
+                if msg[0] == "rendered":
+                    self._n_rendered = msg[1] + 1
+                elif msg[0] == "result":
+                    self._results[msg[1]] = msg[2]
+                elif msg[0] == "state" and want_state:
+                    states.append((conn, msg))
+                got = True
+            if want_state and states:
+                return states
+
+    def _fail(self, why: str) -> None:
+        self.close(sync=False)
+        raise PipelineError(why)

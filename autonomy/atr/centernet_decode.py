@@ -24,6 +24,8 @@ def decode_centernet(heatmap: NDArray, size_log: NDArray, offset: NDArray, strid
     c, h, w = heatmap.shape
     flat = heatmap.reshape(-1)
     idx = np.flatnonzero(flat >= score_threshold)
+    if idx.size == 0:  # the usual frame: nothing to decode
+        return np.zeros((0, 4)), np.zeros(0), np.zeros(0, dtype=np.int64)
     if idx.size > max_detections:
         idx = idx[np.argpartition(-flat[idx], max_detections - 1)[:max_detections]]
     idx = idx[np.argsort(-flat[idx], kind="stable")]

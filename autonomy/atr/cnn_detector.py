@@ -90,7 +90,8 @@ class CnnDetector:
         """Fan image (H_fan, W_fan) uint8 -> model input (1, 1, H, W) float32."""
         h, w = self.input_hw
         small = cv2.resize(fan, (w, h), interpolation=cv2.INTER_AREA)
-        return (small.astype(np.float32) * np.float32(1.0 / 255.0))[None, None]
+        # one pass: uint8 -> float32 and the scale (the same float32 products as astype, then *)
+        return np.multiply(small, np.float32(1.0 / 255.0), dtype=np.float32)[None, None]
 
     def raw_outputs(self, fan: NDArray[np.uint8]) -> dict[str, NDArray[np.float32]]:
         """Model outputs for one fan image, by name, batch dimension removed."""
@@ -104,6 +105,8 @@ class CnnDetector:
         out = self.raw_outputs(fan)
         boxes, scores, cls = decode_centernet(out["heatmap"], out["size"], out["offset"], self.stride,
                                               thr, self.max_detections)
+        if boxes.shape[0] == 0:
+            return boxes, scores, cls
         sx = fan.shape[1] / self.input_hw[1]
         sy = fan.shape[0] / self.input_hw[0]
         # Input px (pixel centres at integers) -> fan px.

@@ -10,7 +10,7 @@ Hypotheses offering the same gated options share one lazily extended ranked list
 
 from __future__ import annotations
 
-from collections.abc import Container, Sequence
+from collections.abc import Iterable, Sequence
 
 from autonomy.estimation.assignment import LazyRanked, ranked_associations
 
@@ -31,19 +31,20 @@ class KBestAssociator:
             raise ValueError(f"KBestAssociator: {len(gated)} gated rows but {len(private)} private rows")
         self._gated = gated
         self._private = private
-        self._any_gated = any(gated)
-        self._streams: dict[tuple, LazyRanked] = {}
+        #: Every object label gated with some measurement: a hypothesis's options depend only on
+        #: which of these it holds, so that set keys the shared streams.
+        self._gated_labels = frozenset(o[0] for g in gated for o in g)
+        self._streams: dict[frozenset[int], LazyRanked] = {}
         self._row_cache: dict = {}
 
-    def ranked(self, labels: Container[int]) -> LazyRanked:
+    def ranked(self, labels: Iterable[int]) -> LazyRanked:
         """Joint associations, best first, of a hypothesis holding the objects ``labels``:
         ``get(k)`` gives the k-th ``(total cost, label of each measurement)`` or None."""
-        gated = self._gated
-        present = tuple(tuple(o[0] for o in g if o[0] in labels) for g in gated) if self._any_gated else ()
+        present = self._gated_labels.intersection(labels)
         stream = self._streams.get(present)
         if stream is None:
             if present:
-                opts = [[o for o in g if o[0] in labels] + list(pv) for g, pv in zip(gated, self._private)]
+                opts = [[o for o in g if o[0] in present] + list(pv) for g, pv in zip(self._gated, self._private)]
             else:
                 opts = self._private
             stream = self._streams[present] = LazyRanked(ranked_associations(opts, self._row_cache))

@@ -38,6 +38,8 @@ class TrajectoryLog:
     ``trajectory.csv`` are read back block by block.
     """
 
+    sonar_frames = False  # ignores the sonar's renders (the pipelined loop need not ship them)
+
     def __init__(self, *, block_rows: int = 4096, spool_dir: str | Path | None = None) -> None:
         self.block_rows = int(block_rows)
         self._spool_dir = spool_dir

@@ -1,8 +1,10 @@
-"""Pipelined sonar and perception (``workers`` > 1) against the serial loop: the same bytes."""
+"""Pipelined sonar and perception (``workers`` > 1, worker processes) against the serial loop:
+the same bytes, no process left behind, a worker's failure reported."""
 
 from __future__ import annotations
 
 import json
+import os
 
 import numpy as np
 import pytest
@@ -11,9 +13,10 @@ from scenarios import load_scenario
 from sim.evaluation.detection_scoring import DetectionScorer
 from sim.mission import Mission
 from sim.outputs.trajectory_log import TrajectoryLog
+from sim.perception import Perception
 from sim.records import PerceptionResult
 from sim.sensors.fls import FlsRender
-from sim.sonar_pipeline import SonarPipeline
+from sim.sonar_pipeline import PipelineError, SonarPipeline
 
 # Dived 10 m short of OPI1 heading for it, survey started at once: frames with targets from t = 0.
 OVER = ["autonomy.guidance.mission.start_delay_s=0", "vehicle.initial_pos_ned=[0.0,0.0,2.0]", "duration_s=3.0"]
@@ -31,7 +34,8 @@ class _Messages:
 
     def on_message(self, name: str, msg) -> None:
         if isinstance(msg, FlsRender):
-            self.seen.append((name, "frame", msg.frame.t_s, msg.frame.polar.tobytes() + msg.frame.fan.tobytes()))
+            self.seen.append((name, "frame", msg.frame.t_s, msg.frame.polar.tobytes() + msg.frame.fan.tobytes(),
+                              msg.intensity.tobytes(), msg.truth.mask_polar.tobytes(), repr(msg.truth.objects)))
         elif isinstance(msg, PerceptionResult):
             self.seen.append((name, "result", msg.t_s, repr(msg.detections), repr(msg.localized)))
 
@@ -39,30 +43,56 @@ class _Messages:
         pass
 
 
-def _run(workers: int, tmp_path, detector: str):
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    with open(f"/proc/{pid}/stat") as f:  # a zombie is not running
+        return f.read().rsplit(")", 1)[1].split()[0] != "Z"
+
+
+def _run(workers: int, tmp_path, detector: str, frames: bool = True):
     log, msgs, scorer = TrajectoryLog(), _Messages(), DetectionScorer("fls", detector)
     m = Mission(load_scenario("cssn_lawnmower", OVER + [f"autonomy.atr.detector={detector}"]),
-                observers=[log, msgs, scorer], workers=workers)
+                observers=[log, msgs, scorer] if frames else [log], workers=workers)
     m.reset()
+    pids = m._pipeline.pids if m._pipeline is not None else []
+    assert (workers > 1) == bool(pids) and all(_alive(p) for p in pids)
     summary = m.run(progress=False)
     m.close()
+    assert not any(_alive(p) for p in pids)  # no worker left behind
     path = tmp_path / f"trajectory_{workers}.csv"
     log.write_csv(path)
-    return path.read_bytes(), json.dumps(m.perception.world_model_json()), msgs.seen, summary, scorer.metrics()
+    return (path.read_bytes(), json.dumps(m.perception.world_model_json()), msgs.seen, summary, scorer.metrics(),
+            m.fls.rng.bit_generator.state)
 
 
 @pytest.mark.parametrize(("detector", "workers"), [("cnn", 2), ("classical", 3)])
 def test_pipelined_loop_gives_the_serial_outputs(tmp_path, detector, workers):
-    csv1, wm1, seen1, s1, score1 = _run(1, tmp_path, detector)
+    csv1, wm1, seen1, s1, score1, rng1 = _run(1, tmp_path, detector)
     frames = [s for s in seen1 if s[1] == "frame"]
     assert len(frames) >= 8  # 3 Hz over 3 s
     assert json.loads(wm1)["objects"]  # something was detected and fused into the world model
-    csv_w, wm_w, seen_w, s_w, score_w = _run(workers, tmp_path, detector)
+    csv_w, wm_w, seen_w, s_w, score_w, rng_w = _run(workers, tmp_path, detector)
     assert csv_w == csv1
     assert wm_w == wm1
     assert seen_w == seen1  # every frame and result reached the observers, in order
     assert s_w.messages_delivered == s1.messages_delivered
     assert score1["detections"] > 0 and score_w == score1  # the observer scoring detections saw the same
+    assert rng_w == rng1  # the sonar's noise stream carries on where the render worker left it
+
+
+def test_frames_stay_in_the_workers_when_no_observer_takes_them(tmp_path):
+    csv1, wm1, *_ = _run(1, tmp_path, "classical", frames=False)
+    m = Mission(load_scenario("cssn_lawnmower", OVER + ["autonomy.atr.detector=classical"]),
+                observers=[TrajectoryLog()], workers=2)
+    m.reset()
+    assert m._pipeline.frames is False
+    m.close()
+    csv2, wm2, *_ = _run(2, tmp_path, "classical", frames=False)
+    assert csv2 == csv1 and wm2 == wm1
+    assert json.loads(wm1)["objects"]
 
 
 def test_pipeline_is_off_where_perception_feeds_back_or_is_absent():
@@ -72,23 +102,30 @@ def test_pipeline_is_off_where_perception_feeds_back_or_is_absent():
     assert m._pipeline is None
     with pytest.raises(ValueError, match="workers"):
         Mission(scn, workers=0)
-    with pytest.raises(ValueError, match="workers"):
-        SonarPipeline(m.physics, None, None, workers=1)
 
 
-def test_frames_in_flight_wait_for_a_free_scene_copy():
-    """More captures than scene copies: each waits for a render to finish, none is lost."""
+class _FailingPerception(Perception):
+    """Perception that fails on its second frame (in the worker process)."""
+
+    def process(self, render, nav):
+        if self.n_frames >= 1:
+            raise RuntimeError("perception failed on purpose")
+        return super().process(render, nav)
+
+
+def test_a_worker_failure_is_raised_with_its_traceback_and_ends_the_workers():
     m = Mission(load_scenario("cssn_lawnmower", OVER + ["autonomy.atr.detector=classical"]))
     m.reset()
-    pipe = SonarPipeline(m.physics, m.fls, lambda render, nav: render.frame.t_s, workers=2, slots=1)
-    tickets = []
-    for _ in range(4):
-        for _ in range(4):
-            m.physics.step(np.zeros(m.physics.params.n_thrusters))
-        tickets.append(pipe.capture(m.physics.truth()))
-    for t in tickets:
-        pipe.deliver("fls", t, None)
-    out = list(pipe.ready(wait=True))
-    pipe.close()
-    assert [r for _, _, r in out] == [t.t_s for t in tickets]
-    assert [f.frame.t_s for _, f, _ in out] == [t.t_s for t in tickets]
+    p = m.parts.perception
+    failing = _FailingPerception(m.scenario, m.fls, m.physics.world.seabed, m.parts.waypoints_ne)
+    pipe = SonarPipeline(m.physics, m.fls, failing, frames=False)
+    pids = pipe.pids
+    with pytest.raises(PipelineError, match="perception failed on purpose"):
+        for _ in range(3):
+            for _ in range(40):
+                m.physics.step(np.zeros(m.physics.params.n_thrusters))
+            pipe.deliver("fls", pipe.capture(m.physics.truth()), m.nav_filter.estimate())
+        list(pipe.ready(wait=True))
+    assert not any(_alive(pid) for pid in pids)
+    pipe.close()  # already closed: nothing more to do
+    assert p is m.parts.perception

@@ -75,6 +75,21 @@ def test_onnxruntime_matches_torch(tiny_model):
     np.testing.assert_array_equal(torch_peak[clear], np.isclose(full, pooled, rtol=0, atol=0)[clear])
 
 
+def test_preprocess_follows_the_model_contract(tiny_model):
+    """Input = the fan resized with cv2.INTER_AREA, / 255 in float32 (bit for bit the product
+    with float32(1 / 255) the detector has always fed the model)."""
+    import cv2
+
+    _, path = tiny_model
+    det = CnnDetector(path)
+    fan = np.random.default_rng(3).integers(0, 256, FAN_HW, dtype=np.uint8)
+    x = det.preprocess(fan)
+    small = cv2.resize(fan, INPUT_HW[::-1], interpolation=cv2.INTER_AREA)
+    assert x.shape == (1, 1, *INPUT_HW) and x.dtype == np.float32
+    np.testing.assert_array_equal(x[0, 0], small.astype(np.float32) * np.float32(1.0 / 255.0))
+    np.testing.assert_allclose(x[0, 0], small / 255.0, rtol=1e-7)
+
+
 def test_detect_returns_messages_in_fan_pixels(tiny_model):
     _, path = tiny_model
     det = CnnDetector(path, score_threshold=0.0, max_detections=5)

@@ -111,6 +111,10 @@ def test_decode_centernet_recovers_planted_peaks():
     np.testing.assert_allclose(boxes[0], [cx - 6, cy - 4, cx + 6, cy + 4], atol=1e-5)
     b2, s2, _ = decode_centernet(heat, size, off, stride, 0.1, 1)
     assert len(s2) == 1 and s2[0] == pytest.approx(0.9)
+    # nothing above the threshold: empty arrays of the documented shapes and dtypes
+    b0, s0, c0 = decode_centernet(heat, size, off, stride, 0.95, 10)
+    assert b0.shape == (0, 4) and s0.shape == (0,) and c0.shape == (0,)
+    assert (b0.dtype, s0.dtype, c0.dtype) == (np.float64, np.float64, np.int64)
 
 
 def _blob_fan(rng, centres_px, radius_px=9, level=200):

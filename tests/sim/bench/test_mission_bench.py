@@ -18,6 +18,8 @@ def test_no_sonar_and_workers_report_both_loops_of_one_run():
     assert w["serial_real_time_factor"] == r["real_time_factor"]
     assert w["workers_speedup"] == pytest.approx(w["real_time_factor"] / r["real_time_factor"])
     assert r["cpu_real_time_factor"] > 0
+    assert list(w["cpu_s_by_process"]) == ["mission"]  # no worker processes
+    assert w["cores_bound_speedup"] > 0
 
 
 @pytest.mark.parametrize("argv, says", [
