@@ -52,6 +52,7 @@ FloatArray = NDArray[np.float64]
 log = logging.getLogger(__name__)
 USBL, SONAR = "usbl", "sonar"
 CV_STATES = 6  # initiation state: NED position (m), NED velocity (m/s)
+_RBE = RangeBearingElevation()
 
 
 class RelativeSpherical:
@@ -111,6 +112,8 @@ class _Pose:
     t_s: float
     pos_ned: FloatArray
     rpy_rad: FloatArray
+    cov_pos_ned: FloatArray | None = None
+    cov_yaw_rad2: float = 0.0
 
 
 class TargetTracker:
@@ -150,6 +153,7 @@ class TargetTracker:
         self._checkpoints: list[tuple[float, FloatArray, FloatArray] | None] = []
         self._base: tuple[float, FloatArray, FloatArray] | None = None  # state before the kept history
         self._seq = 0
+        self._last_sonar_t = -math.inf  # time of the previous sonar detection (its error's correlation)
         self.rejected: list[tuple[float, str]] = []
 
     @property
@@ -157,13 +161,20 @@ class TargetTracker:
         """Time of the newest vehicle pose (-inf before any)."""
         return self._poses[-1].t_s if self._poses else -math.inf
 
-    def record_pose(self, t_s: float, pos_ned: ArrayLike, rpy_rad: ArrayLike) -> None:
+    def record_pose(self, t_s: float, pos_ned: ArrayLike, rpy_rad: ArrayLike, cov_pos_ned: ArrayLike | None = None,
+                    cov_yaw_rad2: float = 0.0) -> None:
         """Vehicle pose (body origin NED, m; roll/pitch/yaw, rad) at ``t_s`` from navigation;
-        times must increase."""
+        times must increase. ``cov_pos_ned`` (3, 3) m^2 and ``cov_yaw_rad2`` are the
+        navigation's uncertainty of that pose (default: known): a measurement taken from it
+        carries it (see :meth:`nav_noise`)."""
         if self._poses and t_s <= self._poses[-1].t_s:
             return
+        cov = None if cov_pos_ned is None else np.asarray(cov_pos_ned, dtype=float).reshape(3, 3).copy()
+        if cov is not None and not np.all(np.isfinite(cov)):
+            cov = None
+        yaw2 = float(cov_yaw_rad2) if math.isfinite(cov_yaw_rad2) and cov_yaw_rad2 > 0.0 else 0.0
         self._poses.append(_Pose(float(t_s), np.asarray(pos_ned, dtype=float).copy(),
-                                 np.asarray(rpy_rad, dtype=float).copy()))
+                                 np.asarray(rpy_rad, dtype=float).copy(), cov, yaw2))
         horizon = t_s - self.cfg.history_s - 1.0
         while len(self._poses) > 2 and self._poses[1].t_s < horizon:
             self._poses.pop(0)
@@ -184,6 +195,31 @@ class TargetTracker:
         d_rpy = np.angle(np.exp(1j * (b.rpy_rad - a.rpy_rad)))
         return a.pos_ned + f * (b.pos_ned - a.pos_ned), rot_from_euler(*(a.rpy_rad + f * d_rpy))
 
+    def nav_noise(self, t_s: float, z: ArrayLike, head_ned: ArrayLike, R_nh: ArrayLike) -> FloatArray:
+        """(3, 3) covariance that the navigation's uncertainty at ``t_s`` adds to a (range,
+        bearing, elevation) measurement ``z`` (3,) taken from a head at ``head_ned`` (3,)
+        with head->NED rotation ``R_nh`` (3, 3): ``G P_nav G^T`` with ``G = -d z / d p_target``
+        (the head moves with the vehicle; lever arm neglected) plus ``g cov_yaw g^T`` with
+        ``g = d z / d yaw`` (the vehicle's heading turns the head). The navigation covariance
+        is that of the last pose at or before ``t_s``; zero without one (paper 004 takes the
+        vehicle states as known; here they are the navigation filter's estimate)."""
+        ps = self._poses
+        i = bisect.bisect_right([p.t_s for p in ps], float(t_s) + 1e-9) - 1
+        pose = ps[max(i, 0)] if ps else None
+        if pose is None or (pose.cov_pos_ned is None and pose.cov_yaw_rad2 == 0.0):
+            return np.zeros((3, 3))
+        R_nh = np.asarray(R_nh, dtype=float)
+        rel_h = _RBE.inverse(z)
+        J = _RBE.jacobian(rel_h)  # d z / d rel_h
+        out = np.zeros((3, 3))
+        if pose.cov_pos_ned is not None:
+            G = J @ R_nh.T
+            out += G @ pose.cov_pos_ned @ G.T
+        if pose.cov_yaw_rad2 > 0.0:
+            g = J @ (-R_nh.T @ np.cross([0.0, 0.0, 1.0], R_nh @ rel_h))
+            out += pose.cov_yaw_rad2 * np.outer(g, g)
+        return out
+
     def on_usbl(self, msg: UsblMsg) -> bool:
         """Add a USBL fix at its measurement time ``msg.t_s``. Returns whether it was taken
         into the history (bad input, another transponder, sonar-only mode: refused and logged)."""
@@ -203,8 +239,9 @@ class TargetTracker:
         cfg = self.cfg
         sig_r = cfg.usbl_range_sigma_m + cfg.usbl_range_sigma_frac * z[0]
         sig_a = math.radians(cfg.usbl_angle_sigma_deg + cfg.usbl_angle_sigma_deg_per_100m * z[0] / 100.0)
-        model = RelativeSpherical(pos + R_nb @ self._usbl_mount, R_nb @ self._R_b_usbl)
-        self._insert(_Event(float(msg.t_s), self._next_seq(), USBL, z, np.diag([sig_r**2, sig_a**2, sig_a**2]), model))
+        head, R_nh = pos + R_nb @ self._usbl_mount, R_nb @ self._R_b_usbl
+        R = np.diag([sig_r**2, sig_a**2, sig_a**2]) + self.nav_noise(msg.t_s, z, head, R_nh)
+        self._insert(_Event(float(msg.t_s), self._next_seq(), USBL, z, R, RelativeSpherical(head, R_nh)))
         return True
 
     def on_sonar(self, t_s: float, range_m: float, azimuth_rad: float, elevation_rad: float = 0.0, *,
@@ -216,7 +253,20 @@ class TargetTracker:
         mode (no other depth cue), is kept as a pseudo-measurement. ``centre_sigma_m`` (1
         sigma, m) adds, in range and across the beam, the uncertainty of where the target's
         centre lies w.r.t. the detection (a target cut by the edge of the view shows only
-        part of itself)."""
+        part of itself).
+
+        The target's echo comes from its side facing the sonar: the measured range is taken
+        as ``target_thickness_m / 2`` short of its centre (added back). The measurement
+        noise is the image's resolution (``sonar_range_sigma_m``, ``sonar_azimuth_sigma_deg``,
+        white) plus the target's extent, a uniform over it (``target_thickness_m / sqrt(12)``
+        along the beam, ``target_size_m / sqrt(12)`` across), whose error is correlated from
+        frame to frame (an AR(1) sequence, correlation ``rho = exp(-dt / tau)`` with ``dt``
+        the time since the previous detection and ``tau = sonar_error_correlation_s``): its
+        variance is inflated by ``(1 + rho) / (1 - rho)``, the factor by which such a
+        sequence's samples carry less information than independent ones (the variance of
+        the mean of n AR(1) samples is ``sigma^2 (1 + rho) / (n (1 - rho))`` for large n), so
+        a detection after a gap counts fully and a run of frames counts as the independent
+        looks it holds; plus the navigation's uncertainty (:meth:`nav_noise`)."""
         if self.cfg.mode == "usbl":
             return False
         if not (math.isfinite(range_m) and math.isfinite(azimuth_rad) and range_m > 0.0):
@@ -229,14 +279,28 @@ class TargetTracker:
         sig_e2 = math.radians(cfg.sonar_vertical_beam_deg) ** 2 / 12.0
         if not (math.isfinite(centre_sigma_m) and centre_sigma_m >= 0.0):
             return self._refuse(t_s, f"sonar centre sigma not finite or < 0: {centre_sigma_m}")
+        z = np.array([range_m + 0.5 * cfg.target_thickness_m, azimuth_rad, elevation_rad])
+        k = self._correlation_inflation(float(t_s))
+        along2, across2 = k * cfg.target_thickness_m**2 / 12.0, k * cfg.target_size_m**2 / 12.0
         c2 = centre_sigma_m**2
-        R = np.diag([cfg.sonar_range_sigma_m**2 + c2, math.radians(cfg.sonar_azimuth_sigma_deg) ** 2 + c2 / range_m**2,
-                     sig_e2])
+        R = np.diag([cfg.sonar_range_sigma_m**2 + along2 + c2,
+                     math.radians(cfg.sonar_azimuth_sigma_deg) ** 2 + (across2 + c2) / z[0] ** 2, sig_e2])
         ndim = 3 if cfg.mode == "sonar" else 2  # sonar only: the beam centre is its only depth cue
-        model = RelativeSpherical(pos + R_nb @ self._sonar_mount, R_nb @ self._R_b_sonar, ndim=ndim)
-        self._insert(_Event(float(t_s), self._next_seq(), SONAR, np.array([range_m, azimuth_rad, elevation_rad]), R,
-                            model))
+        head, R_nh = pos + R_nb @ self._sonar_mount, R_nb @ self._R_b_sonar
+        R = R + self.nav_noise(t_s, z, head, R_nh)
+        self._insert(_Event(float(t_s), self._next_seq(), SONAR, z, R, RelativeSpherical(head, R_nh, ndim=ndim)))
         return True
+
+    def _correlation_inflation(self, t_s: float) -> float:
+        """``(1 + rho) / (1 - rho)``, ``rho = exp(-dt / tau)``, for a sonar detection at ``t_s``
+        (``dt`` since the previous one, at least 1 ms); 1 for the first or with ``tau = 0``."""
+        tau = self.cfg.sonar_error_correlation_s
+        dt = abs(t_s - self._last_sonar_t)
+        self._last_sonar_t = t_s
+        if tau <= 0.0 or not math.isfinite(dt):
+            return 1.0
+        rho = math.exp(-max(dt, 1e-3) / tau)
+        return (1.0 + rho) / (1.0 - rho)
 
     # ------------------------------------------------------------------ outputs
     @property
