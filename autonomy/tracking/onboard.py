@@ -136,7 +136,7 @@ class TrackingStack:
         inputs that were waiting for a pose at their time; returns the results of the frames
         processed now."""
         for tr in self.trackers.values():
-            tr.record_pose(nav.t_s, nav.pos_ned, nav.rpy_rad, nav.cov_pos_ned, nav.cov_yaw_rad2)
+            tr.record_pose(nav.t_s, nav.pos_ned, nav.rpy_rad)
         pending, self._pending = self._pending, []
         done = []
         for msg in pending:

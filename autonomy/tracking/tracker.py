@@ -52,7 +52,6 @@ FloatArray = NDArray[np.float64]
 log = logging.getLogger(__name__)
 USBL, SONAR = "usbl", "sonar"
 CV_STATES = 6  # initiation state: NED position (m), NED velocity (m/s)
-_RBE = RangeBearingElevation()
 
 
 class RelativeSpherical:
@@ -112,8 +111,6 @@ class _Pose:
     t_s: float
     pos_ned: FloatArray
     rpy_rad: FloatArray
-    cov_pos_ned: FloatArray | None = None
-    cov_yaw_rad2: float = 0.0
 
 
 class TargetTracker:
@@ -161,20 +158,13 @@ class TargetTracker:
         """Time of the newest vehicle pose (-inf before any)."""
         return self._poses[-1].t_s if self._poses else -math.inf
 
-    def record_pose(self, t_s: float, pos_ned: ArrayLike, rpy_rad: ArrayLike, cov_pos_ned: ArrayLike | None = None,
-                    cov_yaw_rad2: float = 0.0) -> None:
+    def record_pose(self, t_s: float, pos_ned: ArrayLike, rpy_rad: ArrayLike) -> None:
         """Vehicle pose (body origin NED, m; roll/pitch/yaw, rad) at ``t_s`` from navigation;
-        times must increase. ``cov_pos_ned`` (3, 3) m^2 and ``cov_yaw_rad2`` are the
-        navigation's uncertainty of that pose (default: known): a measurement taken from it
-        carries it (see :meth:`nav_noise`)."""
+        times must increase."""
         if self._poses and t_s <= self._poses[-1].t_s:
             return
-        cov = None if cov_pos_ned is None else np.asarray(cov_pos_ned, dtype=float).reshape(3, 3).copy()
-        if cov is not None and not np.all(np.isfinite(cov)):
-            cov = None
-        yaw2 = float(cov_yaw_rad2) if math.isfinite(cov_yaw_rad2) and cov_yaw_rad2 > 0.0 else 0.0
         self._poses.append(_Pose(float(t_s), np.asarray(pos_ned, dtype=float).copy(),
-                                 np.asarray(rpy_rad, dtype=float).copy(), cov, yaw2))
+                                 np.asarray(rpy_rad, dtype=float).copy()))
         horizon = t_s - self.cfg.history_s - 1.0
         while len(self._poses) > 2 and self._poses[1].t_s < horizon:
             self._poses.pop(0)
@@ -194,31 +184,6 @@ class TargetTracker:
         f = (t_s - a.t_s) / (b.t_s - a.t_s)
         d_rpy = np.angle(np.exp(1j * (b.rpy_rad - a.rpy_rad)))
         return a.pos_ned + f * (b.pos_ned - a.pos_ned), rot_from_euler(*(a.rpy_rad + f * d_rpy))
-
-    def nav_noise(self, t_s: float, z: ArrayLike, head_ned: ArrayLike, R_nh: ArrayLike) -> FloatArray:
-        """(3, 3) covariance that the navigation's uncertainty at ``t_s`` adds to a (range,
-        bearing, elevation) measurement ``z`` (3,) taken from a head at ``head_ned`` (3,)
-        with head->NED rotation ``R_nh`` (3, 3): ``G P_nav G^T`` with ``G = -d z / d p_target``
-        (the head moves with the vehicle; lever arm neglected) plus ``g cov_yaw g^T`` with
-        ``g = d z / d yaw`` (the vehicle's heading turns the head). The navigation covariance
-        is that of the last pose at or before ``t_s``; zero without one (paper 004 takes the
-        vehicle states as known; here they are the navigation filter's estimate)."""
-        ps = self._poses
-        i = bisect.bisect_right([p.t_s for p in ps], float(t_s) + 1e-9) - 1
-        pose = ps[max(i, 0)] if ps else None
-        if pose is None or (pose.cov_pos_ned is None and pose.cov_yaw_rad2 == 0.0):
-            return np.zeros((3, 3))
-        R_nh = np.asarray(R_nh, dtype=float)
-        rel_h = _RBE.inverse(z)
-        J = _RBE.jacobian(rel_h)  # d z / d rel_h
-        out = np.zeros((3, 3))
-        if pose.cov_pos_ned is not None:
-            G = J @ R_nh.T
-            out += G @ pose.cov_pos_ned @ G.T
-        if pose.cov_yaw_rad2 > 0.0:
-            g = J @ (-R_nh.T @ np.cross([0.0, 0.0, 1.0], R_nh @ rel_h))
-            out += pose.cov_yaw_rad2 * np.outer(g, g)
-        return out
 
     def on_usbl(self, msg: UsblMsg) -> bool:
         """Add a USBL fix at its measurement time ``msg.t_s``. Returns whether it was taken
@@ -240,7 +205,7 @@ class TargetTracker:
         sig_r = cfg.usbl_range_sigma_m + cfg.usbl_range_sigma_frac * z[0]
         sig_a = math.radians(cfg.usbl_angle_sigma_deg + cfg.usbl_angle_sigma_deg_per_100m * z[0] / 100.0)
         head, R_nh = pos + R_nb @ self._usbl_mount, R_nb @ self._R_b_usbl
-        R = np.diag([sig_r**2, sig_a**2, sig_a**2]) + self.nav_noise(msg.t_s, z, head, R_nh)
+        R = np.diag([sig_r**2, sig_a**2, sig_a**2])
         self._insert(_Event(float(msg.t_s), self._next_seq(), USBL, z, R, RelativeSpherical(head, R_nh)))
         return True
 
@@ -266,7 +231,7 @@ class TargetTracker:
         sequence's samples carry less information than independent ones (the variance of
         the mean of n AR(1) samples is ``sigma^2 (1 + rho) / (n (1 - rho))`` for large n), so
         a detection after a gap counts fully and a run of frames counts as the independent
-        looks it holds; plus the navigation's uncertainty (:meth:`nav_noise`)."""
+        looks it holds."""
         if self.cfg.mode == "usbl":
             return False
         if not (math.isfinite(range_m) and math.isfinite(azimuth_rad) and range_m > 0.0):
@@ -287,7 +252,6 @@ class TargetTracker:
                      math.radians(cfg.sonar_azimuth_sigma_deg) ** 2 + (across2 + c2) / z[0] ** 2, sig_e2])
         ndim = 3 if cfg.mode == "sonar" else 2  # sonar only: the beam centre is its only depth cue
         head, R_nh = pos + R_nb @ self._sonar_mount, R_nb @ self._R_b_sonar
-        R = R + self.nav_noise(t_s, z, head, R_nh)
         self._insert(_Event(float(t_s), self._next_seq(), SONAR, z, R, RelativeSpherical(head, R_nh, ndim=ndim)))
         return True
 

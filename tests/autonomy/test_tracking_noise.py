@@ -1,6 +1,6 @@
 """Target tracker measurement noise (issue 16): the sonar's near-side range offset, the
-target-extent noise correlated from frame to frame, and the navigation's uncertainty, each
-checked against hand computations and a Monte Carlo of correlated detections."""
+target-extent noise correlated from frame to frame, checked against hand computations and a
+Monte Carlo of correlated detections."""
 
 from __future__ import annotations
 
@@ -13,10 +13,10 @@ from autonomy.messages import UsblMsg
 from autonomy.tracking import TargetTracker, TrackingConfig
 
 
-def _pose_tracker(cfg, yaw_rad=0.0, cov_pos=None, cov_yaw=0.0, t_end=60.0):
+def _pose_tracker(cfg, yaw_rad=0.0, t_end=60.0):
     tr = TargetTracker(cfg)
     for t in np.round(np.arange(0.0, t_end + 1e-9, 0.1), 10):
-        tr.record_pose(t, [0.0, 0.0, 5.0], [0.0, 0.0, yaw_rad], cov_pos, cov_yaw)
+        tr.record_pose(t, [0.0, 0.0, 5.0], [0.0, 0.0, yaw_rad])
     return tr
 
 
@@ -54,24 +54,6 @@ def test_second_detection_counts_as_correlated_extent_noise():
     expect = x0[:2] + K @ (z - [r, math.atan2(e, n)])
     np.testing.assert_allclose(x1[:2], expect, atol=1e-3)
     assert np.linalg.norm(x1[:2] - x0[:2]) > 1e-3  # it did update
-
-
-def test_navigation_uncertainty_adds_to_a_fix():
-    """A track started by one USBL fix: its position covariance grows by exactly the
-    navigation's position covariance, and a heading variance adds (d^2 var_yaw) across the line of sight."""
-    cfg = TrackingConfig(mode="usbl")
-    cov_nav = np.array([[0.04, 0.01, 0.0], [0.01, 0.09, 0.0], [0.0, 0.0, 0.01]])
-    z = UsblMsg(1.0, 8.0, math.radians(20.0), math.radians(5.0), "diver", True)
-    base, with_pos, with_yaw = (_pose_tracker(cfg, 0.3, c, y, t_end=2.0)
-                                for c, y in ((None, 0.0), (cov_nav, 0.0), (None, math.radians(2.0) ** 2)))
-    for tr in (base, with_pos, with_yaw):
-        assert tr.on_usbl(z)
-    P0, P1, P2 = (tr.estimate(1.0)[1][:3, :3] for tr in (base, with_pos, with_yaw))
-    np.testing.assert_allclose(P1 - P0, cov_nav, atol=1e-9)
-    x = base.estimate(1.0)[0]
-    d = x[:3] - [0.0, 0.0, 5.0]
-    across = np.array([-d[1], d[0], 0.0])  # d(target NED)/d(yaw): the line of sight turns about down
-    np.testing.assert_allclose(P2 - P0, math.radians(2.0) ** 2 * np.outer(across, across), atol=1e-9)
 
 
 def _correlated_run(seed, tau_model_s, t_end=30.0, tau_true_s=10.0):
