@@ -204,9 +204,8 @@ class TargetTracker:
         cfg = self.cfg
         sig_r = cfg.usbl_range_sigma_m + cfg.usbl_range_sigma_frac * z[0]
         sig_a = math.radians(cfg.usbl_angle_sigma_deg + cfg.usbl_angle_sigma_deg_per_100m * z[0] / 100.0)
-        head, R_nh = pos + R_nb @ self._usbl_mount, R_nb @ self._R_b_usbl
-        R = np.diag([sig_r**2, sig_a**2, sig_a**2])
-        self._insert(_Event(float(msg.t_s), self._next_seq(), USBL, z, R, RelativeSpherical(head, R_nh)))
+        model = RelativeSpherical(pos + R_nb @ self._usbl_mount, R_nb @ self._R_b_usbl)
+        self._insert(_Event(float(msg.t_s), self._next_seq(), USBL, z, np.diag([sig_r**2, sig_a**2, sig_a**2]), model))
         return True
 
     def on_sonar(self, t_s: float, range_m: float, azimuth_rad: float, elevation_rad: float = 0.0, *,
@@ -218,7 +217,7 @@ class TargetTracker:
         mode (no other depth cue), is kept as a pseudo-measurement. ``centre_sigma_m`` (1
         sigma, m) adds, in range and across the beam, the uncertainty of where the target's
         centre lies w.r.t. the detection (a target cut by the edge of the view shows only
-        part of itself).
+        part of itself; correlated from frame to frame as the extent's part below).
 
         The target's echo comes from its side facing the sonar: the measured range is taken
         as ``target_thickness_m / 2`` short of its centre (added back). The measurement
@@ -246,10 +245,10 @@ class TargetTracker:
             return self._refuse(t_s, f"sonar centre sigma not finite or < 0: {centre_sigma_m}")
         z = np.array([range_m + 0.5 * cfg.target_thickness_m, azimuth_rad, elevation_rad])
         k = self._correlation_inflation(float(t_s))
-        along2, across2 = k * cfg.target_thickness_m**2 / 12.0, k * cfg.target_size_m**2 / 12.0
-        c2 = centre_sigma_m**2
-        R = np.diag([cfg.sonar_range_sigma_m**2 + along2 + c2,
-                     math.radians(cfg.sonar_azimuth_sigma_deg) ** 2 + (across2 + c2) / z[0] ** 2, sig_e2])
+        c2 = centre_sigma_m**2  # as correlated as the extent's part: the same cut from frame to frame
+        along2, across2 = k * (cfg.target_thickness_m**2 / 12.0 + c2), k * (cfg.target_size_m**2 / 12.0 + c2)
+        R = np.diag([cfg.sonar_range_sigma_m**2 + along2,
+                     math.radians(cfg.sonar_azimuth_sigma_deg) ** 2 + across2 / z[0] ** 2, sig_e2])
         ndim = 3 if cfg.mode == "sonar" else 2  # sonar only: the beam centre is its only depth cue
         head, R_nh = pos + R_nb @ self._sonar_mount, R_nb @ self._R_b_sonar
         self._insert(_Event(float(t_s), self._next_seq(), SONAR, z, R, RelativeSpherical(head, R_nh, ndim=ndim)))
