@@ -228,7 +228,8 @@ class TargetTracker:
         the time since the previous detection and ``tau = sonar_error_correlation_s``): its
         variance is inflated by ``(1 + rho) / (1 - rho)``, the factor by which such a
         sequence's samples carry less information than independent ones (the variance of
-        the mean of n AR(1) samples is ``sigma^2 (1 + rho) / (n (1 - rho))`` for large n), so
+        the mean of n AR(1) samples is ``sigma^2 (1 + rho) / (n (1 - rho))`` for large n,
+        docs/references.md [Zwiers1995]), so
         a detection after a gap counts fully and a run of frames counts as the independent
         looks it holds."""
         if self.cfg.mode == "usbl":
