@@ -34,7 +34,7 @@ from __future__ import annotations
 import bisect
 import logging
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -290,7 +290,9 @@ class TargetTracker:
 
     def roi(self, t_s: float | None = None) -> PolarRoi | None:
         """Polar ROI in the sonar frame at ``t_s`` (default: now), or None before the first
-        estimate or without a pose then."""
+        estimate or without a pose then. It is centred where the target's echo is expected:
+        its near side, ``target_thickness_m / 2`` short of the estimated centre (the
+        measurement model of :meth:`on_sonar`)."""
         t = self.now_s if t_s is None else float(t_s)
         est = self.estimate(t)
         pose = self.pose_at(t)
@@ -299,10 +301,11 @@ class TargetTracker:
         pos, R_nb = pose
         x, P = est
         try:
-            return polar_roi(x[POS], P[POS, POS], pos + R_nb @ self._sonar_mount, R_nb @ self._R_b_sonar,
-                             self.cfg.roi_sigma, self.cfg.target_size_m)
+            roi = polar_roi(x[POS], P[POS, POS], pos + R_nb @ self._sonar_mount, R_nb @ self._R_b_sonar,
+                            self.cfg.roi_sigma, self.cfg.target_size_m)
         except ValueError:
             return None
+        return replace(roi, range_m=max(roi.range_m - 0.5 * self.cfg.target_thickness_m, 0.0))
 
     def used_counts(self) -> dict[str, int]:
         """Accepted updates per kind in the kept history."""

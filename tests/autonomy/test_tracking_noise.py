@@ -30,6 +30,20 @@ def test_sonar_range_is_taken_half_the_thickness_beyond_the_echo():
     np.testing.assert_allclose(x[:3], [7.2 * math.cos(bearing), 7.2 * math.sin(bearing), 5.0], atol=1e-9)
 
 
+def test_roi_is_centred_on_the_expected_echo():
+    """The ROI's range centre is the estimated centre's range less half the thickness (the
+    near side the detector sees); azimuth and half-widths are those of the covariance."""
+    thin, thick = (TrackingConfig(mode="usbl", target_thickness_m=t) for t in (0.0, 0.4))
+    rois = []
+    for cfg in (thin, thick):
+        tr = _pose_tracker(cfg, t_end=1.0)
+        tr.on_usbl(UsblMsg(0.5, 8.0, math.radians(5.0), 0.0, "diver", True))
+        rois.append(tr.roi(1.0))
+    a, b = rois
+    assert abs(a.range_m - 8.0) < 1e-6 and abs(b.range_m - (a.range_m - 0.2)) < 1e-12
+    assert b.azimuth_rad == a.azimuth_rad and b.half_range_m == a.half_range_m
+
+
 def test_second_detection_counts_as_correlated_extent_noise():
     """The second detection 1/6 s after the first updates as a Kalman update (hand algebra in
     the horizontal plane, polar Jacobian at the prior) with R = resolution^2 + the extent's
