@@ -104,8 +104,11 @@ def resolve_path(name_or_path: str | Path) -> Path:
         return p
     shipped = scenarios_dir() / f"{text}.yaml"
     if not shipped.is_file():
-        names = ", ".join(list_scenarios()) or "none"
-        raise ScenarioError(f"{text}: no such scenario file or shipped scenario (shipped: {names})")
+        known = list(list_scenarios())
+        close = difflib.get_close_matches(text, known, n=1)
+        hint = f"; did you mean {close[0]}?" if close else ""
+        raise ScenarioError(f"{text}: no such scenario file or shipped scenario{hint} "
+                            f"(shipped: {', '.join(known) or 'none'})")
     return shipped
 
 

@@ -12,14 +12,21 @@ Writes ``sea_trial_eval.json`` and ``sea_trial_eval.png`` into ``--out``.
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 import time
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
 import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from scenarios.load import load_scenario  # noqa: E402
+from sim.cli.app import run_script, script_parser  # noqa: E402
+from sim.cli.errors import CliError  # noqa: E402
+from sim.outputs.mission_outputs import standard_json  # noqa: E402
+from sim.sweep.runner import run_jobs  # noqa: E402
 
 #: Stages counted as the cost of the link and of the second vehicle.
 LINK_STAGES = ("link", "nav_late_fix")
@@ -34,15 +41,19 @@ def parse_seeds(text: str) -> list[int]:
         ValueError: not of those forms.
     """
     text = text.strip()
-    if "-" in text:
-        a, b = (int(v) for v in text.split("-", 1))
-        seeds = list(range(a, b + 1))
-    elif "," in text:
-        seeds = [int(v) for v in text.split(",")]
-    else:
-        seeds = list(range(int(text)))
+    allowed = f"--seeds {text!r}: give N (seeds 0..N-1), A-B or a comma list of seeds >= 0"
+    try:
+        if "-" in text:
+            a, b = (int(v) for v in text.split("-", 1))
+            seeds = list(range(a, b + 1))
+        elif "," in text:
+            seeds = [int(v) for v in text.split(",")]
+        else:
+            seeds = list(range(int(text)))
+    except ValueError:
+        raise ValueError(allowed) from None
     if not seeds or min(seeds) < 0:
-        raise ValueError(f"--seeds {text!r}: give N (seeds 0..N-1), A-B or a comma list of seeds >= 0")
+        raise ValueError(allowed)
     return seeds
 
 
@@ -146,45 +157,70 @@ def plot(runs: list[dict], path: Path) -> None:
     fig.savefig(path, dpi=110)
 
 
-def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--seeds", default="10", help="N (seeds 0..N-1), A-B, or a comma list (default 10)")
-    ap.add_argument("--scenario", default="cssn_sea_trial")
-    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="scenario override")
-    ap.add_argument("--workers", type=int, default=2, help="processes (at most 2 on a shared machine)")
-    ap.add_argument("--out", required=True, help="folder for sea_trial_eval.json and .png")
-    args = ap.parse_args(argv)
+def _seed_job(job: tuple[int, str, tuple[str, ...]]) -> dict:
+    return run_seed(*job)
+
+
+def check_args(args) -> list[int]:
+    """Refuse bad input before the first run: the seeds, the worker count, a scenario that
+    loads with ``--set`` and flies the sea trial (the acoustic link and its surface vehicle),
+    an output folder that can be written. Returns the seeds.
+
+    Raises:
+        CliError: naming the argument and what is allowed; ScenarioError: the scenario does
+            not load.
+    """
     try:
         seeds = parse_seeds(args.seeds)
     except ValueError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
+        raise CliError(str(exc)) from None
     if not 1 <= args.workers <= 2:
-        print(f"error: --workers {args.workers}: allowed 1 or 2", file=sys.stderr)
-        return 2
+        raise CliError(f"--workers {args.workers}: allowed 1 or 2")
+    scn = load_scenario(args.scenario, args.set)
+    if not scn.comms.acoustic.enabled:
+        raise CliError(f"--scenario {args.scenario}: does not fly the sea trial (comms.acoustic.enabled is false; "
+                       "shipped: cssn_sea_trial)")
     out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise CliError(f"--out {out}: is a file; give a folder for sea_trial_eval.json and .png")
     out.mkdir(parents=True, exist_ok=True)
+    return seeds
+
+
+def evaluate(args) -> int:
+    seeds = check_args(args)
+    out = Path(args.out)
     runs: list[dict] = []
     t0 = time.perf_counter()
-    with ProcessPoolExecutor(max_workers=args.workers) as pool:
-        futures = [pool.submit(run_seed, s, args.scenario, tuple(args.set)) for s in seeds]
-        for k, fut in enumerate(as_completed(futures), 1):
-            r = fut.result()
-            runs.append(r)
-            print(f"[{k}/{len(seeds)}] seed {r['seed']}: surface {r['surface']['matched']}/6 "
-                  f"false {r['surface']['false']} err {r['surface']['mean_position_error_m']} m | onboard "
-                  f"{r['onboard']['matched']}/6 false {r['onboard']['false']} err {r['onboard']['mean_position_error_m']} m"
-                  f" | nav fused {r['nav_mean_error_survey_m']['usbl_fused']:.3f} m vs DVL-only "
-                  f"{r['nav_mean_error_survey_m']['dvl_only']:.3f} m | link {r['wall_time_share']['link']:.1%} "
-                  f"buoy {r['wall_time_share']['second_vehicle']:.1%} surface WM "
-                  f"{r['wall_time_share']['surface_world_model']:.1%} | {time.perf_counter() - t0:.0f} s elapsed",
-                  flush=True)
-            runs.sort(key=lambda r: r["seed"])
-            result = {"scenario": args.scenario, "overrides": args.set, "summary": summarise(runs), "runs": runs}
-            (out / "sea_trial_eval.json").write_text(json.dumps(result, indent=2, default=float) + "\n")
+    jobs = [(s, args.scenario, tuple(args.set)) for s in seeds]
+    for k, r in enumerate(run_jobs(_seed_job, jobs, args.workers), 1):
+        runs.append(r)
+        n_true = r["surface"]["matched"] + r["surface"]["missed"]
+        print(f"[{k}/{len(seeds)}] seed {r['seed']}: surface {r['surface']['matched']}/{n_true} "
+              f"false {r['surface']['false']} err {r['surface']['mean_position_error_m']} m | onboard "
+              f"{r['onboard']['matched']}/{n_true} false {r['onboard']['false']} err "
+              f"{r['onboard']['mean_position_error_m']} m"
+              f" | nav fused {r['nav_mean_error_survey_m']['usbl_fused']:.3f} m vs DVL-only "
+              f"{r['nav_mean_error_survey_m']['dvl_only']:.3f} m | link {r['wall_time_share']['link']:.1%} "
+              f"buoy {r['wall_time_share']['second_vehicle']:.1%} surface WM "
+              f"{r['wall_time_share']['surface_world_model']:.1%} | {time.perf_counter() - t0:.0f} s elapsed",
+              flush=True)
+        runs.sort(key=lambda r: r["seed"])
+        result = {"scenario": args.scenario, "overrides": args.set, "summary": summarise(runs), "runs": runs}
+        (out / "sea_trial_eval.json").write_text(json.dumps(standard_json(result), indent=2) + "\n")
     plot(runs, out / "sea_trial_eval.png")
-    print(json.dumps(summarise(runs), indent=2))
+    print(json.dumps(standard_json(summarise(runs)), indent=2))
     return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = script_parser("evaluate_sea_trial.py", " ".join(__doc__.split("\n\n")[0].split()))
+    ap.add_argument("--seeds", default="10", help="N (seeds 0..N-1), A-B, or a comma list (default 10)")
+    ap.add_argument("--scenario", default="cssn_sea_trial", help="a scenario with the acoustic link and its buoy")
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="scenario override")
+    ap.add_argument("--workers", type=int, default=2, help="processes (at most 2 on a shared machine)")
+    ap.add_argument("--out", required=True, help="folder for sea_trial_eval.json and .png")
+    return run_script(ap, evaluate, argv)
 
 
 if __name__ == "__main__":

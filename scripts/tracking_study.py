@@ -19,6 +19,7 @@ import json
 import logging
 import math
 import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -32,6 +33,7 @@ from sim.cli.args import positive_float, positive_int  # noqa: E402
 from sim.cli.errors import CliError  # noqa: E402
 from sim.evaluation.tracking_eval import ERROR_SETS, error_boxplot_png, evaluation_for  # noqa: E402
 from sim.mission import Mission  # noqa: E402
+from sim.outputs.mission_outputs import standard_json  # noqa: E402
 
 
 def run_one(scenario: str, seed: int, duration_s: float | None,
@@ -132,14 +134,16 @@ def study(args) -> int:
                   + f"; bubble clusters {runs[-1]['roi']['bubble_clusters']}"
                   + f", breaths in view / apart {runs[-1].get('plume', {}).get('breath_frames_in_view', 0)}"
                   + f" / {runs[-1].get('plume', {}).get('breath_frames_apart', 0)}", flush=True)
-        report[name] = {"summary": summarise(runs), "runs": runs}
+        with warnings.catch_warnings():  # a set empty in every run (no breath in view) is NaN -> null
+            warnings.simplefilter("ignore", RuntimeWarning)
+            report[name] = standard_json({"summary": summarise(runs), "runs": runs})
         if args.png:
             stem = Path(name).stem
             error_boxplot_png({k: np.concatenate(v) for k, v in pooled.items()}, args.png / f"tracking_study_{stem}.png",
                               f"{stem}: {args.seeds} seeds", ylabel="horizontal position error (m)")
         print(json.dumps({name: report[name]["summary"]}, indent=1), flush=True)
     if args.json:
-        args.json.write_text(json.dumps(report, indent=1, default=float))
+        args.json.write_text(json.dumps(report, indent=1))
     return 0
 
 

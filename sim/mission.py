@@ -130,6 +130,12 @@ class Mission:
         return self.parts.sonar
 
     @property
+    def pipelined(self) -> bool:
+        """Whether the sonar and its perception run on worker threads (``workers`` > 1 and a
+        mission that allows it: FLS perception, no tracker); known after :meth:`reset`."""
+        return self._pipeline is not None
+
+    @property
     def perception(self):
         """The perception chain (None without one); pipelined frames are finished first."""
         self.flush()

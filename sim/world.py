@@ -13,6 +13,7 @@ act through the hydrodynamic wrench (:mod:`sim.vehicle`). Geom groups:
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass, field, replace
 
 import mujoco
@@ -116,6 +117,25 @@ def _quat_z_to(normal: NDArray) -> list[float]:
     return [np.cos(angle / 2), *(np.sin(angle / 2) * axis)]
 
 
+def _add_msh_asset(spec: mujoco.MjSpec, stem: str, vertices: NDArray, faces: NDArray) -> str:
+    """Put a triangle mesh into ``spec``'s assets in MuJoCo's binary ``.msh`` layout and return
+    its file name (``stem`` plus a digest of the content).
+
+    The layout (int32 vertex, normal, texcoord and face counts; float32 vertices; int32 faces)
+    holds the same float32 vertices and faces as ``uservert`` / ``userface``, so the compiled
+    mesh is the same, but MuJoCo reads it in C: a 65k-vertex seabed takes 0.4 ms instead of the
+    ~20 ms the Python binding spends converting the arrays. MuJoCo caches meshes read from
+    files; :func:`build_world` clears that cache after compiling (a seabed is read once and
+    would hold ~50 MB there).
+    """
+    v = np.ascontiguousarray(vertices, dtype=np.float32)
+    f = np.ascontiguousarray(faces, dtype=np.int32)
+    payload = np.array([len(v), 0, 0, len(f)], dtype=np.int32).tobytes() + v.tobytes() + f.tobytes()
+    name = f"{stem}_{hashlib.blake2b(payload, digest_size=12).hexdigest()}.msh"
+    spec.assets = {**spec.assets, name: payload}
+    return name
+
+
 def _add_seabed(spec: mujoco.MjSpec, seabed: Seabed) -> list[mujoco.MjsGeom]:
     cfg = seabed.cfg
     center = np.array([cfg.center_ne_m[0], cfg.center_ne_m[1], 0.0])
@@ -129,8 +149,7 @@ def _add_seabed(spec: mujoco.MjSpec, seabed: Seabed) -> list[mujoco.MjsGeom]:
         )
         return [geom]
     mesh = seabed.terrain_mesh()
-    spec.add_mesh(name="seabed_mesh", uservert=mesh.vertices.astype(np.float32).ravel(),
-                  userface=mesh.faces.astype(np.int32).ravel())
+    spec.add_mesh(name="seabed_mesh", file=_add_msh_asset(spec, "seabed", mesh.vertices, mesh.faces))
     geom = spec.worldbody.add_geom(
         name="seabed", type=mujoco.mjtGeom.mjGEOM_MESH, meshname="seabed_mesh", group=ACOUSTIC_GROUP,
         contype=0, conaffinity=0, rgba=[0.55, 0.5, 0.4, 1.0],
@@ -251,6 +270,8 @@ def build_world(scenario: Scenario, *, with_vehicle: bool = True) -> World:
         spec.worldbody.add_frame().attach_body(extra.body(VEHICLE_BODY), f"{name}/", "")
 
     model = spec.compile()
+    if spec.assets:  # meshes read from assets (the seabed) stay in MuJoCo's cache: free them
+        mujoco.mj_clearCache(mujoco.mj_getCache())
     data = mujoco.MjData(model)
 
     geom_object_id = np.full(model.ngeom, NO_OBJECT_ID, dtype=np.int64)

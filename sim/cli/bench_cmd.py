@@ -6,12 +6,13 @@ import argparse
 import importlib
 import inspect
 import json
+import sys
 
 from scenarios.load import load_scenario
 from sim.bench import BENCHES
 from sim.cli.args import non_negative_int, positive_int
 from sim.cli.errors import CliError
-from sim.cli.scenario_cmds import DEFAULT_SCENARIO, add_scenario_args
+from sim.cli.scenario_cmds import DEFAULT_SCENARIO, add_scenario_args, refuse_sweep_only
 
 OPTION_BENCHES = {"workers": ("mission", "gym"), "sonar": ("mission",)}  # benches taking each option
 
@@ -21,6 +22,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     overrides = list(args.overrides)
     if args.seed is not None:
         overrides.append(f"seed={args.seed}")
+    refuse_sweep_only(args.scenario, "bench")
     scenario = load_scenario(args.scenario, overrides)
     bench = getattr(importlib.import_module(module_name), func_name)
     params = inspect.signature(bench).parameters
@@ -32,6 +34,12 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         if key not in params:
             raise CliError(f"{flag}: only for bench {' and '.join(OPTION_BENCHES[key])}, not {args.name}")
         options[key] = value
+    if args.no_sonar and args.workers is not None and args.workers > 1:
+        raise CliError("--workers: times the pipelined sonar against the serial loop; not with --no-sonar "
+                       "(drop one of them)")
+    what = f" on {scenario.name}" if "scenario" in params else ""
+    print(f"bench {args.name}{what}: running; its figures come at the end (minutes for mission and gym on a "
+          "loaded machine)", file=sys.stderr, flush=True)
     if "scenario" in params:
         result = bench(scenario, **options)
     else:

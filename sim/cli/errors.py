@@ -20,7 +20,8 @@ def user_error_types() -> tuple[type[BaseException], ...]:
     from autonomy.atr.model_file import ModelFileError
     from scenarios.load import ScenarioError
     from sim.dataset.errors import DatasetError
+    from sim.mcm.errors import NoTileError
     from sim.outputs.run_dir import OutputDirError
     from sim.sweep.runner import SweepError
 
-    return (CliError, ScenarioError, OutputDirError, DatasetError, ModelFileError, SweepError)
+    return (CliError, ScenarioError, OutputDirError, DatasetError, ModelFileError, SweepError, NoTileError)

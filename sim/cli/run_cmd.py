@@ -8,7 +8,7 @@ import sys
 from scenarios.load import load_scenario
 from sim.cli.args import non_negative_int, positive_int
 from sim.cli.errors import EXIT_MISSION_ABORTED, EXIT_OK, CliError
-from sim.cli.scenario_cmds import add_scenario_args
+from sim.cli.scenario_cmds import add_scenario_args, refuse_sweep_only
 
 
 def _fmt(value: float | None, spec: str, unit: str = "") -> str:
@@ -27,7 +27,8 @@ def print_summary(metrics: dict, out: str) -> None:
           f"final nav error {_fmt(nav.get('final_position_error_m'), '.2f', ' m')}")
     if "world_model" in metrics:
         wm = metrics["world_model"]
-        print(f"world model: {wm['objects']} targets ({wm.get('objects_not_target', 0)} more objects classified "
+        n_other = wm.get('objects_not_target', 0)
+        print(f"world model: {wm['objects']} targets ({n_other} more object{'' if n_other == 1 else 's'} classified "
               f"not target), {wm['matched']} matched, {wm['missed']} missed, {wm['false']} false, "
               f"mean error {_fmt(wm.get('mean_position_error_m'), '.2f', ' m')}, GOSPA {_fmt(wm.get('gospa'), '.2f')}")
     if "surface_world_model" in metrics:
@@ -40,14 +41,20 @@ def print_summary(metrics: dict, out: str) -> None:
             pending = f", {st['pending']} still queued or in flight at the end" if st.get("pending") else ""
             print(f"link, {name}: {st['sent']} sent, {st['delivered']} delivered, {st['lost']} lost{pending}, latency mean "
                   f"{_fmt(st.get('mean_latency_s'), '.2f', ' s')}, p95 {_fmt(st.get('p95_latency_s'), '.2f', ' s')}")
-    if "tracking" in metrics:
+    if "tracking" in metrics and not any(v.get("n") for v in metrics["tracking"]["errors"].values()):
+        tr = metrics["tracking"]
+        print(f"tracking ({tr['mode']}): nothing scored (errors count from {tr.get('scored_from_s', 0):g} s into the "
+              "run, once the filters have started); raise duration_s")
+    elif "tracking" in metrics:
         tr = metrics["tracking"]
         errs = ", ".join(f"{k} {_fmt(v.get('mean_m'), '.2f')} +- {_fmt(v.get('std_m'), '.2f')} m"
                          for k, v in tr["errors"].items())
         print(f"tracking ({tr['mode']}; 3-D error, horizontal in metrics.json): {errs}; sonar used in "
               f"{_fmt(100 * tr['fused_sonar_step_fraction'], '.0f')} % "
               f"of steps; target in view {_fmt(100 * tr['target_in_fov_fraction'], '.0f')} %")
-    if "mcm" in metrics:
+    if "mcm" in metrics and "note" in metrics["mcm"]:
+        print(metrics["mcm"]["note"])
+    elif "mcm" in metrics:
         mcm, det = metrics["mcm"], metrics["mcm"]["detector"]
         maps = ", ".join(f"{k} GOSPA {_fmt(v['final_gospa_mean'], '.1f')} ({v['final_cardinality_mean']:.0f} objects)"
                          for k, v in mcm.items() if isinstance(v, dict) and "final_gospa_mean" in v)
@@ -55,7 +62,7 @@ def print_summary(metrics: dict, out: str) -> None:
               f"{det['clutter_per_tile']:.2f} false per tile; {maps}")
     if "msis_localization" in metrics:
         ml = metrics["msis_localization"]
-        print(f"msis localisation: {ml['n_fixes']} sonar position fixes, horizontal RMS error "
+        print(f"msis localisation: {ml['n_fixes']} sonar position fix{'' if ml['n_fixes'] == 1 else 'es'}, horizontal RMS error "
               f"{_fmt(ml.get('rms_fused_m'), '.2f', ' m')} (dead reckoning alone "
               f"{_fmt(ml.get('rms_dead_reckoning_m'), '.2f', ' m')})")
     print(f"results in {out}")
@@ -69,6 +76,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         overrides.append(f"seed={args.seed}")
     if args.detector is not None:
         overrides.append(f"autonomy.atr.detector={args.detector}")
+    refuse_sweep_only(args.scenario, "run")
     scenario = load_scenario(args.scenario, overrides)
     rosbag = args.rosbag or scenario.outputs.rosbag
     if rosbag:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from scenarios.load import list_scenarios, load_scenario
+from sim.cli.errors import CliError
 
 DEFAULT_SCENARIO = "cssn_lawnmower"
 
@@ -18,8 +19,24 @@ def add_scenario_args(p: argparse.ArgumentParser, *, positional: bool = True) ->
                    help="dotted override, e.g. --set vehicle.mass_kg=36 (repeatable; values parsed as YAML)")
 
 
+def refuse_sweep_only(name: str, command: str) -> None:
+    """Refuse a study that runs only as ``auvsim sweep`` (``mcm_survey``) by name.
+
+    Raises:
+        CliError: ``name`` is such a study.
+    """
+    from sim.sweep.runner import SWEEP_ONLY
+
+    if name in SWEEP_ONLY:
+        raise CliError(f"{name}: a Monte Carlo study without a scenario file, so not for auvsim {command}; "
+                       f"run it as: auvsim sweep {name} --runs N --out DIR [--set key=value] (its MuJoCo "
+                       "counterpart, mcm_survey_full, also runs alone)")
+
+
 def _cmd_scenarios(args: argparse.Namespace) -> int:
-    for name, desc in list_scenarios().items():
+    from sim.sweep.runner import SWEEP_ONLY
+
+    for name, desc in {**list_scenarios(), **SWEEP_ONLY}.items():
         print(f"{name:28s} {desc}")
     return 0
 
@@ -27,6 +44,7 @@ def _cmd_scenarios(args: argparse.Namespace) -> int:
 def _cmd_validate(args: argparse.Namespace) -> int:
     import yaml
 
+    refuse_sweep_only(args.scenario, "validate")
     scenario = load_scenario(args.scenario, args.overrides)
     print(yaml.safe_dump(scenario.model_dump(mode="json"), sort_keys=False), end="")
     return 0

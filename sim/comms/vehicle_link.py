@@ -158,6 +158,7 @@ class VehicleLink:
             "all": self.link.stats().to_dict(),
             "detections_queued": self.n_detections_queued,
             "detections_dropped_stale": self._up.n_dropped_stale,
+            "detections_unsent_at_end": len(self._up),  # queued = sent + dropped stale + these
             "usbl_fixes_made": self.n_fixes_queued, "usbl_fixes_received": self.n_fixes_received,
             "tdma": {"cycle_s": self.cfg.cycle_s, "surface_slot_s": self.cfg.surface_slot_s,
                      "guard_s": self.cfg.guard_s},

@@ -63,8 +63,10 @@ def render_frames(spec: SceneSpec, fls_cfg: FlsConfig, rng: np.random.Generator,
         R_nb = rot_from_euler(*pose.rpy_rad)
         render = sensor.render(t_s, np.array(pose.pos_ned), R_nb, caster, world.objects, noise=True)
         labels = []
+        # column-major once per frame: each object's mask then reaches the RLE encoder without a copy
+        mask_fan = np.asfortranarray(render.truth.mask_fan)
         for obj in render.truth.objects:
-            m = render.truth.mask_fan == obj.id
+            m = mask_fan == obj.id
             if not m.any():
                 continue
             rle, bbox, area = mask_annotation(m)

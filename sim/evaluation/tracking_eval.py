@@ -227,6 +227,7 @@ class TrackingEvaluation:
                           {"n": 0})
         return {
             "mode": self.stack.cfg.mode,
+            "scored_from_s": self.warmup_s,
             "errors": stats,
             "errors_horizontal": stats_h,
             "fused_sonar_step_fraction": float(scored[:, 5].mean()) if len(scored) else math.nan,

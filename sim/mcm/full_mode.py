@@ -23,11 +23,20 @@ from autonomy.sidescan.detector import SssHighlightShadowDetector, SssTileDetect
 from autonomy.sidescan.tile_assembler import SssTileAssembler
 from scenarios.schema import Scenario
 from sim.evaluation.world_model_score import match
+from sim.mcm.errors import NoTileError
 from sim.mcm.ins_drift import InsDriftParams, sample_drift
 from sim.mcm.survey import map_and_score
 from sim.rng import component_rng
 
 FloatArray = NDArray[np.float64]
+
+
+def no_tile_message(scenario: Scenario) -> str:
+    """Why a run formed no tile and what to change (``duration_s``)."""
+    period = scenario.mcm.tile.tile_period_s
+    return (f"mcm: the run formed no side-scan tile in its {scenario.duration_s:g} s (duration_s; a tile pair "
+            f"closes every mcm.tile.tile_period_s = {period:g} s of mission time while the side-scan pings, the "
+            f"first at {period:g} s): raise duration_s above {period:g}")
 
 
 class SssTileProcessor:
@@ -133,11 +142,11 @@ class McmFullObserver:
         plus ``detector`` (:meth:`detector_score`) and ``mode: full``.
 
         Raises:
-            ValueError: the run recorded no tile.
+            NoTileError: the run recorded no tile.
         """
         mcm = self.scenario.mcm
         if not self.tiles:
-            raise ValueError("mcm: the run formed no side-scan tile (is the sonar pinging, the duration long enough?)")
+            raise NoTileError(no_tile_message(self.scenario))
         th = np.geomspace(0.02, 0.99, 20) if thresholds is None else np.asarray(thresholds, dtype=float)
         dt = 1.0 / mcm.ins.rate_hz
         t_nav = np.arange(dt, self.t_s[-1] + 1e-9, dt)

@@ -66,7 +66,7 @@ class McmSurveyConfig(StrictModel):
     sigma_lin_mps2: float = Field(0.5, ge=0.0, description="mapper's NCT process noise, linear")
     sigma_ang_degps2: float = Field(20.0, ge=0.0, description="mapper's NCT process noise, angular")
     confirm_threshold: float = Field(0.8, gt=0.0, lt=1.0)
-    modes: tuple[MapperMode, ...] = MODES
+    modes: tuple[MapperMode, ...] = Field(MODES, min_length=1, description="the mappers to run (at least one)")
     gospa_cutoff_m: float = Field(50.0, gt=0.0)
     correct_within_m: float = Field(20.0, gt=0.0)
     max_tiles: int | None = Field(None, ge=1, description="stop after this many tiles (None: the survey)")
@@ -192,8 +192,9 @@ def map_and_score(mapper_config, modes, seed: int, truth_pos: FloatArray, truth_
 
     Returns:
         per mode: ``gospa``, ``cardinality``, ``auv_err_m`` (per tile), ``final_gospa``,
-        ``auv_rmse_m``, ``class_accuracy``, ``class_matched``, ``correct``, ``false``; and
-        ``thresholds``.
+        ``auv_rmse_m``, ``class_accuracy``, ``class_matched``, ``correct``, ``false``, and the
+        objects confirmed at the end (at the mapper's ``confirm_threshold``): ``objects_ne_m``
+        (J, 2) north, east m and ``objects_class`` (J,) 0 mine-like; and ``thresholds``.
     """
     out: dict = {}
     for mode in modes:
@@ -226,6 +227,8 @@ def map_and_score(mapper_config, modes, seed: int, truth_pos: FloatArray, truth_
             "auv_rmse_m": float(np.sqrt(np.mean(np.square(err)))) if err else None,
             "class_accuracy": acc_hits / acc_n if acc_n else None, "class_matched": acc_n,
             "correct": correct, "false": false,
+            "objects_ne_m": np.asarray(est.pos_ned, dtype=float).reshape(-1, 2).tolist(),
+            "objects_class": np.asarray(est.class_index, dtype=int).tolist(),
         }
     out["thresholds"] = np.asarray(thresholds, dtype=float).tolist()
     return out

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -50,10 +51,15 @@ def _clean(obj: Any, decimals: int | None) -> Any:
     return obj
 
 
+def standard_json(data: Any, decimals: int | None = None) -> Any:
+    """``data`` as plain JSON values (numpy converted, NaN/inf -> None, which ``json`` would
+    write as the non-standard ``NaN``), floats rounded to ``decimals`` when given."""
+    return _clean(json.loads(json.dumps(data, default=_json_default)), decimals)
+
+
 def write_json(path: Path, data: Any, decimals: int | None = None) -> None:
     """Write ``data`` as indented standard JSON (NaN -> null), floats rounded to ``decimals``."""
-    plain = json.loads(json.dumps(data, default=_json_default))
-    path.write_text(json.dumps(_clean(plain, decimals), indent=2) + "\n")
+    path.write_text(json.dumps(standard_json(data, decimals), indent=2) + "\n")
 
 
 def with_geodetic(world_model: dict[str, Any], origin: GeodeticOrigin) -> dict[str, Any]:
@@ -191,16 +197,18 @@ def map_layers(mission: Mission, tracking: Any, sim_time_s: float, overlay=None,
 
 
 class _ProgressObserver:
-    """Feeds the mission's step records to a :class:`MissionProgress`."""
+    """Feeds the mission's step records to a :class:`MissionProgress`; a buddy mission (whose
+    survey state machine stays ``idle``) shows its behaviour instead (``buddy follow``)."""
 
-    def __init__(self, progress: MissionProgress) -> None:
+    def __init__(self, progress: MissionProgress, buddy: str | None = None) -> None:
         self.progress = progress
+        self.buddy = buddy
 
     def on_start(self, info: Any) -> None:
         self.progress.start()
 
     def on_step(self, record: Any) -> None:
-        self.progress.update(record.t_s, record.mode)
+        self.progress.update(record.t_s, f"buddy {self.buddy}" if self.buddy else record.mode)
 
     def on_message(self, name: str, msg: Any) -> None:
         pass
@@ -264,8 +272,10 @@ def run_mission(
 
             msis_obs = LocalizationErrorObserver(mission)
             mission.observers.append(msis_obs)
+        buddy = scenario.autonomy.guidance.buddy
         mission.observers.append(_ProgressObserver(MissionProgress(scenario.name, planned_length_s(mission),
-                                                                   enabled=progress)))
+                                                                   enabled=progress),
+                                                   buddy=buddy.behaviour if buddy.enabled else None))
         tracking = None
         if mission.parts.tracking is not None:
             from sim.evaluation.tracking_eval import evaluation_for
@@ -279,6 +289,9 @@ def run_mission(
             mcm_obs = McmFullObserver(scenario)
             mission.observers.append(mcm_obs)
         mission.reset()
+        if workers > 1 and not mission.pipelined:
+            print(f"{scenario.name}: --workers {workers}: this mission runs the serial loop (the pipeline takes the "
+                  "FLS frames of a mission with perception and no tracker)", file=sys.stderr, flush=True)
         try:
             mission.run(progress=False)
         finally:
@@ -292,6 +305,11 @@ def run_mission(
             metrics["msis_localization"] = msis_obs.rms()
             overlay = msis_overlay(msis_obs, scenario.world.basin, msis.localizer)
             extent = basin_outline_ne(scenario.world.basin)
+        mcm_result = mcm_obs.results(mission.seed) if mcm_obs is not None and mcm_obs.tiles else None
+        if mcm_result is not None:
+            from sim.mcm.figures import confirmed_objects_overlay
+
+            overlay = confirmed_objects_overlay(mcm_result)
         log.write_csv(partial / "trajectory.csv")
         layers = map_layers(mission, tracking, metrics["sim_time_s"], overlay, extent)
         estimates, rejected = [], []
@@ -319,12 +337,15 @@ def run_mission(
             metrics["tracking"] = tracking.metrics()
             tracking.plot(partial / "tracking_error.png", partial / "tracking_boxplot.png",
                           title=f"{scenario.name} seed {mission.seed}")
-        if mcm_obs is not None:
+        if mcm_obs is not None and not mcm_obs.tiles:  # too short a run: its other outputs still count
+            from sim.mcm.full_mode import no_tile_message
+
+            metrics["mcm"] = {"tiles": 0, "note": no_tile_message(scenario)}
+        elif mcm_result is not None:
             from sim.mcm.figures import summarise, write_figures
 
-            mcm_result = mcm_obs.results(mission.seed)
             write_json(partial / "mcm.json", mcm_result)
-            write_figures(partial, [mcm_result])
+            write_figures(partial, [mcm_result], title=f"{scenario.name} seed {mission.seed}")
             metrics["mcm"] = {**summarise([mcm_result]), "detector": mcm_result["detector"]}
         write_json(partial / "metrics.json", metrics, decimals=METRICS_DECIMALS)
         staged.commit()

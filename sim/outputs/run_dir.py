@@ -142,9 +142,11 @@ def check_output_dir(path: str | os.PathLike[str], *, kind: str, overwrite: bool
             raise OutputDirError(f"{arg} {out}: cannot read it: {exc.strerror or exc}") from None
         if entries:
             if not is_output_of(out, kind):
-                raise OutputDirError(
-                    f"{arg} {out}: folder exists and holds files that are not an auvsim {kind} output; "
-                    "refusing to touch it (name a new folder)")
+                other = (read_marker(out) or {}).get("kind")
+                what = f"an auvsim {other} output, not a {kind}" if isinstance(other, str) else (
+                    f"files that are not an auvsim {kind} output")
+                raise OutputDirError(f"{arg} {out}: folder exists and holds {what}; refusing to touch it "
+                                     "(name a new folder)")
             if not (overwrite or resume):
                 raise OutputDirError(f"{arg} {out}: holds an earlier {kind}; pass --overwrite to replace it, "
                                      "or name a new folder")

@@ -1,4 +1,5 @@
-"""The study scripts (``scripts/tracking_study.py``, ``scripts/evaluate_msis_localization.py``)
+"""The study scripts (``scripts/tracking_study.py``, ``scripts/evaluate_msis_localization.py``,
+``scripts/evaluate_sea_trial.py``)
 refuse bad input as the CLI does: one line naming the argument, exit status 2, no traceback,
 before any run (so a study's results are never lost at its end)."""
 
@@ -58,3 +59,22 @@ def test_tracking_study_refuses(argv, culprits, capsys, tmp_path):
 ])
 def test_msis_evaluation_refuses(argv, culprits, capsys):
     _refused(_script("evaluate_msis_localization"), argv, capsys, *culprits)
+
+
+@pytest.mark.parametrize("argv,culprits", [
+    (["--seeds", "a,b"], ("evaluate_sea_trial.py: error:", "--seeds 'a,b'", "comma list")),
+    (["--seeds", "5-2"], ("--seeds '5-2'",)),
+    (["--seeds", "1", "--workers", "3"], ("--workers 3", "1 or 2")),
+    (["--seeds", "1", "--scenario", "cssn_sea_tral"], ("cssn_sea_tral", "did you mean cssn_sea_trial?")),
+    (["--seeds", "1", "--scenario", "cssn_lawnmower"], ("--scenario cssn_lawnmower", "comms.acoustic.enabled")),
+    (["--seeds", "1", "--set", "nope=1"], ("nope", "unknown key")),
+    (["--seeds", "1", "--out", "{file}"], ("--out", "is a file")),
+])
+def test_sea_trial_evaluation_refuses(argv, culprits, capsys, tmp_path):
+    (tmp_path / "f.txt").write_text("keep")
+    argv = [a.format(file=tmp_path / "f.txt") for a in argv]
+    if "--out" not in argv:
+        argv += ["--out", str(tmp_path / "out")]
+    _refused(_script("evaluate_sea_trial"), argv, capsys, *culprits)
+    assert (tmp_path / "f.txt").read_text() == "keep"
+    assert not (tmp_path / "out").exists()

@@ -36,6 +36,8 @@ def test_messages_cross_both_ways_without_contact(short_run):
     up, down = link["uplink_detections"], link["downlink_usbl_fixes"]
     assert up["delivered"] > 50 and down["delivered"] > 10
     assert up["sent"] == up["delivered"] + up["lost"] + up["pending"]
+    assert link["detections_queued"] == (up["sent"] + link["detections_dropped_stale"]
+                                         + link["detections_unsent_at_end"])
     assert 0.0 < up["mean_latency_s"] < up["p95_latency_s"] < 1.0  # queue + 48 ms packets + travel
     assert link["usbl_fixes_fused"] > 5
     assert link["surface_world_model"]["reports_received"] == up["delivered"]

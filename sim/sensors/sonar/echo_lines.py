@@ -20,6 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sim.sensors.sonar.beam_pattern import two_way_beam_power
+from sim.sensors.sonar.fused_passes import kernels
 from sim.sensors.sonar.ray_fan import RayTable, Segments, row_dot
 
 FloatArray = NDArray[np.float64]
@@ -126,36 +127,19 @@ def spread_segments(n_rows: int, n_bins: int, row: NDArray[np.intp], u_a: FloatA
 
     Exact bin coverage (a bin gets energy * overlap / length); parts outside
     ``[0, n_bins)`` are dropped. Zero-length intervals go to the bin holding ``u_a``.
-    One ``bincount`` of kinks and one row-wise prefix sum, accumulated in float64 and
-    returned as ``dtype``. Returns (n_rows, n_bins), non-negative.
+    Each interval adds kinks to a float64 array (a segment ``F(x) = density * (relu(x - lo) -
+    relu(x - hi))`` puts ``w`` at ``fl + 1`` and ``w (1 - fr)`` at ``fl`` with ``-w (1 - fr)``
+    at ``fl + 1`` for each end ``p = fl + fr``; a point ``+E`` at its bin and ``-E`` at the
+    next), whose row-wise prefix sums (the differences of consecutive rows of a 2-D integral
+    image, :func:`row_cumsum`) are the bin energies, returned as ``dtype``, floored at 0
+    (prefix-sum round-off). One compiled pass (:mod:`sim.sensors.sonar.fused_passes`).
+    Returns (n_rows, n_bins), non-negative.
     """
-    lo = np.minimum(u_a, u_b)
-    hi = np.maximum(u_a, u_b)
-    length = hi - lo
-    point = length < 1e-9
-    stride = n_bins + 2
-    # points: +E at their bin and -E at the next, so the prefix sum leaves E in one bin
-    kp = np.floor(lo[point])
-    okp = (kp >= 0) & (kp < n_bins)
-    base_p = row[point][okp] * stride + kp[okp].astype(np.intp)
-    e_p = energy[point][okp]
-    # segments: F(x) = density * (relu(x - lo) - relu(x - hi)) and bin k gets F(k+1) - F(k). A
-    # kink of weight w at p = fl + fr adds w (k - fl - 1) + w (1 - fr) to F(k) for k > fl, so bin
-    # k gets cumsum(S)[k] + O[k + 1] with S[fl + 1] += w and O[fl + 1] += w (1 - fr); the O term
-    # joins the same prefix sum as +O at fl and -O at fl + 1.
-    seg = ~point & (hi > 0.0) & (lo < n_bins)
-    r = row[seg]
-    density = energy[seg] / length[seg]
-    pos = np.concatenate([np.clip(lo[seg], 0.0, n_bins), np.clip(hi[seg], 0.0, n_bins)])
-    w = np.concatenate([density, -density])
-    fl = np.floor(pos)
-    base = np.concatenate([r, r]) * stride + fl.astype(np.intp)
-    off = w * (1.0 - (pos - fl))
-    idx = np.concatenate([base + 1, base, base + 1, base_p, base_p + 1])
-    weights = np.concatenate([w, off, -off, e_p, -e_p])
-    acc = np.bincount(idx, weights=weights, minlength=n_rows * stride).astype(np.float64, copy=False)
-    out = row_cumsum(acc.reshape(n_rows, stride), n_bins, dtype)
-    np.maximum(out, 0, out=out)  # prefix-sum round-off
+    out = np.empty((n_rows, n_bins), dtype=dtype)
+    f64 = np.float64
+    kernels().spread_segments(int(n_rows), int(n_bins), np.ascontiguousarray(row, dtype=np.intp),
+                              np.ascontiguousarray(u_a, dtype=f64), np.ascontiguousarray(u_b, dtype=f64),
+                              np.ascontiguousarray(energy, dtype=f64), out)
     return out
 
 

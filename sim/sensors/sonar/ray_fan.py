@@ -21,6 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from autonomy.sonar_frame import ray_directions_sonar
 from sim.sensors.raycast import RayCaster, RayHits
+from sim.sensors.sonar.fused_passes import kernels
 
 FloatArray = NDArray[np.float64]
 SURFACE_CHORD_SIN = 0.75  # max |chord . normal| / |chord| for two hits to count as one surface
@@ -47,11 +48,19 @@ def same_surface(d_a: FloatArray, n_a: FloatArray, o_a: NDArray[np.int64], v_a: 
     Returns:
         (N,) bool.
     """
-    both = np.isfinite(d_a) & np.isfinite(d_b) & (o_a == o_b)
-    chord = np.where(both, d_b, 0.0)[:, None] * v_b
-    chord -= np.where(both, d_a, 0.0)[:, None] * v_a
-    tol = SURFACE_CHORD_SIN * np.sqrt(row_dot(chord, chord)) + 1e-9
-    return both & (np.abs(row_dot(chord, n_a)) <= tol) & (np.abs(row_dot(chord, n_b)) <= tol)
+    every = np.arange(len(d_a))
+    return same_surface_rows(d_a, n_a, o_a, v_a, every, d_b, n_b, o_b, v_b, every)
+
+
+def same_surface_rows(d_a: FloatArray, n_a: FloatArray, o_a: NDArray[np.int64], v_a: FloatArray,
+                      ia: NDArray[np.intp], d_b: FloatArray, n_b: FloatArray, o_b: NDArray[np.int64],
+                      v_b: FloatArray, ib: NDArray[np.intp]) -> NDArray[np.bool_]:
+    """:func:`same_surface` of rows ``ia`` of the a arrays against rows ``ib`` of the b arrays
+    (M,), without gathering them: one compiled pass
+    (:mod:`sim.sensors.sonar.fused_passes`; the chord is ``d_b v_b - d_a v_a`` where both rays
+    hit, the tolerance ``SURFACE_CHORD_SIN |chord| + 1e-9``)."""
+    return kernels().same_surface(d_a, n_a, o_a, v_a, np.asarray(ia, dtype=np.intp), d_b, n_b, o_b, v_b,
+                                  np.asarray(ib, dtype=np.intp), SURFACE_CHORD_SIN)
 
 
 @dataclass(frozen=True, slots=True)
@@ -117,8 +126,8 @@ class RayTable:
 
     def same_surface(self, ia: NDArray[np.intp], ib: NDArray[np.intp]) -> NDArray[np.bool_]:
         """:func:`same_surface` of rows ``ia`` and ``ib``."""
-        return same_surface(self.dist[ia], self.normal[ia], self.obj[ia], self.dirs[ia],
-                            self.dist[ib], self.normal[ib], self.obj[ib], self.dirs[ib])
+        return same_surface_rows(self.dist, self.normal, self.obj, self.dirs, ia,
+                                 self.dist, self.normal, self.obj, self.dirs, ib)
 
 
 @dataclass(frozen=True, slots=True)
@@ -398,13 +407,12 @@ class RayFan:
             whole = act.size == n
             if whole:  # column, azimuth and weight never change
                 col, az, weight, a_p, b_p = lo_t.col, lo_t.az, lo_t.weight, lo_p, hi_p
-                a_d, a_n, a_o, a_v = lo_d, lo_n, lo_o, lo_v
             else:
                 col, az, weight, a_p, b_p = lo_t.col[act], lo_t.az[act], lo_t.weight[act], lo_p[act], hi_p[act]
-                a_d, a_n, a_o, a_v = lo_d[act], lo_n[act], lo_o[act], lo_v[act]
             mid = self.cast_rays(caster, origin_ned, R_ns, col, az, 0.5 * (a_p + b_p), weight, max_range_m)
-            with_lo = same_surface(a_d, a_n, a_o, a_v, mid.dist, mid.normal, mid.obj, mid.dirs)
-            with_lo |= ~np.isfinite(a_d) & ~np.isfinite(mid.dist)
+            with_lo = same_surface_rows(lo_d, lo_n, lo_o, lo_v, act, mid.dist, mid.normal, mid.obj, mid.dirs,
+                                        np.arange(act.size))
+            with_lo |= ~np.isfinite(lo_d[act]) & ~np.isfinite(mid.dist)
             mid_row = n_pool + np.arange(act.size)
             pool.append(mid)
             n_pool += act.size

@@ -1,0 +1,183 @@
+"""The compiled kernels behind :mod:`sim.sensors.sonar.fused_passes` (numba, cached on disk).
+
+Module-level functions, so numba's on-disk cache finds them in every process; imported on
+first use through :func:`sim.sensors.sonar.fused_passes.kernels`.
+"""
+
+from __future__ import annotations
+
+import numba as nb
+import numpy as np
+
+f32 = np.float32
+TWO_M24 = f32(2.0 ** -24)  # the float32 uniform's grid step
+
+
+@nb.njit(cache=True, nogil=True)
+def complement_uniform_f32(raw32, first, has_first, out):
+    """``1 - U`` for float32 uniforms ``U = (w >> 8) 2^-24`` of the uint32 words ``raw32``
+    (after ``first`` when ``has_first``), as numpy's ``Generator.random(dtype=float32)``
+    forms them; exact: ``1 - k 2^-24 = (2^24 - k) 2^-24``."""
+    o = out.ravel()
+    j = 0
+    if has_first:
+        o[0] = f32(16777216 - (first >> 8)) * TWO_M24
+        j = 1
+    for i in range(o.size - j):
+        o[i + j] = f32(16777216 - (raw32[i] >> 8)) * TWO_M24
+
+
+@nb.njit(cache=True, nogil=True)
+def scale_by_neg(mean, add, log_u, out):
+    """``out = (mean + add) * -log_u`` element-wise, float32 (``-log(1 - U)`` is Exp(1))."""
+    m, lu, o = mean.ravel(), log_u.ravel(), out.ravel()
+    a = f32(add)
+    for i in range(o.size):
+        o[i] = (m[i] + a) * -lu[i]
+
+
+@nb.njit(cache=True, nogil=True)
+def gain_floor(x, gain, floor, out):
+    """``out = max(x * gain[None, :], floor)`` of a (rows, cols) float32 array."""
+    rows, cols = x.shape
+    lo = f32(floor)
+    for r in range(rows):
+        for c in range(cols):
+            v = x[r, c] * gain[c]
+            out[r, c] = lo if v < lo else v  # np.maximum's: NaN stays NaN
+
+
+@nb.njit(cache=True, nogil=True)
+def remap_bilinear_u8(src, dst_flat, dst_idx, base, frac, step, wtab):
+    """Fixed-point bilinear gather (``cv2.remap`` with ``CV_16SC2`` maps on 8-bit images):
+    ``dst[dst_idx] = (sum_k w_k p_k + 2^14) >> 15`` over the 2 x 2 neighbours of ``base``;
+    ``step`` bit 0 / bit 1: the right / lower neighbour exists (else its weight is 0)."""
+    p = src.ravel()
+    w = src.shape[1]
+    for i in range(dst_idx.size):
+        b = base[i]
+        s = step[i]
+        dx = 1 if s & 1 else 0
+        dy = w if s & 2 else 0
+        t = frac[i]
+        acc = (np.int32(p[b]) * wtab[t, 0] + np.int32(p[b + dx]) * wtab[t, 1]
+               + np.int32(p[b + dy]) * wtab[t, 2] + np.int32(p[b + dy + dx]) * wtab[t, 3])
+        dst_flat[dst_idx[i]] = (acc + 16384) >> 15
+
+
+@nb.njit(cache=True, nogil=True)
+def gather(src, dst_flat, dst_idx, src_idx):
+    """``dst_flat[dst_idx] = src.ravel()[src_idx]`` (nearest-neighbour resampling)."""
+    p = src.ravel()
+    for i in range(dst_idx.size):
+        dst_flat[dst_idx[i]] = p[src_idx[i]]
+
+
+@nb.njit(cache=True, nogil=True)
+def spread_segments(n_rows, n_bins, row, u_a, u_b, energy, out):
+    """:func:`sim.sensors.sonar.echo_lines.spread_segments` in three passes: the kinks in
+    the order ``np.bincount`` met them (so each bin's float64 sum adds the same terms in the
+    same order), then per row the prefix sums as ``cv2.integral`` forms them (running row
+    sum added to the previous row's integral) and their row differences in ``out``'s type,
+    floored at 0."""
+    stride = n_bins + 2
+    acc = np.zeros(n_rows * stride)
+    m = row.size
+    nb_f = float(n_bins)
+    # segments: +w at fl + 1, then the fractional terms (lower ends first, then upper ends)
+    for part in range(3):
+        for end in range(2):
+            for i in range(m):
+                lo, hi = min(u_a[i], u_b[i]), max(u_a[i], u_b[i])
+                length = hi - lo
+                if length < 1e-9 or not (hi > 0.0) or not (lo < nb_f):
+                    continue
+                density = energy[i] / length
+                p = min(max(lo if end == 0 else hi, 0.0), nb_f)
+                w = density if end == 0 else -density
+                fl = np.floor(p)
+                base = row[i] * stride + int(fl)
+                if part == 0:
+                    acc[base + 1] += w
+                else:
+                    off = w * (1.0 - (p - fl))
+                    if part == 1:
+                        acc[base] += off
+                    else:
+                        acc[base + 1] += -off
+    # points: +E at their bin, -E at the next
+    for part in range(2):
+        for i in range(m):
+            lo, hi = min(u_a[i], u_b[i]), max(u_a[i], u_b[i])
+            if not (hi - lo < 1e-9):
+                continue
+            kp = np.floor(lo)
+            if not (kp >= 0.0 and kp < nb_f):
+                continue
+            base = row[i] * stride + int(kp)
+            if part == 0:
+                acc[base] += energy[i]
+            else:
+                acc[base + 1] += -energy[i]
+    prev = np.zeros(stride)  # the integral's previous row
+    zero = out.dtype.type(0)
+    r = 0
+    while r + 4 <= n_rows:  # four rows at a time: four independent running sums
+        s0 = s1 = s2 = s3 = 0.0
+        a0, a1, a2, a3 = r * stride, (r + 1) * stride, (r + 2) * stride, (r + 3) * stride
+        for x in range(n_bins):
+            s0 += acc[a0 + x]
+            s1 += acc[a1 + x]
+            s2 += acc[a2 + x]
+            s3 += acc[a3 + x]
+            p = prev[x]
+            c0 = p + s0
+            c1 = c0 + s1
+            c2 = c1 + s2
+            c3 = c2 + s3
+            t = out.dtype.type(p)
+            t0 = out.dtype.type(c0)
+            t1 = out.dtype.type(c1)
+            t2 = out.dtype.type(c2)
+            t3 = out.dtype.type(c3)
+            v0, v1, v2, v3 = t0 - t, t1 - t0, t2 - t1, t3 - t2
+            out[r, x] = zero if v0 < zero else v0
+            out[r + 1, x] = zero if v1 < zero else v1
+            out[r + 2, x] = zero if v2 < zero else v2
+            out[r + 3, x] = zero if v3 < zero else v3
+            prev[x] = c3
+        r += 4
+    while r < n_rows:
+        s0 = 0.0
+        for x in range(n_bins):
+            s0 += acc[r * stride + x]
+            c0 = prev[x] + s0
+            v0 = out.dtype.type(c0) - out.dtype.type(prev[x])
+            out[r, x] = zero if v0 < zero else v0
+            prev[x] = c0
+        r += 1
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def row_dot3(a, i, b, j):
+    """``a[i] . b[j]`` of two (N, 3) arrays summed as ``np.einsum("ij,ij->i")`` sums three
+    terms: ``(a0 b0 + a2 b2) + a1 b1``."""
+    return (a[i, 0] * b[j, 0] + a[i, 2] * b[j, 2]) + a[i, 1] * b[j, 1]
+
+
+@nb.njit(cache=True, nogil=True)
+def same_surface(d_a, n_a, o_a, v_a, ia, d_b, n_b, o_b, v_b, ib, chord_sin):
+    """:func:`sim.sensors.sonar.ray_fan.same_surface` of rows ``ia`` of the a arrays and
+    ``ib`` of the b arrays, with the same float64 operations."""
+    out = np.zeros(ia.size, dtype=np.bool_)
+    chord = np.empty((1, 3))
+    for k in range(ia.size):
+        i, j = ia[k], ib[k]
+        da, db = d_a[i], d_b[j]
+        if not (np.isfinite(da) and np.isfinite(db) and o_a[i] == o_b[j]):
+            continue
+        for c in range(3):
+            chord[0, c] = db * v_b[j, c] - da * v_a[i, c]
+        tol = chord_sin * np.sqrt(row_dot3(chord, 0, chord, 0)) + 1e-9
+        out[k] = abs(row_dot3(chord, 0, n_a, i)) <= tol and abs(row_dot3(chord, 0, n_b, j)) <= tol
+    return out
