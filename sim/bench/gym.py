@@ -10,8 +10,8 @@ Variants (each at its default decision interval, one process unless stated):
   across workers, and ``speedup``: that over the single env of the same run.
 
 Single-env figures time ``step`` only (resets are reported apart); vector figures
-include the workers' automatic resets and start after ``VECTOR_WARMUP_STEPS`` untimed steps
-(a fresh worker's first steps pay one-off costs the single env has already paid).
+include the workers' automatic resets. Both start after ``WARMUP_STEPS`` untimed steps (a
+fresh env's first steps pay one-off costs: the first sonar frames, caches).
 
 On a shared machine the wall-clock ``speedup`` says how many cores the vector env got, not
 how many it could use; CPU time tells the two apart. Each figure also carries
@@ -41,7 +41,7 @@ from scenarios.schema import Scenario
 from sim.envs.survey_env import SurveyEnv, SurveyEnvOptions
 from sim.envs.waypoint_env import WaypointEnv
 
-VECTOR_WARMUP_STEPS = 2
+WARMUP_STEPS = 2  # untimed steps after the first reset (one-off costs of a fresh env)
 SURVEY_ACTION = np.array([0.0, 0.05, 0.0], dtype=np.float32)  # 0.5 m/s, 0.75 deg/s turn, 2 m altitude
 
 
@@ -59,6 +59,10 @@ def _time_env(env: gym.Env, n_steps: int, dt_s: float, seed: int) -> dict[str, f
     t0 = time.perf_counter()
     env.reset(seed=seed)
     reset_s = [time.perf_counter() - t0]
+    for _ in range(WARMUP_STEPS):
+        _, _, term, trunc, _ = env.step(act())
+        if term or trunc:
+            env.reset()
     step_s = reset_cpu_s = 0.0
     # CPU time is read around the whole loop, not around each step: reading it is a system
     # call, where a loaded machine preempts, and per step that would move the waits for a core
@@ -105,7 +109,7 @@ def _time_vector(fn, n_envs: int, n_steps: int, dt_s: float, act_dim: int, const
 
     try:
         venv.reset(seed=list(range(n_envs)))
-        for _ in range(VECTOR_WARMUP_STEPS):
+        for _ in range(WARMUP_STEPS):
             venv.step(action())
         cpu0, t0 = _workers_cpu_s(venv), time.perf_counter()
         for _ in range(n_steps):

@@ -34,9 +34,10 @@ def test_gym_bench_reports_cpu_figures():
         single, vec = r[key], r["vector"][key]
         assert single["cpu_ms_per_step"] > 0.0
         assert vec["n_envs"] == 2 and vec["speedup"] > 0.0
-        assert vec["cpu_ms_per_step"] >= 0.0
-        assert 0.0 <= vec["worker_busy_fraction"] <= 1.2
+        assert vec["cpu_ms_per_step"] >= 0.0 and vec["worker_busy_fraction"] >= 0.0
     # a worker's sonar step costs about what the single env's does: n_envs by CPU time (loose:
-    # 10 ms clock ticks over ~0.1 s of CPU per worker)
-    assert 0.8 < r["vector"]["survey_sonar"]["cpu_speedup"] < 4.0
+    # 10 ms clock ticks over ~0.1 s of CPU per worker; the other variants run too few steps)
+    sonar = r["vector"]["survey_sonar"]
+    assert 0.8 < sonar["cpu_speedup"] < 4.0
+    assert sonar["worker_busy_fraction"] <= 1.3  # one thread a worker (CPU clock ticks of 10 ms)
     assert r["load_avg_1min"] is None or r["load_avg_1min"] >= 0.0
