@@ -58,8 +58,9 @@ def _gym(variant: str) -> Callable[[dict], str]:
 def _gym_vector(variant: str) -> Callable[[dict], str]:
     def fmt(r: dict) -> str:
         v = r["vector"][variant]
+        cpu = f", {v['cpu_speedup']:.2f}x by CPU time per step" if "cpu_speedup" in v else ""
         return (f"{_x(v['real_time_factor'])} real time over {v['n_envs']} envs, {v['speedup']:.2f}x one env "
-                f"of the same run")
+                f"of the same run{cpu}")
     return fmt
 
 

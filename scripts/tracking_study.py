@@ -61,6 +61,8 @@ def summarise(runs: list[dict]) -> dict:
     for key in ("fused_sonar_step_fraction", "target_in_fov_fraction", "min_distance_m"):
         v = np.array([r[key] for r in runs], dtype=float)
         out[key] = {"mean": float(np.nanmean(v)), "min": float(np.nanmin(v)), "max": float(np.nanmax(v))}
+    out["nees_horizontal"] = {m: {k: float(np.nanmean([r["nees_horizontal"][m][k] for r in runs]))
+                                  for k in ("mean", "above_95_fraction")} for m in ("sonar", "usbl", "fused")}
     roi = {k: sum(r["roi"][k] for r in runs) for k in ("bubble_clusters", "bubble_rejected", "target_clusters",
                                                         "target_kept")}
     roi["bubble_rejected_ci95"] = proportion_ci95(roi["bubble_rejected"], roi["bubble_clusters"])
@@ -132,6 +134,7 @@ def study(args) -> int:
             e = runs[-1]["errors_horizontal"]
             print(f"{name} seed {seed} (horizontal): " + ", ".join(f"{k} {e[k].get('mean_m', math.nan):.2f}" for k in ERROR_SETS)
                   + f"; sonar steps {runs[-1]['fused_sonar_step_fraction']:.2f}"
+                  + f"; fused NEES {runs[-1]['nees_horizontal']['fused']['mean']:.2f}"
                   + f"; bubble clusters {runs[-1]['roi']['bubble_clusters']}"
                   + f", breaths in view / apart {runs[-1].get('plume', {}).get('breath_frames_in_view', 0)}"
                   + f" / {runs[-1].get('plume', {}).get('breath_frames_apart', 0)}", flush=True)

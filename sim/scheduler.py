@@ -35,6 +35,7 @@ class SensorScheduler:
     def __init__(self, eps_s: float = 1e-9) -> None:
         self.eps_s = eps_s
         self._channels: dict[str, _Channel] = {}
+        self._next_any_s = math.inf  # earliest next_fire_s of any channel
         # (deliver_s, seq, name, message): ordered by time, then push order (seq is unique)
         self._queue: list[tuple[float, int, str, Any]] = []
         self._seq = 0
@@ -62,21 +63,26 @@ class SensorScheduler:
                 raise ValueError(f"sensor {name!r}: latency_s must be >= 0, got {latency_s}")
             latency = lambda _msg, _fixed=fixed: _fixed  # noqa: E731
         self._channels[name] = _Channel(name, 1.0 / rate_hz, latency, first_fire_s)
+        self._next_any_s = min(ch.next_fire_s for ch in self._channels.values())
 
     def reset(self, t_s: float = 0.0) -> None:
         self._queue.clear()
         self._seq = 0
         for ch in self._channels.values():
             ch.next_fire_s = t_s
+        self._next_any_s = t_s
 
     def due(self, t_s: float) -> list[str]:
         """Names of the sensors that fire at time ``t_s`` (each advances its clock)."""
+        if self._next_any_s > t_s + self.eps_s:  # most physics steps: nothing due
+            return []
         out = []
         for ch in self._channels.values():
             if ch.next_fire_s <= t_s + self.eps_s:
                 out.append(ch.name)
                 # Catch up without bursts if a sensor was starved.
                 ch.next_fire_s += ch.period_s * max(1, math.floor((t_s - ch.next_fire_s) / ch.period_s + 1e-9) + 1)
+        self._next_any_s = min((ch.next_fire_s for ch in self._channels.values()), default=math.inf)
         return out
 
     def push(self, name: str, t_s: float, message: Any) -> None:

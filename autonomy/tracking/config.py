@@ -16,7 +16,13 @@ class TrackingConfig(StrictModel):
     (paper 004 eq. 6); until the course is known (its 1 sigma below
     ``initiation_course_sigma_deg``) the filter runs a Cartesian constant-velocity model
     (``initiation_accel_noise_m2_per_s3``), whose Gaussian velocity prior is consistent where a
-    course drawn uniformly on the circle is not; ``roi_sigma`` scales the polar ROI half-widths (paper 004 eq. 16)."""
+    course drawn uniformly on the circle is not; ``roi_sigma`` scales the polar ROI half-widths (paper 004 eq. 16).
+
+    Sonar noise: ``sonar_range_sigma_m`` and ``sonar_azimuth_sigma_deg`` are the white part
+    (the image's resolution); the target's extent adds a part that is correlated from frame
+    to frame (which part of the body the echo shows): ``target_thickness_m / sqrt(12)`` along
+    the beam and ``target_size_m / sqrt(12)`` across it (a uniform over the extent), with the
+    correlation time ``sonar_error_correlation_s`` (see :meth:`TargetTracker.on_sonar`)."""
 
     enabled: bool = False
     mode: Literal["sonar", "usbl", "fused"] = "fused"
@@ -44,6 +50,12 @@ class TrackingConfig(StrictModel):
     sonar_range_sigma_m: float = Field(0.1, gt=0.0, le=10.0)
     sonar_azimuth_sigma_deg: float = Field(0.5, gt=0.0, le=20.0)
     sonar_vertical_beam_deg: float = Field(14.0, gt=0.0, le=90.0, description="elevation within the beam")
+    target_thickness_m: float = Field(
+        0.4, ge=0.0, le=10.0, description="the target's extent along the sonar beam (a diver: 0.4 m across): its echo "
+        "comes from the side facing the sonar, so a detection's range is taken as half of it short of the centre")
+    sonar_error_correlation_s: float = Field(
+        10.0, ge=0.0, le=600.0, description="correlation time of a detection's centre error from the target's extent "
+        "(which part of the body the echo shows changes as the target turns: about its manoeuvre time); 0: white")
     gate_probability: float = Field(0.999, gt=0.0, lt=1.0, description="chi-square gate on each update")
     usbl_rejections_to_restart: int = Field(3, ge=1, le=100, description="USBL fixes gated out in a row: restart")
     roi_sigma: float = Field(2.45, gt=0.0, le=10.0, description="ROI half-width in sigmas (2.45: 95 % in 2-D)")

@@ -34,7 +34,7 @@ from __future__ import annotations
 import bisect
 import logging
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -150,6 +150,7 @@ class TargetTracker:
         self._checkpoints: list[tuple[float, FloatArray, FloatArray] | None] = []
         self._base: tuple[float, FloatArray, FloatArray] | None = None  # state before the kept history
         self._seq = 0
+        self._last_sonar_t = -math.inf  # time of the previous sonar detection (its error's correlation)
         self.rejected: list[tuple[float, str]] = []
 
     @property
@@ -216,7 +217,21 @@ class TargetTracker:
         mode (no other depth cue), is kept as a pseudo-measurement. ``centre_sigma_m`` (1
         sigma, m) adds, in range and across the beam, the uncertainty of where the target's
         centre lies w.r.t. the detection (a target cut by the edge of the view shows only
-        part of itself)."""
+        part of itself; correlated from frame to frame as the extent's part below).
+
+        The target's echo comes from its side facing the sonar: the measured range is taken
+        as ``target_thickness_m / 2`` short of its centre (added back). The measurement
+        noise is the image's resolution (``sonar_range_sigma_m``, ``sonar_azimuth_sigma_deg``,
+        white) plus the target's extent, a uniform over it (``target_thickness_m / sqrt(12)``
+        along the beam, ``target_size_m / sqrt(12)`` across), whose error is correlated from
+        frame to frame (an AR(1) sequence, correlation ``rho = exp(-dt / tau)`` with ``dt``
+        the time since the previous detection and ``tau = sonar_error_correlation_s``): its
+        variance is inflated by ``(1 + rho) / (1 - rho)``, the factor by which such a
+        sequence's samples carry less information than independent ones (the variance of
+        the mean of n AR(1) samples is ``sigma^2 (1 + rho) / (n (1 - rho))`` for large n,
+        docs/references.md [Zwiers1995]), so
+        a detection after a gap counts fully and a run of frames counts as the independent
+        looks it holds."""
         if self.cfg.mode == "usbl":
             return False
         if not (math.isfinite(range_m) and math.isfinite(azimuth_rad) and range_m > 0.0):
@@ -229,14 +244,27 @@ class TargetTracker:
         sig_e2 = math.radians(cfg.sonar_vertical_beam_deg) ** 2 / 12.0
         if not (math.isfinite(centre_sigma_m) and centre_sigma_m >= 0.0):
             return self._refuse(t_s, f"sonar centre sigma not finite or < 0: {centre_sigma_m}")
-        c2 = centre_sigma_m**2
-        R = np.diag([cfg.sonar_range_sigma_m**2 + c2, math.radians(cfg.sonar_azimuth_sigma_deg) ** 2 + c2 / range_m**2,
-                     sig_e2])
+        z = np.array([range_m + 0.5 * cfg.target_thickness_m, azimuth_rad, elevation_rad])
+        k = self._correlation_inflation(float(t_s))
+        c2 = centre_sigma_m**2  # as correlated as the extent's part: the same cut from frame to frame
+        along2, across2 = k * (cfg.target_thickness_m**2 / 12.0 + c2), k * (cfg.target_size_m**2 / 12.0 + c2)
+        R = np.diag([cfg.sonar_range_sigma_m**2 + along2,
+                     math.radians(cfg.sonar_azimuth_sigma_deg) ** 2 + across2 / z[0] ** 2, sig_e2])
         ndim = 3 if cfg.mode == "sonar" else 2  # sonar only: the beam centre is its only depth cue
-        model = RelativeSpherical(pos + R_nb @ self._sonar_mount, R_nb @ self._R_b_sonar, ndim=ndim)
-        self._insert(_Event(float(t_s), self._next_seq(), SONAR, np.array([range_m, azimuth_rad, elevation_rad]), R,
-                            model))
+        head, R_nh = pos + R_nb @ self._sonar_mount, R_nb @ self._R_b_sonar
+        self._insert(_Event(float(t_s), self._next_seq(), SONAR, z, R, RelativeSpherical(head, R_nh, ndim=ndim)))
         return True
+
+    def _correlation_inflation(self, t_s: float) -> float:
+        """``(1 + rho) / (1 - rho)``, ``rho = exp(-dt / tau)``, for a sonar detection at ``t_s``
+        (``dt`` since the previous one, at least 1 ms); 1 for the first or with ``tau = 0``."""
+        tau = self.cfg.sonar_error_correlation_s
+        dt = abs(t_s - self._last_sonar_t)
+        self._last_sonar_t = t_s
+        if tau <= 0.0 or not math.isfinite(dt):
+            return 1.0
+        rho = math.exp(-max(dt, 1e-3) / tau)
+        return (1.0 + rho) / (1.0 - rho)
 
     # ------------------------------------------------------------------ outputs
     @property
@@ -262,7 +290,9 @@ class TargetTracker:
 
     def roi(self, t_s: float | None = None) -> PolarRoi | None:
         """Polar ROI in the sonar frame at ``t_s`` (default: now), or None before the first
-        estimate or without a pose then."""
+        estimate or without a pose then. It is centred where the target's echo is expected:
+        its near side, ``target_thickness_m / 2`` short of the estimated centre (the
+        measurement model of :meth:`on_sonar`)."""
         t = self.now_s if t_s is None else float(t_s)
         est = self.estimate(t)
         pose = self.pose_at(t)
@@ -271,10 +301,11 @@ class TargetTracker:
         pos, R_nb = pose
         x, P = est
         try:
-            return polar_roi(x[POS], P[POS, POS], pos + R_nb @ self._sonar_mount, R_nb @ self._R_b_sonar,
-                             self.cfg.roi_sigma, self.cfg.target_size_m)
+            roi = polar_roi(x[POS], P[POS, POS], pos + R_nb @ self._sonar_mount, R_nb @ self._R_b_sonar,
+                            self.cfg.roi_sigma, self.cfg.target_size_m)
         except ValueError:
             return None
+        return replace(roi, range_m=max(roi.range_m - 0.5 * self.cfg.target_thickness_m, 0.0))
 
     def used_counts(self) -> dict[str, int]:
         """Accepted updates per kind in the kept history."""

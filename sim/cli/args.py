@@ -27,6 +27,7 @@ frame_count = _checked(int, lambda v: 1 <= v <= MAX_DATASET_FRAMES, f"a whole nu
 non_negative_int = _checked(int, lambda v: 0 <= v <= 2**63 - 1, "a whole number from 0 to 2**63-1")
 probability = _checked(float, lambda v: math.isfinite(v) and 0.0 <= v <= 1.0, "a number from 0 to 1")
 positive_float = _checked(float, lambda v: math.isfinite(v) and v > 0.0, "a finite number > 0")
+non_negative_float = _checked(float, lambda v: math.isfinite(v) and v >= 0.0, "a finite number >= 0")
 
 
 def size_hw(text: str) -> tuple[int, int]:

@@ -5,7 +5,9 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from autonomy.frames import rot_from_euler
 from autonomy.localization import fls_visibility
+from autonomy.sonar_frame import sonar_to_body_rotation, sonar_to_spherical
 from sim.envs.area import OperatingArea
 
 
@@ -40,6 +42,7 @@ class CoverageGrid:
         self._mount_rpy = np.asarray(mount_rpy_rad, dtype=float)
         self._fan = dict(range_min_m=float(range_min_m), range_max_m=float(range_max_m), fov_rad=float(fov_rad),
                          vertical_fov_rad=float(vertical_fov_rad))
+        self._R_bs = sonar_to_body_rotation(self._mount_rpy)
         self.covered = np.zeros(rows * cols, dtype=bool)
 
     def reset(self) -> None:
@@ -54,6 +57,35 @@ class CoverageGrid:
         if n_new:
             self.covered |= new
         return n_new
+
+    def observe_many(self, pos_ned: ArrayLike, rpy_rad: ArrayLike) -> int:
+        """Mark the cells inside the fan at any of ``K`` poses (``pos_ned`` (K, 3) m NED,
+        ``rpy_rad`` (K, 3) rad); returns how many are new. Same cells and count as
+        :meth:`observe` called on each pose in turn (the fan test of
+        :func:`autonomy.localization.fls_visibility` with no margin, the same products), but
+        one batched evaluation over the cells not yet covered.
+
+        Raises:
+            ValueError: ``pos_ned`` and ``rpy_rad`` not both of shape (K, 3).
+        """
+        pos = np.asarray(pos_ned, dtype=float)
+        rpy = np.asarray(rpy_rad, dtype=float)
+        if pos.ndim != 2 or pos.shape[1] != 3 or rpy.shape != pos.shape:
+            raise ValueError(f"observe_many needs pos_ned and rpy_rad of shape (K, 3), got {pos.shape}, {rpy.shape}")
+        todo = np.flatnonzero(~self.covered)
+        if todo.size == 0 or len(pos) == 0:
+            return 0
+        R_nb = np.stack([rot_from_euler(*angles) for angles in rpy.tolist()])  # (K, 3, 3)
+        R_ns = R_nb @ self._R_bs
+        origin = pos + R_nb @ self._mount_pos  # (K, 3) sonar origin, NED
+        r, a, e = sonar_to_spherical((self.centres_ned[todo] - origin[:, None, :]) @ R_ns)  # (K, M) each
+        fan = self._fan
+        seen = (r >= fan["range_min_m"]) & (r <= fan["range_max_m"])
+        seen &= np.abs(a) <= 0.5 * fan["fov_rad"]
+        seen &= np.abs(e) <= 0.5 * fan["vertical_fov_rad"]
+        new = todo[seen.any(axis=0)]
+        self.covered[new] = True
+        return int(new.size)
 
     @property
     def fraction(self) -> float:

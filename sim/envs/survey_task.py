@@ -349,16 +349,24 @@ class SurveyTask:
         speed = s_lo + 0.5 * (a[0] + 1.0) * (s_hi - s_lo)
         altitude = h_lo + 0.5 * (a[2] + 1.0) * (h_hi - h_lo)
         dt = m.autonomy_dt_s
-        effort = 0.0
-        n_new_cells = 0
         collided = False
-        for _ in range(self.ticks_per_step):
-            self._heading_sp_rad = float(wrap_angle(self._heading_sp_rad + a[1] * self.max_yaw_rate_radps * dt))
-            rec = m.step(Setpoint(float(speed), self._heading_sp_rad, altitude_m=float(altitude)))
-            effort += float(np.mean(np.square(rec.thruster_cmd))) * dt
-            n_new_cells += self.coverage.observe(rec.nav.pos_ned, rec.nav.rpy_rad)
+        n_ticks = self.ticks_per_step
+        poses = np.empty((n_ticks, 2, 3))  # per tick: navigation position (NED m) and attitude (rad)
+        cmds = np.empty((n_ticks, len(m.thruster_cmd)))
+        yaw_step = a[1] * self.max_yaw_rate_radps * dt
+        speed, altitude = float(speed), float(altitude)
+        for k in range(n_ticks):
+            self._heading_sp_rad = float(wrap_angle(self._heading_sp_rad + yaw_step))
+            rec = m.step(Setpoint(speed, self._heading_sp_rad, altitude_m=altitude))
+            cmds[k] = rec.thruster_cmd
+            poses[k, 0] = rec.nav.pos_ned
+            poses[k, 1] = rec.nav.rpy_rad
             if m.physics.data.ncon and m.physics.vehicle_in_contact():
                 collided = True
+        effort = 0.0  # integral of mean(cmd^2), summed tick by tick
+        for sq in np.mean(np.square(cmds), axis=1).tolist():
+            effort += sq * dt
+        n_new_cells = self.coverage.observe_many(poses[:, 0], poses[:, 1])
         self._nav = rec.nav
         self._n_steps += 1
         t_s = self._n_steps * self.decision_interval_s

@@ -31,13 +31,15 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.stats import chi2
 
 from autonomy.tracking.onboard import MODES, TrackingStack
 from sim.movers import DIVER_HALF_LENGTH_M, DIVER_RADIUS_M, VEHICLE_HALF_SIZE_M
 
 FloatArray = NDArray[np.float64]
 ERROR_SETS = ("sonar", "sonar_when_available", "usbl", "fused")
-_COLS = 11
+NEES2_95 = float(chi2.ppf(0.95, 2))  # chi-square(2) 95 % point
+_COLS = 14
 
 
 class TrackingEvaluation:
@@ -73,7 +75,8 @@ class TrackingEvaluation:
         self.R_bs = np.asarray(R_bs, dtype=float)
         self.fov_rad, self.window_m, self.vbeam_rad = float(fov_rad), tuple(window_m), float(vertical_beam_rad)
         self.warmup_s, self.match_m = float(warmup_s), float(match_m)
-        self.rows: list[tuple[float, ...]] = []  # t, err x3 modes, sonar_avail, fused_sonar, in_fov, distance, horizontal err x3
+        self.rows: list[tuple[float, ...]] = []  # t, err x3 modes, sonar_avail, fused_sonar, in_fov, distance,
+        # horizontal err x3, horizontal NEES x3
         self.primary_est_ned: list[tuple[float, float, float, float]] = []  # t, NED of the primary filter's estimate
         self._poses: dict[int, tuple[FloatArray, FloatArray]] = {}
         self._n_results = 0
@@ -113,11 +116,12 @@ class TrackingEvaluation:
             self._plume_view(res)
             self._label(res)
         tgt = np.asarray(self.target_pos_at(t), dtype=float)
-        errs, errs_h = [], []
+        errs, errs_h, nees_h = [], [], []
         for m in MODES:
             est = self.stack.trackers[m].estimate(t)
             errs.append(float(np.linalg.norm(est[0][:3] - tgt)) if est is not None else math.nan)
             errs_h.append(float(np.linalg.norm(est[0][:2] - tgt[:2])) if est is not None else math.nan)
+            nees_h.append(horizontal_nees(est[0][:2] - tgt[:2], est[1][:2, :2]) if est is not None else math.nan)
             if m == self.stack.cfg.mode and est is not None:
                 self.primary_est_ned.append((t, *(float(v) for v in est[0][:3])))
         sonar_avail = any(r.chosen["sonar"] is not None for r in results)
@@ -126,7 +130,7 @@ class TrackingEvaluation:
         in_fov = (abs(a) <= 0.5 * self.fov_rad and self.window_m[0] <= r <= self.window_m[1]
                   and abs(e) <= 0.5 * self.vbeam_rad)
         self.rows.append((t, *errs, float(sonar_avail), float(fused_sonar), float(in_fov),
-                          float(np.linalg.norm(tgt - truth.pos_ned)), *errs_h))
+                          float(np.linalg.norm(tgt - truth.pos_ned)), *errs_h, *nees_h))
 
     def _pose_at(self, t_s: float) -> tuple[FloatArray, FloatArray]:
         pose = self._poses.get(int(round(t_s * 1000)))
@@ -251,9 +255,25 @@ class TrackingEvaluation:
                     "target_chosen_fraction": self.n_target_chosen / self.n_frames_with_target
                     if self.n_frames_with_target else math.nan, "accepted_bubbles": list(self.accepted_bubbles)},
             "plume": self.plume_metrics(),
+            "nees_horizontal": self.nees_metrics(),
             "target_in_fov_fraction": float(a[:, 6].mean()) if len(a) else math.nan,
             "min_distance_m": float(a[:, 7].min()) if len(a) else math.nan,
         }
+
+    def nees_metrics(self) -> dict[str, dict[str, float]]:
+        """Consistency of each filter after the warm-up: mean horizontal (north, east) NEES
+        (2 for a consistent filter) and the fraction of ticks above the chi-square(2) 95 %
+        point (0.05 for a consistent filter); ticks are correlated, so these are figures to
+        read, not a test."""
+        a = np.array(self.rows, dtype=float).reshape(-1, _COLS)
+        a = a[a[:, 0] >= self.warmup_s]
+        out = {}
+        for i, m in enumerate(MODES):
+            v = a[:, 11 + i]
+            v = v[np.isfinite(v)]
+            out[m] = {"mean": float(v.mean()) if v.size else math.nan,
+                      "above_95_fraction": float(np.mean(v > NEES2_95)) if v.size else math.nan}
+        return out
 
     def plume_metrics(self) -> dict[str, Any]:
         """What the sonar could see of the plume: sonar frames, (frame, breath) pairs with a
@@ -293,6 +313,16 @@ class TrackingEvaluation:
         fig.tight_layout()
         fig.savefig(error_png, dpi=110)
         error_boxplot_png(self.error_sets(), box_png, title or "error sets", ylabel="3-D position error (m)")
+
+
+def horizontal_nees(err_ne_m: FloatArray, covar_ne_m2: FloatArray) -> float:
+    """Normalised estimation error squared ``e^T P^-1 e`` of a horizontal error (2,) m with
+    its covariance (2, 2) m^2 (chi-square with 2 degrees of freedom for a consistent filter;
+    Bar-Shalom, Li and Kirubarajan 2001 section 5.4); NaN for a singular covariance."""
+    try:
+        return float(err_ne_m @ np.linalg.solve(covar_ne_m2, err_ne_m))
+    except np.linalg.LinAlgError:
+        return math.nan
 
 
 def error_boxplot_png(sets: dict[str, FloatArray], path: Path, title: str, ylabel: str = "position error (m)") -> None:

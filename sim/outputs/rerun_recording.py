@@ -20,11 +20,17 @@ Scanning-sonar entities (``<name>`` the sensor entry's name):
   fix, the echo points it used, the fitted circle or the wall segments with their 95 % rho
   bands (navigation frame of the estimate before the fix) and the fixed position.
 
+The true, estimated and other vehicles' paths are ``world/path/<name>/<k>``: line strips of
+at most ``path_chunk_points`` points each, the last one re-logged every ``path_every_s`` as it
+grows, so the recording and the recorder's memory grow linearly with mission time (re-logging
+the whole path each time grew the file with the square of it).
+
 An observer of the mission loop; it streams to an ``.rrd`` file as the mission runs.
 """
 
 from __future__ import annotations
 
+from datetime import timedelta
 from pathlib import Path
 
 import cv2
@@ -44,6 +50,44 @@ from sim.sensors.msis_scan import ScanImage
 from sim.target_meshes import target_mesh
 
 
+# The stream's batcher cuts a chunk per entity at every flush (rerun's default: every 0.2 s of
+# wall clock), and the recording process's memory grows with the number of chunks written
+# (measured: the same simulated hour of logging stays flat in large chunks and grows 87 MB in
+# 2-row chunks), so a mission running at a few times real time grew 150-200 MB per simulated
+# hour. Flushing every 10 s (or 8 MiB) makes the chunks 50x fewer and larger; what waits for
+# a flush stays within the 8 MiB.
+RECORDING_FLUSH_TICK_S = 10.0
+RECORDING_FLUSH_BYTES = 8 * 2**20
+
+
+class _GrowingPath:
+    """A path logged as consecutive line strips ``<entity>/0``, ``<entity>/1``, ... of at most
+    ``chunk_points`` points (each strip starts at the previous one's last point); only the
+    strip still growing (and one filled since the last :meth:`log`) is kept and logged."""
+
+    def __init__(self, entity: str, color: list[int], chunk_points: int) -> None:
+        self.entity, self.color, self.chunk_points = entity, color, max(int(chunk_points), 2)
+        self._points: list[list[float]] = []
+        self._filled: list[tuple[int, list[list[float]]]] = []  # (index, points) not yet logged in full
+        self._k = 0
+
+    def append(self, pos_ned) -> None:
+        """Add one (3,) NED position, m."""
+        if len(self._points) >= self.chunk_points:
+            self._filled.append((self._k, self._points))
+            self._k += 1
+            self._points = [self._points[-1]]
+        self._points.append([float(x) for x in pos_ned])
+
+    def log(self, rec, rr) -> None:
+        """Log the strips filled since the last call, then the growing one."""
+        for k, points in self._filled:
+            rec.log(f"{self.entity}/{k}", rr.LineStrips3D([np.asarray(points)], colors=[self.color]))
+        self._filled.clear()
+        if len(self._points) > 1 or self._k == 0 and self._points:
+            rec.log(f"{self.entity}/{self._k}", rr.LineStrips3D([np.asarray(self._points)], colors=[self.color]))
+
+
 class RerunRecorder:
     """Streams a mission into ``path`` (a rerun ``.rrd`` file).
 
@@ -52,6 +96,7 @@ class RerunRecorder:
         fls_every: log every n-th FLS frame (1 = all).
         fls_scale: resize factor for logged fan images (JPEG-encoded).
         path_every_s: how often the path line strips are re-logged.
+        path_chunk_points: points per logged path strip (10 Hz steps: 60 s a strip).
         msis_point_threshold: raw intensity (uint8) from which a scanning-sonar sample is
             logged as a point.
         msis_max_points: at most this many (max-pooled) bins per ping.
@@ -63,7 +108,7 @@ class RerunRecorder:
     """
 
     def __init__(self, path: Path, *, fls_every: int = 1, fls_scale: float = 0.5, path_every_s: float = 2.0,
-                 msis_point_threshold: int = 80, msis_max_points: int = 200, msis_image_every: int = 10,
+                 path_chunk_points: int = 600, msis_point_threshold: int = 80, msis_max_points: int = 200, msis_image_every: int = 10,
                  msis_image_px: int = 256, scorer=None) -> None:
         import rerun as rr
 
@@ -73,10 +118,12 @@ class RerunRecorder:
         self.fls_every = max(int(fls_every), 1)
         self.fls_scale = float(fls_scale)
         self.path_every_s = float(path_every_s)
-        self._rec = rr.RecordingStream("auvsim")
-        self._true: list[np.ndarray] = []
-        self._others: dict[str, list[np.ndarray]] = {}
-        self._est: list[np.ndarray] = []
+        self._rec = rr.RecordingStream("auvsim", batcher_config=rr.ChunkBatcherConfig(
+            flush_tick=timedelta(seconds=RECORDING_FLUSH_TICK_S), flush_num_bytes=RECORDING_FLUSH_BYTES))
+        self.path_chunk_points = int(path_chunk_points)
+        self._true = _GrowingPath("world/path/true", [40, 120, 220], self.path_chunk_points)
+        self._est = _GrowingPath("world/path/estimated", [240, 140, 30], self.path_chunk_points)
+        self._others: dict[str, _GrowingPath] = {}
         self._last_path_t = -np.inf
         self._n_fls = 0
         self._frame_logged = False
@@ -128,8 +175,8 @@ class RerunRecorder:
         rec.set_time("sim_time", duration=r.t_s)
         tr = r.truth
         rec.log("world/vehicle", rr.Transform3D(translation=tr.pos_ned, quaternion=_xyzw(quat_from_rot(tr.R_nb))))
-        self._true.append(np.asarray(tr.pos_ned, dtype=float))
-        self._est.append(np.asarray(r.nav.pos_ned, dtype=float))
+        self._true.append(tr.pos_ned)
+        self._est.append(r.nav.pos_ned)
         err = float(np.linalg.norm(tr.pos_ned[:2] - r.nav.pos_ned[:2]))
         rec.log("nav/horizontal_error_m", rr.Scalars(err))
         rec.log("nav/sigma_horizontal_m", rr.Scalars(float(np.sqrt(np.trace(r.nav.cov_pos_ned[:2, :2])))))
@@ -137,13 +184,17 @@ class RerunRecorder:
         for name, other in r.others.items():
             rec.log(f"world/vehicles/{name}", rr.Transform3D(translation=other.pos_ned,
                                                              quaternion=_xyzw(quat_from_rot(other.R_nb))))
-            self._others.setdefault(name, []).append(np.asarray(other.pos_ned, dtype=float))
+            if name not in self._others:
+                self._others[name] = _GrowingPath(f"world/path/{name}", [60, 200, 90], self.path_chunk_points)
+            self._others[name].append(other.pos_ned)
         if r.t_s - self._last_path_t >= self.path_every_s:
             self._last_path_t = r.t_s
-            for name, path in self._others.items():
-                rec.log(f"world/path/{name}", rr.LineStrips3D([np.asarray(path)], colors=[[60, 200, 90]]))
-            rec.log("world/path/true", rr.LineStrips3D([np.asarray(self._true)], colors=[[40, 120, 220]]))
-            rec.log("world/path/estimated", rr.LineStrips3D([np.asarray(self._est)], colors=[[240, 140, 30]]))
+            self._log_paths()
+
+    def _log_paths(self) -> None:
+        rr, rec = self._rr, self._rec
+        for path in (*self._others.values(), self._true, self._est):
+            path.log(rec, rr)
 
     def on_message(self, name: str, msg: Any) -> None:
         if isinstance(msg, FlsRender):
@@ -291,10 +342,8 @@ class RerunRecorder:
                                                  array_format=rr.Box2DFormat.XYXY, colors=colours))
 
     def on_end(self, summary: MissionSummary) -> None:
-        rr, rec = self._rr, self._rec
-        if self._true:
-            rec.log("world/path/true", rr.LineStrips3D([np.asarray(self._true)], colors=[[40, 120, 220]]))
-            rec.log("world/path/estimated", rr.LineStrips3D([np.asarray(self._est)], colors=[[240, 140, 30]]))
+        rec = self._rec
+        self._log_paths()
         rec.flush()
         rec.disconnect()
 

@@ -99,7 +99,8 @@ def _simulate_consistent_run(seed, mode, t_end=40.0):
     cfg = TrackingConfig(enabled=True, mode=mode, transponder="diver", course_rate_noise_rad2_per_s3=0.001,
                          surge_noise_m2_per_s3=0.002, heave_noise_m2_per_s3=0.0005, pos_noise_m2_per_s=0.001,
                          usbl_range_sigma_m=0.2, usbl_range_sigma_frac=0.0, usbl_angle_sigma_deg=1.5,
-                         usbl_angle_sigma_deg_per_100m=0.0, target_size_m=0.0,
+                         usbl_angle_sigma_deg_per_100m=0.0, target_size_m=0.0, target_thickness_m=0.0,
+                         sonar_error_correlation_s=0.0,  # the synthetic sonar here: a point target, white noise
                          initiation_accel_noise_m2_per_s3=0.003, initial_surge_mps=0.0 if mode != "usbl" else 0.3,
                          initial_surge_sigma_mps=0.3 if mode != "usbl" else 0.1)
     kin = TargetKinematics(cfg.pos_noise_m2_per_s, cfg.course_rate_noise_rad2_per_s3, cfg.surge_noise_m2_per_s3,

@@ -227,8 +227,8 @@ def test_polar_roi_outline_follows_its_range_and_azimuth_bounds():
 def test_sonar_centre_sigma_widens_the_measurement_noise():
     """A detection whose centre is uncertain by ``centre_sigma_m`` moves the estimate less:
     the update equals a Kalman update with R + diag(c^2, c^2 / r^2) (independent algebra on
-    the 2-D position), and a huge ``c`` leaves the prior."""
-    cfg = TrackingConfig(mode="fused")
+    the 2-D position), and a huge ``c`` leaves the prior (a point target: no extent terms)."""
+    cfg = TrackingConfig(mode="fused", target_thickness_m=0.0, target_size_m=0.0)
 
     def run(c):
         tr = TargetTracker(cfg)

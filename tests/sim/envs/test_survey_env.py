@@ -86,6 +86,32 @@ def test_coverage_grid_matches_fan_geometry():
     assert grid.fraction == pytest.approx(expected.mean())
 
 
+def test_coverage_observe_many_is_observe_per_pose():
+    """The batched coverage test marks the cells the per-pose fan predicate
+    (autonomy.localization.fls_visibility) marks, and counts them the same, from any start."""
+    area = OperatingArea(np.array([-30.0, -30.0]), np.array([30.0, 30.0]), 0.0)
+    depth = lambda n, e: 4.0 + 0.05 * np.asarray(n) - 0.03 * np.asarray(e)  # noqa: E731  sloping seabed
+    kw = dict(range_min_m=1.0, range_max_m=30.0, fov_rad=math.radians(130.0), vertical_fov_rad=math.radians(20.0))
+    a = CoverageGrid(area, (24, 24), depth, (0.6, 0.0, 0.2), (0.0, math.radians(15.0), 0.0), **kw)
+    b = CoverageGrid(area, (24, 24), depth, (0.6, 0.0, 0.2), (0.0, math.radians(15.0), 0.0), **kw)
+    rng = np.random.default_rng(7)
+    for _ in range(40):
+        start = rng.random(a.covered.size) < rng.uniform(0.0, 0.9)
+        a.covered[:], b.covered[:] = start, start
+        pos = np.array([rng.uniform(-30, 30), rng.uniform(-30, 30), rng.uniform(0.5, 3.0)]) + np.cumsum(
+            rng.normal(0.0, 0.3, (10, 3)), axis=0)
+        rpy = np.column_stack([rng.normal(0, 0.05, 10), rng.normal(0, 0.05, 10),
+                               rng.uniform(-math.pi, math.pi) + np.cumsum(rng.normal(0, 0.05, 10))])
+        n_each = sum(a.observe(p_, r_) for p_, r_ in zip(pos, rpy))
+        assert b.observe_many(pos, rpy) == n_each
+        np.testing.assert_array_equal(a.covered, b.covered)
+    assert a.fraction > 0.3
+    a.covered[:] = True
+    assert a.observe_many(pos, rpy) == 0
+    with pytest.raises(ValueError, match="shape"):
+        a.observe_many(pos, rpy[:, :2])
+
+
 @dataclass
 class _Obj:
     id: int
