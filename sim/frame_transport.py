@@ -14,6 +14,7 @@ not fit a slot travels in band, slower but whole.
 from __future__ import annotations
 
 import io
+import multiprocessing as mp
 import pickle
 from multiprocessing.shared_memory import SharedMemory
 from typing import Any
@@ -21,6 +22,7 @@ from typing import Any
 import numpy as np
 
 OUT_OF_BAND_MIN_BYTES = 32 * 1024  # smaller arrays stay in the pickle
+PARENT_CHECK_S = 1.0  # a writer waiting for a free slot checks its parent this often
 
 
 class _Pickler(pickle.Pickler):
@@ -93,8 +95,16 @@ class FrameRing:
 
     def put(self, conn: Any, obj: Any, shared_ids: dict[int, str] | None = None) -> None:
         """Send ``obj`` over ``conn``, its large arrays through the next slot (waits for a free
-        one); ``shared_ids``: ``id(object) -> name`` of the objects sent by reference."""
-        self._free.acquire()
+        one); ``shared_ids``: ``id(object) -> name`` of the objects sent by reference.
+
+        Raises:
+            EOFError: this process's parent ended while it waited for a slot (the reader will
+                never free one; a worker must not outlive the mission process).
+        """
+        parent = mp.parent_process()
+        while not self._free.acquire(timeout=PARENT_CHECK_S):
+            if parent is not None and not parent.is_alive():
+                raise EOFError("the parent process ended while this one waited for a free slot")
         buf = io.BytesIO()
         _Pickler(buf, self, self._next_put, shared_ids or {}).dump(obj)
         self._next_put = (self._next_put + 1) % self.slots

@@ -34,6 +34,7 @@ import io
 import multiprocessing as mp
 import os
 import pickle
+import sys
 from collections import deque
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -53,6 +54,7 @@ RING_SLOTS = 4  # frames in flight between two processes
 CAPTURES_IN_FLIGHT = 2 * RING_SLOTS  # captures sent and not yet rendered before a capture waits
 STOP_TIMEOUT_S = 10.0  # wait for a worker to end before terminating it
 THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
+NO_MAIN_GUARD_EXIT = 86  # a worker's exit status when spawn found the script unguarded (see SonarPipeline)
 
 
 class PipelineError(RuntimeError):
@@ -105,12 +107,22 @@ class SonarPipeline:
         frames: send each rendered frame back to this process (observers that read them).
         slots: frames in flight in each shared-memory ring.
 
+    The workers start with ``spawn``, which runs the main script again in each worker: a script
+    that builds the pipeline (a ``Mission(workers=2)``) outside ``if __name__ == "__main__":``
+    would build it again there. Built in a worker starting up, the pipeline ends that worker
+    quietly with :data:`NO_MAIN_GUARD_EXIT`, and the mission process raises one
+    :class:`PipelineError` saying so.
+
     Raises:
         ValueError: ``slots`` < 1.
+        PipelineError: (from the calls below) a worker failed, ended, or found the main script
+            unguarded.
     """
 
     def __init__(self, physics: Physics, sonar: Sensor, perception: Any, *, frames: bool = True,
                  slots: int = RING_SLOTS) -> None:
+        if getattr(mp.current_process(), "_inheriting", False):  # a spawned worker re-running the script
+            raise SystemExit(NO_MAIN_GUARD_EXIT)
         if slots < 1:
             raise ValueError(f"SonarPipeline needs slots >= 1, got {slots}")
         self.physics, self.sonar, self.perception = physics, sonar, perception
@@ -148,9 +160,9 @@ class SonarPipeline:
         self._procs = [
             ctx.Process(target=render_main, name="auvsim-sonar-render", daemon=True,
                         args=(render_end, between_w, self._rings[0], frames_w,
-                              self._rings[1] if self.frames else None, render_setup)),
+                              self._rings[1] if self.frames else None)),
             ctx.Process(target=perception_main, name="auvsim-perception", daemon=True,
-                        args=(perceive_end, between_r, self._rings[0], buf.getvalue())),
+                        args=(perceive_end, between_r, self._rings[0])),
         ]
         try:
             with _one_thread_per_library():
@@ -163,6 +175,14 @@ class SonarPipeline:
             for end in (render_end, perceive_end, between_r, between_w, frames_w):
                 if end is not None:
                     end.close()  # the workers hold them now: their ends close when they end
+        # the setups (megabytes) go over the connections, not with the start: spawn writes the
+        # start's data to the new process while holding the read end itself, so a worker that
+        # ends before reading (an unguarded main script) would leave a large write hanging
+        for conn, setup in ((self._render, render_setup), (self._perceive, buf.getvalue())):
+            try:
+                conn.send_bytes(setup)
+            except OSError:
+                self._fail(self._why_ended())
 
     @staticmethod
     def _frame_bytes(sonar: Sensor) -> tuple[int, int]:
@@ -259,7 +279,7 @@ class SonarPipeline:
                 if p.pid is not None:
                     p.join(STOP_TIMEOUT_S)
                 if p.is_alive():
-                    p.terminate()
+                    p.kill()  # the workers ignore SIGTERM
                     p.join()
             for conn in (self._render, self._perceive, self._frames_in):
                 if conn is not None:
@@ -278,20 +298,25 @@ class SonarPipeline:
     def _send(self, conn: Any, msg: tuple) -> None:
         try:
             conn.send(msg)
-        except (OSError, ValueError) as e:
-            self._fail(f"cannot reach the {'render' if conn is self._render else 'perception'} worker: {e}")
+        except (OSError, ValueError):
+            self._fail(self._why_ended())
 
     def _receive(self, block: bool, want_state: bool = False) -> list[tuple[Any, Any]]:
         """Read what the workers sent (``block``: wait for at least one message); results and
-        frames are kept by frame index; ``state`` replies are returned as (connection, message)."""
+        frames are kept by frame index; ``state`` replies are returned as (connection, message).
+        A worker that ended (its process sentinel ready) with nothing left to read fails the
+        pipeline."""
         sources = [c for c in (self._render, self._perceive, self._frames_in) if c is not None]
+        ended = {p.sentinel: p for p in self._procs}
         states = []
         got = False
         while True:
-            ready = wait_any(sources, timeout=None if (block and not got) else 0)
+            ready = wait_any(sources + list(ended), timeout=None if (block and not got) else 0)
             if not ready:
                 return states
             for conn in ready:
+                if conn in ended:
+                    continue
                 try:
                     if conn is self._frames_in:
                         k, render = self._rings[1].get(conn, self._shared)
@@ -299,8 +324,8 @@ class SonarPipeline:
                         got = True
                         continue
                     msg = conn.recv()
-                except EOFError:
-                    self._fail("a sonar pipeline worker ended unexpectedly")
+                except (EOFError, OSError):
+                    self._fail(self._why_ended())
                 if msg[0] == "error":
                     self._fail(f"sonar pipeline worker failed:\n{msg[1]}")
                 if msg[0] == "rendered":
@@ -310,9 +335,23 @@ class SonarPipeline:
                 elif msg[0] == "state" and want_state:
                     states.append((conn, msg))
                 got = True
+            if any(r in ended for r in ready) and not any(c.poll() for c in sources):
+                self._fail(self._why_ended())
             if want_state and states:
                 return states
 
+    def _why_ended(self) -> str:
+        """Why a worker ended without a word: the unguarded main script, or its exit status."""
+        for p in self._procs:
+            p.join(1.0)
+            if p.exitcode == NO_MAIN_GUARD_EXIT:
+                main = getattr(sys.modules.get("__main__"), "__file__", None) or "the main script"
+                return (f"the sonar workers (workers > 1) start with spawn, which runs {main} again in each "
+                        f"worker, and there it builds the mission again: put the code that builds and runs "
+                        f"the mission under `if __name__ == \"__main__\":` (or use workers=1)")
+        codes = ", ".join(f"{p.name} {p.exitcode}" for p in self._procs if p.exitcode is not None)
+        return f"a sonar pipeline worker ended unexpectedly (exit status: {codes or 'unknown'})"
+
     def _fail(self, why: str) -> None:
         self.close(sync=False)
-        raise PipelineError(why)
+        raise PipelineError(why) from None

@@ -2,8 +2,10 @@
 
 Each runs a loop over messages from the mission process (``multiprocessing`` connections,
 ``spawn`` start) and ends on ``("stop",)`` or when the mission process's end of its connection
-closes (the mission process died), so none outlives it. Both ignore SIGINT: Ctrl-C reaches the
-mission process, which stops them after handing on what is finished. A worker's exception is
+closes (the mission process died), so none outlives it. Both ignore SIGINT and SIGTERM: Ctrl-C
+(or a SIGTERM sent to the whole process group) reaches the mission process, which stops them
+after handing on what is finished; a killed mission process ends them through the closed
+connection (or, for a writer waiting on a full ring, :meth:`FrameRing.put`'s parent check). A worker's exception is
 sent to the mission process as ``("error", traceback text)``, then the worker ends.
 
 Render worker (:func:`render_main`): holds its own ``MjData`` over a copy of the mission's
@@ -38,10 +40,11 @@ from sim.frame_transport import FrameRing, shared_objects
 
 
 def _worker_start() -> None:
-    """Ignore Ctrl-C (the mission process stops the worker) and keep OpenCV to one thread."""
+    """Ignore Ctrl-C and SIGTERM (the mission process stops the worker) and keep OpenCV to one thread."""
     import cv2
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
     cv2.setNumThreads(1)
 
 
@@ -53,9 +56,11 @@ def _report(conn: Any) -> None:
 
 
 def render_main(conn: Any, to_perception: Any, ring_perception: FrameRing, to_main: Any,
-                ring_main: FrameRing | None, setup: bytes) -> None:
+                ring_main: FrameRing | None) -> None:
     """Render-worker loop (see the module doc); frames for the mission's observers go over
-    ``to_main`` through ``ring_main`` (None: not wanted). ``setup``: the pickled dict ``sonar``, ``model``,
+    ``to_main`` through ``ring_main`` (None: not wanted). The first message on ``conn`` is the
+    setup (bytes, sent after the start so that the start's own pipe write stays small): the
+    pickled dict ``sonar``, ``model``,
     ``geom_object_id``, ``geom_reflectivity``, ``vehicle_body_id``, ``geom_xpos``, ``geom_xmat``,
     ``moving_geoms``, ``objects``, ``truth_to_perception``."""
     _worker_start()
@@ -67,7 +72,7 @@ def render_main(conn: Any, to_perception: Any, ring_perception: FrameRing, to_ma
         from sim.sensors.base import SceneView
         from sim.sensors.raycast import MujocoRayCaster
 
-        s = pickle.loads(setup)
+        s = pickle.loads(conn.recv_bytes())
         sonar, model, moving = s["sonar"], s["model"], s["moving_geoms"]
         data = mujoco.MjData(model)
         data.geom_xpos[:], data.geom_xmat[:] = s["geom_xpos"], s["geom_xmat"]
@@ -104,8 +109,8 @@ def render_main(conn: Any, to_perception: Any, ring_perception: FrameRing, to_ma
             ring_main.close()
 
 
-def perception_main(conn: Any, from_render: Any, ring: FrameRing, setup: bytes) -> None:
-    """Perception-worker loop (see the module doc). ``setup``: the mission's ``Perception``
+def perception_main(conn: Any, from_render: Any, ring: FrameRing) -> None:
+    """Perception-worker loop (see the module doc). The first message on ``conn`` (bytes): the mission's ``Perception``
     pickled with its detector as the persistent id ``"detector"`` (rebuilt here from
     ``perception.scenario.autonomy.atr``)."""
     _worker_start()
@@ -118,7 +123,7 @@ def perception_main(conn: Any, from_render: Any, ring: FrameRing, setup: bytes) 
             def persistent_load(self, pid: Any) -> Any:
                 return None  # the detector, rebuilt below
 
-        perception = _Loader(io.BytesIO(setup)).load()
+        perception = _Loader(io.BytesIO(conn.recv_bytes())).load()
         perception.detector = build_detector(perception.scenario.autonomy.atr)
         shared = shared_objects(perception.fls)
         frames: dict[int, Any] = {}

@@ -5,6 +5,10 @@ from __future__ import annotations
 
 import json
 import os
+import subprocess
+import sys
+import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,6 +23,7 @@ from sim.sensors.fls import FlsRender
 from sim.sonar_pipeline import PipelineError, SonarPipeline
 
 # Dived 10 m short of OPI1 heading for it, survey started at once: frames with targets from t = 0.
+ROOT = Path(__file__).resolve().parents[2]
 OVER = ["autonomy.guidance.mission.start_delay_s=0", "vehicle.initial_pos_ned=[0.0,0.0,2.0]", "duration_s=3.0"]
 
 
@@ -129,3 +134,44 @@ def test_a_worker_failure_is_raised_with_its_traceback_and_ends_the_workers():
     assert not any(_alive(pid) for pid in pids)
     pipe.close()  # already closed: nothing more to do
     assert p is m.parts.perception
+
+
+UNGUARDED = """
+from scenarios import load_scenario
+from sim.mission import Mission
+Mission(load_scenario("cssn_lawnmower", {over!r}), workers=2).run(progress=False)
+"""
+
+
+def test_a_script_without_the_main_guard_gets_one_clear_error_not_a_hang(tmp_path):
+    # spawn runs the script again in each worker, which would build the mission there again
+    script = tmp_path / "unguarded.py"
+    script.write_text(UNGUARDED.format(over=OVER + ["autonomy.atr.detector=classical"]))
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]))
+    proc = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=120, env=env,
+                          cwd=tmp_path)
+    assert proc.returncode == 1
+    assert proc.stderr.count("Traceback") == 1  # the mission process's, none from the workers
+    assert 'PipelineError: the sonar workers' in proc.stderr and 'if __name__ == "__main__":' in proc.stderr
+    assert str(script) in proc.stderr
+    assert "leaked" not in proc.stderr  # shared memory and semaphores released
+
+
+def test_a_killed_mission_process_leaves_no_worker_behind():
+    # the render worker may be waiting for a ring slot that only the mission process frees
+    code = ("import os, sys, time\nfrom scenarios import load_scenario\nfrom sim.mission import Mission\n"
+            "if __name__ == '__main__':\n"
+            f"    m = Mission(load_scenario('cssn_lawnmower', {OVER[:-1] + ['duration_s=600']!r}), workers=2)\n"
+            "    m.reset()\n    print(*m._pipeline.pids, flush=True)\n"
+            "    for _ in range(3000):\n        m.step()\n")
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]))
+    proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True, env=env)
+    pids = [int(p) for p in proc.stdout.readline().split()]
+    assert len(pids) == 2
+    time.sleep(3.0)  # frames in flight, rings filling
+    proc.kill()
+    proc.wait()
+    deadline = time.monotonic() + 15.0
+    while any(_alive(p) for p in pids) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert not any(_alive(p) for p in pids)
