@@ -3,8 +3,10 @@
 Runs ``python -m sim.cli run`` (the real command, with its observers: trajectory log,
 detection scoring, rerun recording unless ``--no-rerun``) in a child process whose stderr is a
 pseudo-terminal, so its progress bar redraws twice a second with the simulated time. Every
-``--sample-s`` wall seconds the child's ``VmRSS`` (``/proc/PID/status``, Linux) is recorded
-with the latest simulated time. At the end the samples after ``--warmup-s`` simulated seconds
+``--sample-s`` wall seconds the ``VmRSS`` (``/proc/PID/status``, Linux) of the child and its
+descendants (``--run-arg=--workers=2``: the sonar render and perception workers, where the
+world model then lives) is summed and recorded with the latest simulated time; pages the
+processes share (libraries) count once per process, so with workers the sum is an upper bound. At the end the samples after ``--warmup-s`` simulated seconds
 are fitted with a straight line (least squares) and the line is extrapolated to 86400 s.
 Samples after the simulated time stopped advancing (the run writing its outputs) are left out.
 
@@ -22,7 +24,8 @@ the run's own outputs go to ``--out/run``.
         --set autonomy.guidance.survey.min_turn_radius_m=0.4 \\
         --set autonomy.guidance.mission.max_mission_time_s=9000
 
-Exit status: the child's (0 done, 3 mission aborted); 2 on bad input (one line, before any run).
+Exit status: the child's (0 done, 3 mission aborted; 2 when it refused an argument, its error
+line repeated); 2 on bad input (one line, before any run).
 """
 
 from __future__ import annotations
@@ -62,6 +65,36 @@ def _rss_mb(pid: int) -> float | None:
     except (FileNotFoundError, ProcessLookupError):
         return None
     return None
+
+
+def _tree_rss_mb(pid: int) -> float | None:
+    """Summed ``VmRSS`` (MB) of process ``pid`` and its descendants, None once ``pid`` is gone."""
+    children: dict[int, list[int]] = {}
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except (OSError, IndexError):
+            continue  # ended while listed
+        children.setdefault(int(fields[1]), []).append(int(stat.parent.name))
+    total = _rss_mb(pid)
+    if total is None:
+        return None
+    todo = list(children.get(pid, []))
+    while todo:
+        p = todo.pop()
+        total += _rss_mb(p) or 0.0
+        todo += children.get(p, [])
+    return total
+
+
+def _last_line(path: Path) -> str:
+    """The last non-empty line of a console capture (progress redraws split at carriage returns)."""
+    try:
+        text = path.read_bytes().decode("utf-8", "replace").replace("\r", "\n")
+    except OSError:
+        return ""
+    lines = [ln.strip() for ln in text.splitlines() if ln.strip()]
+    return lines[-1] if lines else ""
 
 
 class _SimClock:
@@ -115,7 +148,7 @@ def plot(path: Path, sim_s: np.ndarray, rss_mb: np.ndarray, fit: dict[str, float
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(8, 4.5))
-    ax.plot(sim_s / 3600.0, rss_mb, ".", ms=3, label="VmRSS samples")
+    ax.plot(sim_s / 3600.0, rss_mb, ".", ms=3, label="VmRSS of the run's processes")
     t = np.array([fit["warmup_s"], sim_s[-1]])
     slope_s = fit["slope_mb_per_h"] / 3600.0
     icpt = fit["rss_24h_mb"] - slope_s * DAY_S
@@ -143,6 +176,13 @@ def measure(args: argparse.Namespace) -> int:
     """
     if args.out.exists():
         raise CliError(f"--out {args.out}: exists; give a new folder")
+    if args.warmup_s >= args.duration_s:
+        raise CliError(f"--warmup-s {args.warmup_s:g}: must be below --duration-s {args.duration_s:g} "
+                       "(the fit uses the samples after the warm-up)")
+    for arg in args.run_arg:
+        if arg.split("=")[0] in ("--quiet", "--out", "--overwrite"):
+            raise CliError(f"--run-arg={arg}: not allowed (the measurement reads the run's progress display "
+                           "and chooses its output folder)")
     if not Path("/proc/self/status").exists():
         raise CliError("mission_memory.py: needs Linux /proc to read VmRSS")
     load_scenario(args.scenario, [f"duration_s={args.duration_s:g}", *args.overrides])  # bad input: one line, now
@@ -164,7 +204,7 @@ def measure(args: argparse.Namespace) -> int:
     with open(args.out / "rss.csv", "w", encoding="ascii") as csv:
         csv.write("wall_s,sim_s,rss_mb\n")
         while child.poll() is None:
-            rss = _rss_mb(child.pid)
+            rss = _tree_rss_mb(child.pid)
             if rss is not None and clock.sim_s > 0.0:
                 wall = time.perf_counter() - t0
                 rows.append((wall, clock.sim_s, rss))
@@ -180,6 +220,12 @@ def measure(args: argparse.Namespace) -> int:
     if np.any(data[:, 1] < data[-1, 1]):  # the mission only: not the output writing at its final time
         data = data[data[:, 1] < data[-1, 1]]
     result: dict = {"command": cmd, "returncode": rc}
+    if rc not in (0, 3) and not rows:  # the run never started (a bad --run-arg): its own one-line error
+        result["run_error"] = _last_line(args.out / "progress.txt")
+        (args.out / "rss.json").write_text(json.dumps(result, indent=2) + "\n")
+        print(f"mission_memory.py: error: the run failed before its first sample (exit status {rc}): "
+              f"{result['run_error']}", file=sys.stderr)
+        return rc
     try:
         result["fit"] = fit_growth(data[:, 1], data[:, 2], args.warmup_s)
     except ValueError as e:

@@ -52,6 +52,10 @@ def print_summary(metrics: dict, out: str) -> None:
         print(f"tracking ({tr['mode']}; 3-D error, horizontal in metrics.json): {errs}; sonar used in "
               f"{_fmt(100 * tr['fused_sonar_step_fraction'], '.0f')} % "
               f"of steps; target in view {_fmt(100 * tr['target_in_fov_fraction'], '.0f')} %")
+        if "nees_horizontal" in tr:
+            nees = tr["nees_horizontal"]
+            print("tracking consistency, mean horizontal NEES (2 if the filter's covariance is right, more: "
+                  "overconfident): " + ", ".join(f"{k} {_fmt(v.get('mean'), '.2f')}" for k, v in nees.items()))
     if "mcm" in metrics and "note" in metrics["mcm"]:
         print(metrics["mcm"]["note"])
     elif "mcm" in metrics:

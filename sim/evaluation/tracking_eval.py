@@ -263,16 +263,18 @@ class TrackingEvaluation:
     def nees_metrics(self) -> dict[str, dict[str, float]]:
         """Consistency of each filter after the warm-up: mean horizontal (north, east) NEES
         (2 for a consistent filter) and the fraction of ticks above the chi-square(2) 95 %
-        point (0.05 for a consistent filter); ticks are correlated, so these are figures to
-        read, not a test."""
+        point (0.05 for a consistent filter; both carried in each entry as ``consistent_mean``
+        and ``consistent_above_95_fraction`` so metrics.json reads on its own) over ``n`` ticks;
+        ticks are correlated, so these are figures to read, not a test."""
         a = np.array(self.rows, dtype=float).reshape(-1, _COLS)
         a = a[a[:, 0] >= self.warmup_s]
         out = {}
         for i, m in enumerate(MODES):
             v = a[:, 11 + i]
             v = v[np.isfinite(v)]
-            out[m] = {"mean": float(v.mean()) if v.size else math.nan,
-                      "above_95_fraction": float(np.mean(v > NEES2_95)) if v.size else math.nan}
+            out[m] = {"n": int(v.size), "mean": float(v.mean()) if v.size else math.nan,
+                      "above_95_fraction": float(np.mean(v > NEES2_95)) if v.size else math.nan,
+                      "consistent_mean": 2.0, "consistent_above_95_fraction": 0.05}
         return out
 
     def plume_metrics(self) -> dict[str, Any]:
