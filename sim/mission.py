@@ -71,6 +71,8 @@ class Mission:
 
     Raises:
         ValueError: unknown ``nav_source``; ``workers`` < 1; a sensor mount site missing on the hull.
+        sim.sonar_pipeline.PipelineError: (from :meth:`reset`, :meth:`step`, :meth:`run`) a
+            pipeline worker failed or ended, or the main script lacks the ``__main__`` guard.
     """
 
     def __init__(
@@ -134,7 +136,7 @@ class Mission:
 
     @property
     def pipelined(self) -> bool:
-        """Whether the sonar and its perception run on worker threads (``workers`` > 1 and a
+        """Whether the sonar and its perception run in worker processes (``workers`` > 1 and a
         mission that allows it: FLS perception, no tracker); known after :meth:`reset`."""
         return self._pipeline is not None
 
