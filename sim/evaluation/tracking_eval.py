@@ -207,13 +207,14 @@ class TrackingEvaluation:
         roi = res.roi["fused"]
         for i in np.nonzero(is_bub & inside)[0]:  # what each accepted bubble cluster was, for the audit
             self.accepted_bubbles.append({
-                "t_s": float(res.t_s), "range_m": float(cr[i]), "azimuth_deg": math.degrees(ca[i]),
+                "t_s": round(float(res.t_s), 6), "range_m": float(cr[i]), "azimuth_deg": math.degrees(ca[i]),
                 "score": float(res.candidates[i].score), "chosen": bool(chosen[i]),
                 "body_distance_m": float(d_tgt[i]), "bubble_distance_m": float(d_bub[i]),
-                "roi_centre_distance": float(roi.centre_distance(cr[i], ca[i])),
+                # normalised: 0 at the ROI's centre, 1 on its corners' axes (autonomy.tracking.roi)
+                "roi_centre_distance_normalised": float(roi.centre_distance(cr[i], ca[i])),
                 "roi_half_range_m": roi.half_range_m, "roi_half_azimuth_deg": math.degrees(roi.half_azimuth_rad),
                 "target_clusters_on_frame": int(is_tgt.sum()),
-                **{k: float(v[i]) for k, v in res.features.items()}})
+                **{k: (int(v[i]) if k == "n_contours" else float(v[i])) for k, v in res.features.items()}})
 
     # results
     def error_sets(self, horizontal: bool = False) -> dict[str, FloatArray]:

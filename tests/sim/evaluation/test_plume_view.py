@@ -69,5 +69,5 @@ def test_gating_counts_and_the_accepted_bubble_record():
     (rec,) = ev.accepted_bubbles
     assert rec["range_m"] == 9.0 and rec["azimuth_deg"] == 0.0 and not rec["chosen"]
     assert abs(rec["body_distance_m"] - 1.0) < 1e-9 and rec["bubble_distance_m"] < 1e-9
-    assert abs(rec["roi_centre_distance"] - (1.0 / 1.5) / math.sqrt(2.0)) < 1e-9
+    assert abs(rec["roi_centre_distance_normalised"] - (1.0 / 1.5) / math.sqrt(2.0)) < 1e-9
     assert rec["extent_m"] == 0.9 and rec["target_clusters_on_frame"] == 1
