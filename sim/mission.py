@@ -251,9 +251,10 @@ class Mission:
         physics, scheduler, timer = self.physics, self.parts.scheduler, self.timer
         truth = self._truth
         with timer.stage("physics"):
+            physics_step, scheduler_due, cmd = physics.step, scheduler.due, self.thruster_cmd
             for _ in range(self.substeps):
-                physics.step(self.thruster_cmd)
-                due = scheduler.due(physics.t_s)
+                physics_step(cmd)
+                due = scheduler_due(physics.t_s)
                 if due:
                     with timer.stage("truth"):
                         truth = physics.truth()

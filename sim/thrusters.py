@@ -48,6 +48,8 @@ class ThrusterArray:
         self._per_thruster = tuple(zip(self._dz, self._fwd, self._rev, self._exp, self._Bcols))
         self._alpha_dt = -1.0
         self._alpha = [1.0] * self.n
+        self._cmd_held: list[float] | None = None  # command of the cached speed targets
+        self._targets: list[float] = [0.0] * self.n
         self.speed = [0.0] * self.n
         self.thrust_n = [0.0] * self.n
 
@@ -62,6 +64,19 @@ class ThrusterArray:
             self._alpha_dt = dt_s
         return self._alpha
 
+    def _speed_targets(self, cmd: list[float]) -> list[float]:
+        """Normalised rotor speeds (n,) the commands ``cmd`` drive towards (clipped to [-1, 1],
+        dead zone removed); ValueError on a NaN command."""
+        targets = []
+        for j, (dz, *_) in enumerate(self._per_thruster):
+            c = float(cmd[j])
+            if c != c:
+                raise ValueError(f"thruster '{self.layout.names[j]}' command is NaN")
+            c = 1.0 if c > 1.0 else (-1.0 if c < -1.0 else c)
+            mag = abs(c) - dz
+            targets.append(0.0 if mag <= 0.0 else math.copysign(mag / (1.0 - dz), c))
+        return targets
+
     def step(self, cmd: ArrayLike, dt_s: float) -> list[float]:
         """Advance rotors by ``dt_s`` under commands ``cmd`` (n,) in [-1, 1]; return the
         body wrench (6 floats, about CO, FRD) of the new thrusts."""
@@ -71,14 +86,11 @@ class ThrusterArray:
         tau = [0.0] * 6
         speed = self.speed
         thrust = self.thrust_n
-        cmd = cmd.tolist() if isinstance(cmd, np.ndarray) else cmd  # Python floats: faster scalar arithmetic
-        for j, (dz, fwd, rev, ex, bcol) in enumerate(self._per_thruster):
-            c = float(cmd[j])
-            if c != c:
-                raise ValueError(f"thruster '{self.layout.names[j]}' command is NaN")
-            c = 1.0 if c > 1.0 else (-1.0 if c < -1.0 else c)
-            mag = abs(c) - dz
-            target = 0.0 if mag <= 0.0 else math.copysign(mag / (1.0 - dz), c)
+        cmd = cmd.tolist() if isinstance(cmd, np.ndarray) else list(cmd)  # Python floats: faster scalar arithmetic
+        if cmd != self._cmd_held:  # a new command (held over the physics steps of an autonomy period)
+            self._targets = self._speed_targets(cmd)
+            self._cmd_held = cmd  # never holds a NaN (raised above), so a NaN command is always new
+        for j, (target, (_, fwd, rev, ex, bcol)) in enumerate(zip(self._targets, self._per_thruster)):
             s0 = speed[j]
             s = s0 + alpha[j] * (target - s0)
             speed[j] = s

@@ -62,7 +62,12 @@ class VehicleTruth:
         """(3,) inertial acceleration of the hull point at ``offset_body_m`` (FRD, m), in FRD,
         m/s^2: ``v_dot + omega x v + omega_dot x r + omega x (omega x r)`` (``v`` is the body
         velocity over ground, so ``omega x v`` is the transport term)."""
-        v, omega = self.nu[:3], self.nu[3:]
-        v_dot, omega_dot = self.nu_dot[:3], self.nu_dot[3:]
-        r = offset_body_m
-        return v_dot + cross3(omega, v) + cross3(omega_dot, r) + cross3(omega, cross3(omega, r))
+        # in Python floats (runs at the IMU rate), the same operations in the same order as
+        # v_dot + cross3(omega, v) + cross3(omega_dot, r) + cross3(omega, cross3(omega, r))
+        u, v, w, p, q, r = self.nu.tolist()
+        ud, vd, wd, pd, qd, rd = self.nu_dot.tolist()
+        x, y, z = offset_body_m.tolist() if isinstance(offset_body_m, np.ndarray) else offset_body_m
+        wx, wy, wz = q * z - r * y, r * x - p * z, p * y - q * x  # omega x r
+        return np.array([ud + (q * w - r * v) + (qd * z - rd * y) + (q * wz - r * wy),
+                         vd + (r * u - p * w) + (rd * x - pd * z) + (r * wx - p * wz),
+                         wd + (p * v - q * u) + (pd * y - qd * x) + (p * wy - q * wx)])

@@ -83,8 +83,10 @@ class VehicleDynamics:
         q, v = self._qadr, self._vadr
         self._quat = data.qpos[q + 3:q + 7]
         self._depth = data.qpos[q + 2:q + 3]
+        self._depth_quat = data.qpos[q + 2:q + 7]  # [z, qw, qx, qy, qz]: one tolist per step
         self._vel = data.qvel[v:v + 3]
         self._omega = data.qvel[v + 3:v + 6]
+        self._vel_omega = data.qvel[v:v + 6]
         self._xfrc = data.xfrc_applied[self.body_id]
         self._tau_thr = [0.0] * 6
 
@@ -127,9 +129,9 @@ class VehicleDynamics:
             c = self.current.velocity_tuple
         # tolist(): scalar arithmetic on Python floats is several times faster than on
         # numpy scalars.
-        self._xfrc[:] = self.fossen.mujoco_wrench(self._quat.tolist(), self._vel.tolist(),
-                                                  self._omega.tolist(), c, tau,
-                                                  self._depth.item())
+        z, qw, qx, qy, qz = self._depth_quat.tolist()
+        vx, vy, vz, p, q, r = self._vel_omega.tolist()
+        self._xfrc[:] = self.fossen.mujoco_wrench((qw, qx, qy, qz), (vx, vy, vz), (p, q, r), c, tau, z)
 
     # ------------------------------------------------------------------------ readouts
     @property

@@ -135,6 +135,14 @@ def allocate_thrust(
     pseudo-inverse of each set of unsaturated thrusters.
     """
     tau = np.asarray(wrench_body, dtype=float).reshape(6)
+    B, lo, hi, w_sqrt = _checked_problem(config_matrix, thrust_min_n, thrust_max_n, dof_weights)
+    return _allocate_weighted(w_sqrt * tau, w_sqrt[:, None] * B, lo, hi, pinv_cache)
+
+
+def _checked_problem(config_matrix: ArrayLike, thrust_min_n: ArrayLike, thrust_max_n: ArrayLike,
+                     dof_weights: ArrayLike | None) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """``(B (6, n), thrust_min (n,), thrust_max (n,), sqrt(dof_weights) (6,))`` as float arrays;
+    ValueError on wrong shapes or limits that do not bracket zero thrust."""
     B = np.asarray(config_matrix, dtype=float)
     lo = np.asarray(thrust_min_n, dtype=float)
     hi = np.asarray(thrust_max_n, dtype=float)
@@ -144,9 +152,14 @@ def allocate_thrust(
     if np.any(lo > 0.0) or np.any(hi < 0.0):
         raise ValueError("allocate_thrust: limits must bracket zero thrust")
     w_sqrt = np.ones(6) if dof_weights is None else np.sqrt(np.asarray(dof_weights, dtype=float))
-    Bw = w_sqrt[:, None] * B
-    tw = w_sqrt * tau
+    return B, lo, hi, w_sqrt
 
+
+def _allocate_weighted(tw: FloatArray, Bw: FloatArray, lo: FloatArray, hi: FloatArray,
+                       pinv_cache: dict[bytes, FloatArray] | None) -> FloatArray:
+    """:func:`allocate_thrust` on the weighted problem ``tw = W^(1/2) tau`` (6,),
+    ``Bw = W^(1/2) B`` (6, n), limits checked."""
+    n = Bw.shape[1]
     thrust = np.zeros(n)
     free = np.ones(n, dtype=bool)
     for _ in range(n):
@@ -212,6 +225,11 @@ class ThrustAllocator:
         self.layout = layout
         self.dof_weights = dof_weights
         self._pinv_cache: dict[bytes, FloatArray] = {}
+        # the weighted problem, checked and formed once (allocation runs at the autonomy rate)
+        _, lo, hi, self._w_sqrt = _checked_problem(self.config_matrix, self.thrust_min_n, self.thrust_max_n,
+                                                   dof_weights)
+        self._Bw = self._w_sqrt[:, None] * self.config_matrix
+        self._limits = (lo, hi)
 
     @classmethod
     def from_layout(cls, layout: ThrusterLayout, dof_weights: ArrayLike | None = None) -> "ThrustAllocator":
@@ -220,8 +238,8 @@ class ThrustAllocator:
 
     def allocate_thrust(self, wrench_body: ArrayLike) -> FloatArray:
         """Thrusts (n,) in N for the desired body wrench (6,)."""
-        return allocate_thrust(wrench_body, self.config_matrix, self.thrust_min_n,
-                               self.thrust_max_n, self.dof_weights, self._pinv_cache)
+        tau = np.asarray(wrench_body, dtype=float).reshape(6)
+        return _allocate_weighted(self._w_sqrt * tau, self._Bw, *self._limits, self._pinv_cache)
 
     def allocate(self, wrench_body: ArrayLike) -> FloatArray:
         """Thruster commands (n,) in [-1, 1] for the desired body wrench (6,)."""

@@ -26,21 +26,26 @@ def _fitted_plane_ned(points_ned: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return centroid, normal
 
 
-def fitted_slope_rad(points_ned: np.ndarray) -> float:
-    """Slope (rad from horizontal) of the least-squares plane through >= 3 points (n, 3)."""
-    normal = _fitted_plane_ned(points_ned)[1]
+def _slope_of_normal_rad(normal: np.ndarray) -> float:
     return float(np.arccos(np.clip(abs(normal[2]), 0.0, 1.0)))
 
 
-def plane_altitude_m(points_ned: np.ndarray, origin_ned: np.ndarray) -> float:
+def fitted_slope_rad(points_ned: np.ndarray) -> float:
+    """Slope (rad from horizontal) of the least-squares plane through >= 3 points (n, 3)."""
+    return _slope_of_normal_rad(_fitted_plane_ned(points_ned)[1])
+
+
+def plane_altitude_m(points_ned: np.ndarray, origin_ned: np.ndarray,
+                     plane: tuple[np.ndarray, np.ndarray] | None = None) -> float:
     """Vertical distance (m, down positive) from ``origin_ned`` (3,) to the least-squares plane
     through ``points_ned`` (n >= 3, 3), all NED m: the plane's depth directly below the origin
-    minus the origin's depth.
+    minus the origin's depth. ``plane``: that plane's (centroid, unit normal) when already
+    fitted (saves the SVD).
 
     Raises:
         ValueError: if the plane is vertical (no point directly below the origin).
     """
-    centroid, normal = _fitted_plane_ned(points_ned)
+    centroid, normal = _fitted_plane_ned(points_ned) if plane is None else plane
     if abs(normal[2]) < 1e-9:
         raise ValueError("plane_altitude_m: the fitted plane is vertical")
     rel = origin_ned - centroid
@@ -137,7 +142,8 @@ class DvlSensor(Sensor[DvlMsg]):
         if valid.sum() < cfg.min_valid_beams:
             return self._no_lock(echo.t_s, ranges)
         footprints = echo.origin_ned + ranges[valid, None] * echo.dirs_ned[valid]
-        if fitted_slope_rad(footprints) > math.radians(cfg.max_slope_deg):
+        plane = _fitted_plane_ned(footprints)  # fitted once: the slope test and the altitude
+        if _slope_of_normal_rad(plane[1]) > math.radians(cfg.max_slope_deg):
             return self._no_lock(echo.t_s, ranges)
         if noisy and dropped(self._rng, cfg.dropout_prob):
             return self._no_lock(echo.t_s, ranges)
@@ -149,7 +155,8 @@ class DvlSensor(Sensor[DvlMsg]):
             radial = (1.0 + self._scale_error) * radial + white_noise(self._rng, sigma, len(radial))
         vel_body = np.linalg.lstsq(B, radial, rcond=None)[0]
         return DvlMsg(t_s=echo.t_s, vel_body_mps=vel_body, valid=True,
-                      altitude_m=plane_altitude_m(footprints, echo.origin_ned), beam_ranges_m=ranges)
+                      altitude_m=plane_altitude_m(footprints, echo.origin_ned, plane),
+                      beam_ranges_m=ranges)
 
     @staticmethod
     def _no_lock(t_s: float, ranges_m: np.ndarray) -> DvlMsg:
