@@ -82,7 +82,6 @@ class VehicleDynamics:
         # Views, so the hot path does no lookups.
         q, v = self._qadr, self._vadr
         self._quat = data.qpos[q + 3:q + 7]
-        self._depth = data.qpos[q + 2:q + 3]
         self._depth_quat = data.qpos[q + 2:q + 7]  # [z, qw, qx, qy, qz]: one tolist per step
         self._vel = data.qvel[v:v + 3]
         self._omega = data.qvel[v + 3:v + 6]
@@ -147,15 +146,16 @@ class VehicleDynamics:
         """Ground-truth snapshot; ``nu_dot`` is evaluated at the present state with the
         present thrust (not the acceleration of the step just taken)."""
         q = self._qadr
-        quat = np.array(self._quat)
+        n, e, d, qw, qx, qy, qz = self.data.qpos[q:q + 7].tolist()  # one copy out of MuJoCo's state
+        vx, vy, vz, p, q_rate, r = self._vel_omega.tolist()
+        quat = (qw, qx, qy, qz)
         R = rot_from_quat(quat)
         cur = None if self.current is None or self.current.is_still else self.current.velocity_tuple
-        self.fossen.mujoco_wrench(quat.tolist(), self._vel.tolist(), self._omega.tolist(), cur,
-                                  self._tau_thr, self._depth.item())
+        self.fossen.mujoco_wrench(quat, (vx, vy, vz), (p, q_rate, r), cur, self._tau_thr, d)
         nu = np.array(self.fossen.nu)
         return VehicleTruth(
             t_s=float(t_s),
-            pos_ned=np.array(self.data.qpos[q:q + 3]),
+            pos_ned=np.array([n, e, d]),
             R_nb=R,
             rpy_rad=euler_from_rot(R),
             nu=nu,

@@ -57,22 +57,29 @@ class ImuSensor(Sensor[ImuMsg]):
         self._accel_bias_mps2 = white_noise(rng, np.full(3, cfg.accel_bias_mps2))
 
     def ideal(self, truth: VehicleTruth, scene: SceneView) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
-        """(t_s, rpy_rad (3,), rate_body_radps (3,), specific force FRD (3,)), yaw unwrapped."""
+        """(t_s, rpy_rad (3,), rate_body_radps (3,), specific force FRD (3,)), yaw unwrapped
+        (the attitude and rate are the truth's own arrays: :meth:`exact` and :meth:`corrupt`
+        build new ones)."""
         # R_nb^T g_ned = g * (third row of R_nb): g_ned is along NED z
         specific_force = truth.point_accel_body(self.mount.pos_body_m) - GRAVITY_MPS2 * truth.R_nb[2]
-        return truth.t_s, np.array(truth.rpy_rad, dtype=float), np.array(truth.nu[3:], dtype=float), specific_force
+        return truth.t_s, truth.rpy_rad, truth.nu[3:], specific_force
 
     def exact(self, ideal: tuple[float, np.ndarray, np.ndarray, np.ndarray]) -> ImuMsg:
         t_s, rpy, rate, specific_force = ideal
+        rpy = np.array(rpy, dtype=float)
         rpy[2] = wrap_angle(float(rpy[2]))
-        return ImuMsg(t_s=t_s, rpy_rad=rpy, rate_body_radps=rate, accel_body_mps2=specific_force)
+        return ImuMsg(t_s=t_s, rpy_rad=rpy, rate_body_radps=np.array(rate, dtype=float),
+                      accel_body_mps2=specific_force)
 
     def corrupt(self, ideal: tuple[float, np.ndarray, np.ndarray, np.ndarray], truth: VehicleTruth) -> ImuMsg:
         t_s, rpy, rate, specific_force = ideal
         bias_rpy = self._attitude_bias.at(t_s)
         # one draw for the white noise of the three outputs: attitude, rate, specific force
-        w = self._rng.standard_normal(9).reshape(3, 3) * self._white_sigma
-        rpy = rpy + bias_rpy + w[0]
-        rate = rate + self._gyro_bias_radps + w[1]
-        specific_force = specific_force + self._accel_bias_mps2 + w[2]
-        return self.exact((t_s, rpy, rate, specific_force))
+        w_att, w_rate, w_acc = (self._rng.standard_normal(9).reshape(3, 3) * self._white_sigma).tolist()
+        # true + bias + noise per component in Python floats (this runs at the IMU rate; the
+        # same sums in the same order as the numpy expression rpy + bias_rpy + w_att)
+        roll, pitch, yaw = [a + b + c for a, b, c in zip(rpy.tolist(), bias_rpy.tolist(), w_att)]
+        rate = [a + b + c for a, b, c in zip(rate.tolist(), self._gyro_bias_radps.tolist(), w_rate)]
+        accel = [a + b + c for a, b, c in zip(specific_force.tolist(), self._accel_bias_mps2.tolist(), w_acc)]
+        return ImuMsg(t_s=t_s, rpy_rad=np.array([roll, pitch, wrap_angle(yaw)]), rate_body_radps=np.array(rate),
+                      accel_body_mps2=np.array(accel))
