@@ -142,3 +142,37 @@ def test_thrust_allocator_object_matches_function(feelhippo):
                                ThrusterArray(feelhippo).allocate(wrench))
     with pytest.raises(ValueError, match="command curves"):
         ThrustAllocator(feelhippo.thruster_matrix, feelhippo.thruster_limits_n).allocate(wrench)
+
+
+def test_rotor_lag_follows_a_changed_command_after_a_held_one(feelhippo):
+    """The speed targets are cached while the command is held: a new command (a new array,
+    or the same array changed in place) must move the rotors towards the new target."""
+    thr = ThrusterArray(feelhippo)
+    T = feelhippo.thruster_time_constant_s[0]
+    dz = feelhippo.layout.dead_zone[0]
+    dt = 0.005
+    cmd = np.array([1.0, 0.0, 0.0, 0.0])
+    for _ in range(20):
+        thr.step(cmd, dt)
+    s0 = thr.speed[0]
+    cmd[0] = -0.5  # changed in place
+    target = -(0.5 - dz) / (1.0 - dz)
+    for k in range(1, 21):
+        thr.step(cmd, dt)
+        assert thr.speed[0] == pytest.approx(target + (s0 - target) * math.exp(-k * dt / T), rel=1e-9)
+    with pytest.raises(ValueError, match="NaN"):
+        thr.step(np.array([-0.5, float("nan"), 0.0, 0.0]), dt)
+    with pytest.raises(ValueError, match="NaN"):  # still refused when repeated
+        thr.step(np.array([-0.5, float("nan"), 0.0, 0.0]), dt)
+
+
+def test_weighted_allocator_object_matches_function_bit_for_bit(feelhippo):
+    from autonomy.control.allocation import ThrustAllocator
+
+    weights = np.array([1.0, 2.0, 4.0, 0.5, 0.5, 3.0])
+    alloc = ThrustAllocator(feelhippo.thruster_matrix, feelhippo.thruster_limits_n, feelhippo.layout, weights)
+    lim = feelhippo.thruster_limits_n
+    for wrench in ([30.0, 5.0, -8.0, 0.0, 0.0, 4.0], [400.0, -90.0, 60.0, 1.0, -2.0, 50.0]):
+        np.testing.assert_array_equal(alloc.allocate_thrust(wrench),
+                                      allocate_thrust(wrench, feelhippo.thruster_matrix, lim[:, 0], lim[:, 1],
+                                                      weights))

@@ -244,3 +244,27 @@ def test_suite_and_configs_reject_bad_input():
         ImuConfig(heading_source="compass")
     with pytest.raises(ValidationError, match="bogus"):
         GpsConfig(bogus=1.0)
+
+
+@pytest.mark.parametrize("noise", [False, True])
+def test_imu_message_does_not_share_or_change_the_truth_arrays(noise):
+    imu = ImuSensor(ImuConfig(), MOUNT, RNG(3))
+    tr = wiggle_truth(5.0)
+    tr.rpy_rad[2] = 3.1  # near the wrap
+    before = (tr.rpy_rad.copy(), tr.nu.copy())
+    msg = imu.measure(tr, noise=noise)
+    np.testing.assert_array_equal(tr.rpy_rad, before[0])
+    np.testing.assert_array_equal(tr.nu, before[1])
+    msg.rpy_rad[0] += 1.0
+    msg.rate_body_radps[0] += 1.0
+    np.testing.assert_array_equal(tr.rpy_rad, before[0])
+    np.testing.assert_array_equal(tr.nu, before[1])
+    assert -math.pi <= msg.rpy_rad[2] < math.pi
+
+
+def test_dvl_plane_altitude_with_a_given_fit_equals_the_refit():
+    from sim.sensors.dvl import _fitted_plane_ned, plane_altitude_m
+
+    pts = np.array([[1.0, 0.5, 10.2], [-1.0, 0.4, 9.7], [0.2, -1.1, 10.0], [0.1, 1.3, 10.4]])
+    origin = np.array([0.0, 0.0, 8.0])
+    assert plane_altitude_m(pts, origin, _fitted_plane_ned(pts)) == plane_altitude_m(pts, origin)
