@@ -11,7 +11,8 @@ The two runs are timed in the same call, so a busy machine slows both alike: rea
 CPU second, all processes: what each core gives).
 
 Start-up is reported separately (``startup``): the wall and CPU time of a fresh interpreter
-importing what a dataset worker imports and rendering nothing. The frames of both runs are
+importing what a dataset worker imports and rendering nothing (numba's load of the cached
+sonar kernels at a worker's first frame, about 0.3 s CPU more, is not in it; it is in the runs). The frames of both runs are
 compared byte for byte (``identical_across_workers``): a dataset does not depend on the number
 of workers.
 """
