@@ -64,6 +64,14 @@ def _gym_vector(variant: str) -> Callable[[dict], str]:
     return fmt
 
 
+def _dataset(r: dict) -> str:
+    one, n = r["one_worker"], r["n_workers"]
+    return (f"{one['frames_per_s']:.1f} frames/s with 1 worker process ({one['cpu_frames_per_s']:.1f} per CPU second); "
+            f"{n['workers']} workers {n['frames_per_s']:.1f} frames/s ({n['cpu_frames_per_s']:.1f} per CPU second), "
+            f"{r['workers_speedup']:.2f}x one worker; {r['n_frames']} frames, start-up included "
+            f"({r['startup']['cpu_s']:.2f} CPU s a worker)")
+
+
 # key -> (bench arguments, [(row label, formatter of the JSON, goal)])
 BENCHES: dict[str, tuple[list[str], list[tuple[str, Callable[[dict], str], str]]]] = {
     "physics": (["physics"], [
@@ -85,6 +93,9 @@ BENCHES: dict[str, tuple[list[str], list[tuple[str, Callable[[dict], str], str]]
         ("`gym` Waypoint-v1", _gym("waypoint"), "200x"),
         ("`gym` Survey-v1 without sonar, `AsyncVectorEnv`", _gym_vector("survey"), ""),
         ("`gym` Survey-v1 with sonar, `AsyncVectorEnv`", _gym_vector("survey_sonar"), "")]),
+    "dataset": (["dataset", "--workers", "2"], [
+        ("`dataset` labelled FLS frames (PNG + COCO/YOLO labels), fresh processes", _dataset,
+         ">= 30 per core, linear in workers")]),
     "pmha": (["pmha"], [
         ("`pmha` (50 anchors, 100 hypotheses)",
          lambda r: f"p50 {r['update_ms_p50']:.2f} ms, p99 {r['update_ms_p99']:.2f} ms", "p99 5 ms")]),

@@ -1,9 +1,11 @@
 """Onboard automatic target recognition on FLS frames (onnxruntime CNN, classical baseline)."""
 
-from autonomy.atr.build import SHIPPED_MODEL_PATH, build_detector
-from autonomy.atr.classical import ClassicalDetector
-from autonomy.atr.cnn_detector import CnnDetector
-from autonomy.atr.detector import Detector, NullDetector
+import lazy_loader
 
-__all__ = ["SHIPPED_MODEL_PATH", "build_detector", "ClassicalDetector", "CnnDetector", "Detector",
-           "NullDetector"]
+# names resolved on first use, so importing one submodule (a config, say) loads no other
+__getattr__, __dir__, __all__ = lazy_loader.attach(__name__, submod_attrs={
+    "build": ["SHIPPED_MODEL_PATH", "build_detector"],
+    "classical": ["ClassicalDetector"],
+    "cnn_detector": ["CnnDetector"],
+    "detector": ["Detector", "NullDetector"],
+})

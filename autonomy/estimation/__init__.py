@@ -5,33 +5,18 @@ same-scan clusterer, initiator and deleter, each a small swappable part checked 
 split of the Stone Soup tracking framework, https://stonesoup.readthedocs.io).
 """
 
-from autonomy.estimation.assignment import murty_k_best, ranked_associations
-from autonomy.estimation.association import KBestAssociator
-from autonomy.estimation.clustering import cluster_consistent, fuse_cluster
-from autonomy.estimation.deleter import UpdateTimeDeleter
-from autonomy.estimation.gater import MahalanobisGater, innovation_log_likelihoods
-from autonomy.estimation.initiator import SingleMeasurementInitiator
-from autonomy.estimation.measurement import PositionFix, RangeAzimuth, RangeBearingElevation
-from autonomy.estimation.predictor import KalmanPredictor
-from autonomy.estimation.transition import ConstantPosition, ConstantVelocity
-from autonomy.estimation.updater import ExtendedKalmanUpdater, KalmanUpdater
+import lazy_loader
 
-__all__ = [
-    "ConstantPosition",
-    "ConstantVelocity",
-    "ExtendedKalmanUpdater",
-    "KBestAssociator",
-    "KalmanPredictor",
-    "KalmanUpdater",
-    "MahalanobisGater",
-    "PositionFix",
-    "RangeAzimuth",
-    "RangeBearingElevation",
-    "SingleMeasurementInitiator",
-    "UpdateTimeDeleter",
-    "cluster_consistent",
-    "fuse_cluster",
-    "innovation_log_likelihoods",
-    "murty_k_best",
-    "ranked_associations",
-]
+# names resolved on first use, so importing one submodule (a config, say) loads no other
+__getattr__, __dir__, __all__ = lazy_loader.attach(__name__, submod_attrs={
+    "assignment": ["murty_k_best", "ranked_associations"],
+    "association": ["KBestAssociator"],
+    "clustering": ["cluster_consistent", "fuse_cluster"],
+    "deleter": ["UpdateTimeDeleter"],
+    "gater": ["MahalanobisGater", "innovation_log_likelihoods"],
+    "initiator": ["SingleMeasurementInitiator"],
+    "measurement": ["PositionFix", "RangeAzimuth", "RangeBearingElevation"],
+    "predictor": ["KalmanPredictor"],
+    "transition": ["ConstantPosition", "ConstantVelocity"],
+    "updater": ["ExtendedKalmanUpdater", "KalmanUpdater"],
+})

@@ -1,21 +1,10 @@
 """Target geolocalisation: FLS detections -> NED positions with covariance (paper 000 IV)."""
 
-from autonomy.localization.field_of_view import fls_visibility
-from autonomy.localization.geolocate import LocalizedDetection, localize, sonar_point_ned
-from autonomy.localization.sonar_projection import (
-    flat_seabed_elevation,
-    planar_point_sonar,
-    sonar_to_body_rotation,
-    spherical_to_sonar,
-)
+import lazy_loader
 
-__all__ = [
-    "LocalizedDetection",
-    "flat_seabed_elevation",
-    "fls_visibility",
-    "localize",
-    "planar_point_sonar",
-    "sonar_point_ned",
-    "sonar_to_body_rotation",
-    "spherical_to_sonar",
-]
+# names resolved on first use, so importing one submodule (a config, say) loads no other
+__getattr__, __dir__, __all__ = lazy_loader.attach(__name__, submod_attrs={
+    "field_of_view": ["fls_visibility"],
+    "geolocate": ["LocalizedDetection", "localize", "sonar_point_ned"],
+    "sonar_projection": ["flat_seabed_elevation", "planar_point_sonar", "sonar_to_body_rotation", "spherical_to_sonar"],
+})

@@ -1,6 +1,9 @@
 """Onboard navigation: AHRS + DVL dead reckoning and an EKF fusing depth, GPS and USBL."""
 
-from autonomy.navigation.ekf import NavigationFilter
-from autonomy.navigation.noise_model import NavNoiseModel
+import lazy_loader
 
-__all__ = ["NavNoiseModel", "NavigationFilter"]
+# names resolved on first use, so importing one submodule (a config, say) loads no other
+__getattr__, __dir__, __all__ = lazy_loader.attach(__name__, submod_attrs={
+    "ekf": ["NavigationFilter"],
+    "noise_model": ["NavNoiseModel"],
+})

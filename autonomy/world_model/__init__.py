@@ -1,6 +1,9 @@
 """PMHA world model: anchors and the hypothesis tree (paper 000 V), built from estimation roles."""
 
-from autonomy.world_model.anchor import CLASS_NAMES, Anchor
-from autonomy.world_model.pmha import PMHA, Hypothesis, WorldObject
+import lazy_loader
 
-__all__ = ["CLASS_NAMES", "PMHA", "Anchor", "Hypothesis", "WorldObject"]
+# names resolved on first use, so importing one submodule (a config, say) loads no other
+__getattr__, __dir__, __all__ = lazy_loader.attach(__name__, submod_attrs={
+    "anchor": ["CLASS_NAMES", "Anchor"],
+    "pmha": ["PMHA", "Hypothesis", "WorldObject"],
+})

@@ -17,5 +17,6 @@ BENCHES: dict[str, tuple[str, str, str]] = {
     "sss": ("sim.bench.sss", "run", "side-scan sonar ping rendering (1000 bins per side)"),
     "msis": ("sim.bench.msis", "run", "scanning sonar pings per second and feature-extraction cost per ping"),
     "link": ("sim.bench.link", "run", "acoustic modem link and message codec: cost per message and per tick"),
+    "dataset": ("sim.bench.dataset", "run", "labelled FLS dataset frames per second, one worker process against N"),
     "atr": ("sim.evaluation.atr_metrics", "bench_atr", "ATR inference frame rate (CNN and classical)"),
 }

@@ -14,7 +14,7 @@ from sim.cli.args import non_negative_int, positive_int
 from sim.cli.errors import CliError
 from sim.cli.scenario_cmds import DEFAULT_SCENARIO, add_scenario_args, refuse_sweep_only
 
-OPTION_BENCHES = {"workers": ("mission", "gym"), "sonar": ("mission",)}  # benches taking each option
+OPTION_BENCHES = {"workers": ("mission", "gym", "dataset"), "sonar": ("mission",)}  # benches taking each option
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
@@ -32,7 +32,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         if value == default or (key == "workers" and value is None):
             continue
         if key not in params:
-            raise CliError(f"{flag}: only for bench {' and '.join(OPTION_BENCHES[key])}, not {args.name}")
+            raise CliError(f"{flag}: only for bench {', '.join(OPTION_BENCHES[key])}, not {args.name}")
         options[key] = value
     if args.no_sonar and args.workers is not None and args.workers > 1:
         raise CliError("--workers: times the pipelined sonar against the serial loop; not with --no-sonar "
@@ -59,8 +59,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=non_negative_int, default=None)
     p.add_argument("--json", action="store_true", help="print one JSON object as the last line")
     p.add_argument("--workers", type=positive_int, default=None, metavar="N",
-                   help="mission, gym: also time N threads (mission: the pipelined loop) or N vector-env "
-                        "processes (gym) against one, in the same run")
+                   help="mission, gym, dataset: also time N threads (mission: the pipelined loop), N "
+                        "vector-env processes (gym) or N dataset worker processes against one, in the same run")
     p.add_argument("--no-sonar", action="store_true", help="mission: without the forward-looking sonar "
                                                            "(and so without perception)")
     add_scenario_args(p, positional=False)

@@ -12,7 +12,6 @@ from pydantic import Field, model_validator
 from autonomy.frames import rot_from_euler
 from scenarios.config.base import StrictModel
 from scenarios.config.world import BasinConfig, SeabedConfig, TargetConfig
-from sim.target_meshes import target_mesh
 
 Range = tuple[float, float]
 TARGET_CLASS = "opi"
@@ -205,6 +204,8 @@ def resting_depth(target: TargetConfig, seabed_depth) -> float:
         base at depth 0: a lying cylinder's axis ends up one radius above a flat bed, a tilted
         rock's lowest corner on it.
     """
+    from sim.target_meshes import target_mesh  # trimesh (and scipy): not loaded where no scene is sampled
+
     R = rot_from_euler(*np.deg2rad(target.rpy_deg))
     v = target_mesh(target).vertices @ R.T
     v[:, :2] += np.asarray(target.pos_ned[:2], dtype=float)

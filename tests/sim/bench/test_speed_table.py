@@ -49,3 +49,18 @@ def test_table_rows_come_from_the_json_and_readme_is_rewritten_between_markers(t
     readme.write_text("no markers\n")
     with pytest.raises(ValueError, match="markers"):
         speed_table.rewrite_readme(readme, json_dir)
+
+
+def test_dataset_row_reads_both_runs_and_start_up(tmp_path):
+    json_dir = tmp_path / "speed"
+    _save(json_dir, "dataset", {
+        "n_frames": 96, "workers": 2, "seed": 0, "workers_speedup": 1.62, "cpu_per_frame_ratio": 1.2,
+        "one_worker": {"workers": 1, "wall_s": 6.2, "cpu_s": 6.1, "frames_per_s": 15.41, "cpu_frames_per_s": 15.69},
+        "n_workers": {"workers": 2, "wall_s": 3.8, "cpu_s": 7.3, "frames_per_s": 25.0, "cpu_frames_per_s": 13.1},
+        "startup": {"wall_s": 1.3, "cpu_s": 1.25}, "identical_across_workers": True})
+    rows = speed_table.table(json_dir).splitlines()
+    assert len(rows) == 2 + 2 + 1
+    assert rows[3].startswith("| `dataset` labelled FLS frames")
+    assert ("| 15.4 frames/s with 1 worker process (15.7 per CPU second); 2 workers 25.0 frames/s (13.1 per CPU "
+            "second), 1.62x one worker; 96 frames, start-up included (1.25 CPU s a worker) | >= 30 per core, linear "
+            "in workers |") in rows[3]
