@@ -43,6 +43,7 @@ from autonomy.messages import PositionFixMsg
 from autonomy.sonar_geometry import FanGeometry
 from autonomy.tracking.onboard import TrackingFrameResult
 from autonomy.tracking.roi import PolarRoi
+from sim.outputs.rerun_columns import PoseColumn, ScalarColumn
 from sim.records import MissionInfo, MissionSummary, PerceptionResult, StepRecord
 from sim.sensors.fls import FlsRender
 from sim.sensors.msis import MsisRender
@@ -102,6 +103,8 @@ class RerunRecorder:
         msis_max_points: at most this many (max-pooled) bins per ping.
         msis_image_every: re-log the scan image every n-th ping.
         msis_image_px: side of the logged scan image, px.
+        series_rows: rows of the per-step series (vehicle poses, navigation errors) sent as one
+            column chunk (10 Hz steps: 60 s), :mod:`sim.outputs.rerun_columns`.
         scorer: a :class:`sim.evaluation.detection_scoring.DetectionScorer` placed before this
             recorder among the observers: detections are coloured true (green) or false (red)
             by it; without one they are drawn in one neutral colour.
@@ -109,7 +112,7 @@ class RerunRecorder:
 
     def __init__(self, path: Path, *, fls_every: int = 1, fls_scale: float = 0.5, path_every_s: float = 2.0,
                  path_chunk_points: int = 600, msis_point_threshold: int = 80, msis_max_points: int = 200, msis_image_every: int = 10,
-                 msis_image_px: int = 256, scorer=None) -> None:
+                 msis_image_px: int = 256, series_rows: int = 600, scorer=None) -> None:
         import rerun as rr
 
         self.scorer = scorer
@@ -124,7 +127,10 @@ class RerunRecorder:
         self._true = _GrowingPath("world/path/true", [40, 120, 220], self.path_chunk_points)
         self._est = _GrowingPath("world/path/estimated", [240, 140, 30], self.path_chunk_points)
         self._others: dict[str, _GrowingPath] = {}
+        self.series_rows = max(int(series_rows), 1)
+        self._series: dict[str, ScalarColumn | PoseColumn] = {}
         self._last_path_t = -np.inf
+        self._t_step: float | None = None
         self._n_fls = 0
         self._frame_logged = False
         self.msis_point_threshold = int(msis_point_threshold)
@@ -171,25 +177,35 @@ class RerunRecorder:
                                                    colors=[[150, 150, 150]]), static=True)
 
     def on_step(self, r: StepRecord) -> None:
-        rr, rec = self._rr, self._rec
-        rec.set_time("sim_time", duration=r.t_s)
+        t = self._t_step = r.t_s
         tr = r.truth
-        rec.log("world/vehicle", rr.Transform3D(translation=tr.pos_ned, quaternion=_xyzw(quat_from_rot(tr.R_nb))))
+        self._pose("world/vehicle", t, tr.pos_ned, tr.R_nb)
         self._true.append(tr.pos_ned)
         self._est.append(r.nav.pos_ned)
-        err = float(np.linalg.norm(tr.pos_ned[:2] - r.nav.pos_ned[:2]))
-        rec.log("nav/horizontal_error_m", rr.Scalars(err))
-        rec.log("nav/sigma_horizontal_m", rr.Scalars(float(np.sqrt(np.trace(r.nav.cov_pos_ned[:2, :2])))))
-        rec.log("nav/depth_error_m", rr.Scalars(float(tr.pos_ned[2] - r.nav.pos_ned[2])))
+        self._scalar("nav/horizontal_error_m", t, float(np.linalg.norm(tr.pos_ned[:2] - r.nav.pos_ned[:2])))
+        self._scalar("nav/sigma_horizontal_m", t, float(np.sqrt(np.trace(r.nav.cov_pos_ned[:2, :2]))))
+        self._scalar("nav/depth_error_m", t, float(tr.pos_ned[2] - r.nav.pos_ned[2]))
         for name, other in r.others.items():
-            rec.log(f"world/vehicles/{name}", rr.Transform3D(translation=other.pos_ned,
-                                                             quaternion=_xyzw(quat_from_rot(other.R_nb))))
+            self._pose(f"world/vehicles/{name}", t, other.pos_ned, other.R_nb)
             if name not in self._others:
                 self._others[name] = _GrowingPath(f"world/path/{name}", [60, 200, 90], self.path_chunk_points)
             self._others[name].append(other.pos_ned)
         if r.t_s - self._last_path_t >= self.path_every_s:
-            self._last_path_t = r.t_s
+            self._last_path_t = t
+            self._rec.set_time("sim_time", duration=t)
             self._log_paths()
+
+    def _pose(self, entity: str, t_s: float, pos_ned, R_nb) -> None:
+        col = self._series.get(entity)
+        if col is None:
+            col = self._series[entity] = PoseColumn(entity, self.series_rows)
+        col.append(self._rec, self._rr, t_s, [*pos_ned, *_xyzw(quat_from_rot(R_nb))])
+
+    def _scalar(self, entity: str, t_s: float, value: float) -> None:
+        col = self._series.get(entity)
+        if col is None:
+            col = self._series[entity] = ScalarColumn(entity, self.series_rows)
+        col.append(self._rec, self._rr, t_s, value)
 
     def _log_paths(self) -> None:
         rr, rec = self._rr, self._rec
@@ -343,7 +359,11 @@ class RerunRecorder:
 
     def on_end(self, summary: MissionSummary) -> None:
         rec = self._rec
+        if self._t_step is not None:
+            rec.set_time("sim_time", duration=self._t_step)
         self._log_paths()
+        for col in self._series.values():
+            col.send(rec, self._rr)
         rec.flush()
         rec.disconnect()
 

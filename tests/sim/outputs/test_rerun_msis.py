@@ -17,10 +17,12 @@ rr = pytest.importorskip("rerun")
 
 
 class _FakeStream:
-    """Stands in for ``rr.RecordingStream``: keeps (entity, archetype) per log call."""
+    """Stands in for ``rr.RecordingStream``: keeps (entity, archetype) per log call and the
+    columns of each ``send_columns``."""
 
     def __init__(self) -> None:
         self.logs: dict[str, list] = defaultdict(list)
+        self.columns: dict[str, list] = defaultdict(list)  # entity -> [(indexes, columns)] per send_columns
 
     def save(self, path) -> None:
         pass
@@ -30,6 +32,9 @@ class _FakeStream:
 
     def log(self, entity: str, archetype, static: bool = False) -> None:
         self.logs[entity].append(archetype)
+
+    def send_columns(self, entity: str, indexes, columns) -> None:
+        self.columns[entity].append((indexes, columns))
 
     def flush(self) -> None:
         pass
