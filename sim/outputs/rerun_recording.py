@@ -51,12 +51,13 @@ from sim.sensors.msis_scan import ScanImage
 from sim.target_meshes import target_mesh
 
 
-# The stream's batcher cuts a chunk per entity at every flush (rerun's default: every 0.2 s of
-# wall clock), and the recording process's memory grows with the number of chunks written
-# (measured: the same simulated hour of logging stays flat in large chunks and grows 87 MB in
-# 2-row chunks), so a mission running at a few times real time grew 150-200 MB per simulated
-# hour. Flushing every 10 s (or 8 MiB) makes the chunks 50x fewer and larger; what waits for
-# a flush stays within the 8 MiB.
+# The stream's batcher holds every logged row until it cuts a chunk per entity at a flush
+# (rerun's default: every 0.2 s of wall clock). Many small chunks cost memory (the file sink keeps
+# each chunk's entry for the footer manifest until the end), and rows held for long cost memory
+# in proportion to the run's speed (10 s of wall clock is 120 simulated s at 12x real time, 300 s
+# at 30x). The recorder flushes every ``flush_every_s`` of simulated time (without waiting for
+# the write), so what the batcher holds is bounded in simulated time whatever the run's speed;
+# the wall-clock tick and the byte limit are backstops.
 RECORDING_FLUSH_TICK_S = 10.0
 RECORDING_FLUSH_BYTES = 8 * 2**20
 
@@ -105,6 +106,8 @@ class RerunRecorder:
         msis_image_px: side of the logged scan image, px.
         series_rows: rows of the per-step series (vehicle poses, navigation errors) sent as one
             column chunk (10 Hz steps: 60 s), :mod:`sim.outputs.rerun_columns`.
+        flush_every_s: simulated seconds between flushes of the stream's batcher (the rows it
+            holds until then are the recorder's working memory).
         scorer: a :class:`sim.evaluation.detection_scoring.DetectionScorer` placed before this
             recorder among the observers: detections are coloured true (green) or false (red)
             by it; without one they are drawn in one neutral colour.
@@ -112,7 +115,7 @@ class RerunRecorder:
 
     def __init__(self, path: Path, *, fls_every: int = 1, fls_scale: float = 0.5, path_every_s: float = 2.0,
                  path_chunk_points: int = 600, msis_point_threshold: int = 80, msis_max_points: int = 200, msis_image_every: int = 10,
-                 msis_image_px: int = 256, series_rows: int = 600, scorer=None) -> None:
+                 msis_image_px: int = 256, series_rows: int = 600, flush_every_s: float = 30.0, scorer=None) -> None:
         import rerun as rr
 
         self.scorer = scorer
@@ -131,6 +134,8 @@ class RerunRecorder:
         self._series: dict[str, ScalarColumn | PoseColumn] = {}
         self._last_path_t = -np.inf
         self._t_step: float | None = None
+        self._last_flush_t = 0.0
+        self.flush_every_s = float(flush_every_s)
         self._n_fls = 0
         self._frame_logged = False
         self.msis_point_threshold = int(msis_point_threshold)
@@ -190,6 +195,9 @@ class RerunRecorder:
             if name not in self._others:
                 self._others[name] = _GrowingPath(f"world/path/{name}", [60, 200, 90], self.path_chunk_points)
             self._others[name].append(other.pos_ned)
+        if t - self._last_flush_t >= self.flush_every_s:
+            self._last_flush_t = t
+            self._rec.flush(timeout_sec=0.0)  # start the flush, do not wait for the write
         if r.t_s - self._last_path_t >= self.path_every_s:
             self._last_path_t = t
             self._rec.set_time("sim_time", duration=t)

@@ -23,6 +23,7 @@ class _FakeStream:
     def __init__(self) -> None:
         self.logs: dict[str, list] = defaultdict(list)
         self.columns: dict[str, list] = defaultdict(list)  # entity -> [(indexes, columns)] per send_columns
+        self.flushes: list[float] = []  # timeout_sec of each flush
 
     def save(self, path) -> None:
         pass
@@ -36,8 +37,8 @@ class _FakeStream:
     def send_columns(self, entity: str, indexes, columns) -> None:
         self.columns[entity].append((indexes, columns))
 
-    def flush(self) -> None:
-        pass
+    def flush(self, timeout_sec: float = 1e38) -> None:
+        self.flushes.append(timeout_sec)
 
     def disconnect(self) -> None:
         pass
