@@ -25,6 +25,11 @@ at most ``path_chunk_points`` points each, the last one re-logged every ``path_e
 grows, so the recording and the recorder's memory grow linearly with mission time (re-logging
 the whole path each time grew the file with the square of it).
 
+The per-step series (``world/vehicle`` and ``world/vehicles/<name>`` poses, ``nav/*`` errors, at
+the step rate) are kept in arrays and sent as column chunks of ``series_rows`` rows
+(:mod:`sim.outputs.rerun_columns`), not one ``rr.log`` row per step in the stream's batcher;
+the rest is logged row-wise and the batcher flushed every ``flush_every_s`` simulated seconds.
+
 An observer of the mission loop; it streams to an ``.rrd`` file as the mission runs.
 """
 
