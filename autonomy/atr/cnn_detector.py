@@ -93,25 +93,26 @@ class CnnDetector:
         self.max_detections = int(max_detections)
         self._keep = None if classes is None else set(classes)
         self._check_source = f"CNN detector ({self.model_path})"
-        self._bind_buffers(ort)
+        self._bind_buffers()
 
-    def _bind_buffers(self, ort) -> None:
-        """Allocate the per-frame buffers and bind them to the session (outputs only when the
-        model declares fixed output shapes; otherwise onnxruntime allocates them each run)."""
+    def _bind_buffers(self) -> None:
+        """Allocate the per-frame buffers and bind them to the session (a model whose outputs
+        are not float32 of fixed shapes runs through :meth:`raw_outputs` instead)."""
         self._lock = threading.Lock()
+        self._binding = None
+        outs = {o.name: o for o in self._session.get_outputs()}
+        shapes = {name: outs[name].shape for name in OUTPUT_NAMES}
+        if not (all(isinstance(v, int) for shape in shapes.values() for v in shape)
+                and self._session.get_inputs()[0].type == "tensor(float)"
+                and all(outs[name].type == "tensor(float)" for name in OUTPUT_NAMES)):
+            return
         self._small = np.empty(self.input_hw, np.uint8)
         self._input = np.zeros((1, 1, *self.input_hw), np.float32)
+        self._outputs = {name: np.zeros(shapes[name], np.float32) for name in OUTPUT_NAMES}
         self._binding = self._session.io_binding()
         self._binding.bind_input(INPUT_NAME, "cpu", 0, np.float32, self._input.shape, self._input.ctypes.data)
-        shapes = {o.name: o.shape for o in self._session.get_outputs()}
-        self._outputs: dict[str, NDArray[np.float32]] | None = None
-        if all(isinstance(v, int) for name in OUTPUT_NAMES for v in shapes[name]):
-            self._outputs = {name: np.zeros(shapes[name], np.float32) for name in OUTPUT_NAMES}
-            for name, buf in self._outputs.items():
-                self._binding.bind_output(name, "cpu", 0, np.float32, buf.shape, buf.ctypes.data)
-        else:
-            for name in OUTPUT_NAMES:
-                self._binding.bind_output(name, "cpu")
+        for name, buf in self._outputs.items():
+            self._binding.bind_output(name, "cpu", 0, np.float32, buf.shape, buf.ctypes.data)
 
     def preprocess(self, fan: NDArray[np.uint8]) -> NDArray[np.float32]:
         """Fan image (H_fan, W_fan) uint8 -> model input (1, 1, H, W) float32."""
@@ -130,6 +131,8 @@ class CnnDetector:
         """Preprocess ``fan`` into the bound input and run the model; returns the outputs by
         name, batch dimension removed (views of the bound buffers: valid until the next run,
         so only under ``self._lock``)."""
+        if self._binding is None:
+            return self.raw_outputs(fan)
         if fan.ndim == 2 and fan.dtype == np.uint8:
             h, w = self.input_hw
             cv2.resize(fan, (w, h), dst=self._small, interpolation=cv2.INTER_AREA)
@@ -137,9 +140,7 @@ class CnnDetector:
         else:  # anything else the plain path accepts, through it
             self._input[...] = self.preprocess(fan)
         self._session.run_with_iobinding(self._binding)
-        if self._outputs is not None:
-            return {k: v[0] for k, v in self._outputs.items()}
-        return {k: v.numpy()[0] for k, v in zip(OUTPUT_NAMES, self._binding.get_outputs())}
+        return {k: v[0] for k, v in self._outputs.items()}
 
     def detect_boxes(self, fan: NDArray[np.uint8], score_threshold: float | None = None
                      ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:

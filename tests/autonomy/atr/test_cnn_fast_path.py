@@ -151,3 +151,12 @@ def test_concurrent_calls_take_turns(frames, detector):
     for k, res in got.items():
         for a, b in zip(res if k % 2 else res[::-1], want):
             assert_same(a, b)
+
+
+def test_models_without_fixed_float32_outputs_run_the_plain_path(frames):
+    """Such a model gets no IO binding (``_binding`` None) and still decodes the same."""
+    det = build_detector(AtrConfig())
+    bound = [det.detect_boxes(f.fan, 0.05) for f in frames[:4]]
+    det._binding = None
+    for f, b in zip(frames[:4], bound):
+        assert_same(det.detect_boxes(f.fan, 0.05), b)
