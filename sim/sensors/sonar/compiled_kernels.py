@@ -8,9 +8,110 @@ from __future__ import annotations
 
 import numba as nb
 import numpy as np
+from llvmlite import ir
+from numba.core import types
+from numba.extending import intrinsic
 
 f32 = np.float32
+u64 = np.uint64
 TWO_M24 = f32(2.0 ** -24)  # the float32 uniform's grid step
+LOW32 = u64(0xFFFFFFFF)
+
+
+@intrinsic
+def lcg128(typingctx, x_hi, x_lo, a_hi, a_lo, c_hi, c_lo):
+    """``a x + c`` mod 2^128 of 128-bit numbers held as (hi, lo) uint64 pairs, in LLVM's i128
+    arithmetic (three multiplies on x86-64); returns (hi, lo)."""
+    sig = types.UniTuple(types.uint64, 2)(types.uint64, types.uint64, types.uint64, types.uint64,
+                                          types.uint64, types.uint64)
+
+    def codegen(context, builder, signature, args):
+        i128, i64 = ir.IntType(128), ir.IntType(64)
+        sh = ir.Constant(i128, 64)
+
+        def join(hi, lo):
+            return builder.or_(builder.shl(builder.zext(hi, i128), sh), builder.zext(lo, i128))
+
+        y = builder.add(builder.mul(join(args[0], args[1]), join(args[2], args[3])), join(args[4], args[5]))
+        hi, lo = builder.trunc(builder.lshr(y, sh), i64), builder.trunc(y, i64)
+        return context.make_tuple(builder, signature.return_type, (hi, lo))
+
+    return sig, codegen
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def xsl_rr(hi, lo):
+    """PCG's XSL-RR output of a 128-bit state: ``rotr64(hi ^ lo, hi >> 58)``."""
+    v = hi ^ lo
+    r = hi >> u64(58)
+    return (v >> r) | (v << ((u64(64) - r) & u64(63)))
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def complement_of_word(w32):
+    """``1 - U`` of a float32 uniform ``U = (w >> 8) 2^-24`` (``w`` a uint32 in a uint64), exact."""
+    return f32(np.int64(16777216) - np.int64(w32 >> u64(8))) * TWO_M24
+
+
+@nb.njit(cache=True, nogil=True)
+def pcg64_complement_uniform_f32(s_hi, s_lo, m_hi, m_lo, inc_hi, inc_lo, jump_m, jump_c, first, has_first, out):
+    """:func:`complement_uniform_f32` drawing its words straight from a PCG64 state.
+
+    numpy's PCG64 step is ``s <- M s + inc`` (mod 2^128), then the output ``xsl_rr(s)``; a
+    uint64 gives two uint32 words, low half first. The states are the same whatever order
+    they are computed in, so four chains run side by side, each stepping four states at a
+    time with ``jump_m = M^4`` and ``jump_c = (M^3 + M^2 + M + 1) inc`` ((hi, lo) pairs):
+    independent multiplies instead of one long dependency chain. Returns the last state
+    stepped to (hi, lo) and the high half of the last uint64 drawn (the spare word numpy
+    buffers when the count is odd).
+    """
+    o = out.ravel()
+    n = o.size
+    j0 = 0
+    if has_first:
+        o[0] = complement_of_word(u64(first))
+        j0 = 1
+    need = n - j0
+    n64 = (need + 1) // 2
+    # the first four states after s
+    h0, l0 = lcg128(s_hi, s_lo, m_hi, m_lo, inc_hi, inc_lo)
+    h1, l1 = lcg128(h0, l0, m_hi, m_lo, inc_hi, inc_lo)
+    h2, l2 = lcg128(h1, l1, m_hi, m_lo, inc_hi, inc_lo)
+    h3, l3 = lcg128(h2, l2, m_hi, m_lo, inc_hi, inc_lo)
+    a_hi, a_lo = jump_m
+    c_hi, c_lo = jump_c
+    last_hi, last_lo, spare = s_hi, s_lo, u64(0)
+    i = 0
+    full = need // 2  # uint64 draws whose both halves are used
+    while i + 4 <= full:
+        w0, w1, w2, w3 = xsl_rr(h0, l0), xsl_rr(h1, l1), xsl_rr(h2, l2), xsl_rr(h3, l3)
+        k = j0 + 2 * i
+        o[k] = complement_of_word(w0 & LOW32)
+        o[k + 1] = complement_of_word(w0 >> u64(32))
+        o[k + 2] = complement_of_word(w1 & LOW32)
+        o[k + 3] = complement_of_word(w1 >> u64(32))
+        o[k + 4] = complement_of_word(w2 & LOW32)
+        o[k + 5] = complement_of_word(w2 >> u64(32))
+        o[k + 6] = complement_of_word(w3 & LOW32)
+        o[k + 7] = complement_of_word(w3 >> u64(32))
+        last_hi, last_lo, spare = h3, l3, w3 >> u64(32)
+        h0, l0 = lcg128(h0, l0, a_hi, a_lo, c_hi, c_lo)
+        h1, l1 = lcg128(h1, l1, a_hi, a_lo, c_hi, c_lo)
+        h2, l2 = lcg128(h2, l2, a_hi, a_lo, c_hi, c_lo)
+        h3, l3 = lcg128(h3, l3, a_hi, a_lo, c_hi, c_lo)
+        i += 4
+    # the rest one state at a time, from the next state in order (chain 0's)
+    h, l = h0, l0
+    while i < n64:
+        w = xsl_rr(h, l)
+        k = j0 + 2 * i
+        o[k] = complement_of_word(w & LOW32)
+        if k + 1 < n:
+            o[k + 1] = complement_of_word(w >> u64(32))
+        last_hi, last_lo, spare = h, l, w >> u64(32)
+        h, l = lcg128(h, l, m_hi, m_lo, inc_hi, inc_lo)
+        i += 1
+    return last_hi, last_lo, spare
 
 
 @nb.njit(cache=True, nogil=True)
