@@ -117,16 +117,18 @@ class _CountingCaster:
         return self.caster.object_bounding_sphere(object_id)
 
 
-@pytest.mark.parametrize("far_m", [30.0, 15.2, 14.5])
+@pytest.mark.parametrize("far_m", [30.0, 15.2, 14.7])
 def test_visible_fraction_with_first_hit_ranges_casts_fewer_rays_for_the_same_fraction(far_m):
-    """Rays whose isolated answer the first hit gives (past the sphere, beyond the window, missing
-    it) are not cast again; the fraction is the one every candidate ray gives. A far window edge
-    cutting the sphere (15.2 m, 14.5 m: the sphere spans 14..16 m) exercises the window tests."""
-    sphere = AnalyticSphere(np.array([15.0, 0.0, 0.0]), 1.0, 1)
-    wall = AnalyticBox(np.array([8.0, 0.3 - 5.0, 0.0]), np.array([0.05, 5.0, 5.0]), 2)
-    floor = AnalyticBox(np.array([15.0, 0.0, 0.9 + 5.0]), np.array([20.0, 20.0, 5.0]), -1)  # cuts the sphere
-    caster = _CountingCaster(AnalyticCaster(None, spheres=(sphere,), boxes=(wall, floor)))
-    dirs = _ray_grid(7.0, 161)
+    """Rays whose isolated answer the first hit gives (past the bounding sphere, beyond the window,
+    missing it) are not cast again; the fraction is the one every candidate ray gives. The object
+    is two balls (bounding sphere 2 m about 15 m ahead), one half hidden by a plate inside that
+    sphere (rays stopped there must still be cast), with a floor behind; a far window edge
+    cutting the object (15.2 m, 14.7 m) exercises the window tests."""
+    balls = (AnalyticSphere(np.array([15.0, -1.5, 0.0]), 0.5, 1), AnalyticSphere(np.array([15.0, 1.5, 0.0]), 0.5, 1))
+    plate = AnalyticBox(np.array([14.2, 1.5, -0.5]), np.array([0.05, 0.6, 0.5]), 2)
+    floor = AnalyticBox(np.array([15.0, 0.0, 0.45 + 5.0]), np.array([20.0, 20.0, 5.0]), -1)
+    caster = _CountingCaster(AnalyticCaster(None, spheres=balls, boxes=(plate, floor)))
+    dirs = _ray_grid(9.0, 181)
     hits = caster.cast(np.zeros(3), dirs, 50.0)
     first, dist = hits.object_id, hits.dist_m
     n_hit = int(np.count_nonzero((first == 1) & (dist <= far_m)))
