@@ -282,3 +282,38 @@ def same_surface(d_a, n_a, o_a, v_a, ia, d_b, n_b, o_b, v_b, ib, chord_sin):
         tol = chord_sin * np.sqrt(row_dot3(chord, 0, chord, 0)) + 1e-9
         out[k] = abs(row_dot3(chord, 0, n_a, i)) <= tol and abs(row_dot3(chord, 0, n_b, j)) <= tol
     return out
+
+
+@nb.njit(cache=True, nogil=True)
+def isolated_candidates(dirs, first_obj, first_dist, owner, object_id, offset, radius, near, far, margin):
+    """Rows of the rays to cast against object ``object_id`` alone
+    (:func:`sim.sensors.sonar.ground_truth.visible_fraction`): not first hitting it, counted for
+    it (``owner`` < 0 or == ``object_id``; an empty ``owner`` counts every row), and crossing the
+    sphere (``offset`` (3,) from the origin, ``radius`` + ``margin``) at ``t0 <= t <= t1`` with
+    ``t0 <= far``, ``t1 >= near`` and the first hit no farther than ``min(t1, far)`` (each with
+    ``margin`` of slack towards casting). Returns (M,) int64 row indices, ascending."""
+    n = first_obj.size
+    out = np.empty(n, dtype=np.int64)
+    r = radius + margin
+    c = offset[0] * offset[0] + offset[1] * offset[1] + offset[2] * offset[2] - r * r
+    check_owner = owner.size == n
+    m = 0
+    for i in range(n):
+        if first_obj[i] == object_id:
+            continue
+        if check_owner and not (owner[i] < 0 or owner[i] == object_id):
+            continue
+        fd = first_dist[i]
+        if fd > far + margin:
+            continue
+        b = dirs[i, 0] * offset[0] + dirs[i, 1] * offset[1] + dirs[i, 2] * offset[2]
+        disc = b * b - c
+        if disc < 0.0:
+            continue
+        half = np.sqrt(disc)
+        t0, t1 = b - half, b + half
+        if t0 > far + margin or t1 < near - margin or fd > t1 + margin:
+            continue
+        out[m] = i
+        m += 1
+    return out[:m]
