@@ -266,6 +266,19 @@ def row_dot3(a, i, b, j):
     return (a[i, 0] * b[j, 0] + a[i, 2] * b[j, 2]) + a[i, 1] * b[j, 1]
 
 
+@nb.njit(cache=True, nogil=True, inline="always")
+def same_surface_pair(d_a, n_a, o_a, v_a, i, d_b, n_b, o_b, v_b, j, chord_sin, chord):
+    """:func:`sim.sensors.sonar.ray_fan.same_surface` of row ``i`` of the a arrays and row ``j``
+    of the b arrays, with the same float64 operations (``chord``: (1, 3) scratch)."""
+    da, db = d_a[i], d_b[j]
+    if not (np.isfinite(da) and np.isfinite(db) and o_a[i] == o_b[j]):
+        return False
+    for c in range(3):
+        chord[0, c] = db * v_b[j, c] - da * v_a[i, c]
+    tol = chord_sin * np.sqrt(row_dot3(chord, 0, chord, 0)) + 1e-9
+    return abs(row_dot3(chord, 0, n_a, i)) <= tol and abs(row_dot3(chord, 0, n_b, j)) <= tol
+
+
 @nb.njit(cache=True, nogil=True)
 def same_surface(d_a, n_a, o_a, v_a, ia, d_b, n_b, o_b, v_b, ib, chord_sin):
     """:func:`sim.sensors.sonar.ray_fan.same_surface` of rows ``ia`` of the a arrays and
@@ -273,15 +286,29 @@ def same_surface(d_a, n_a, o_a, v_a, ia, d_b, n_b, o_b, v_b, ib, chord_sin):
     out = np.zeros(ia.size, dtype=np.bool_)
     chord = np.empty((1, 3))
     for k in range(ia.size):
-        i, j = ia[k], ib[k]
-        da, db = d_a[i], d_b[j]
-        if not (np.isfinite(da) and np.isfinite(db) and o_a[i] == o_b[j]):
-            continue
-        for c in range(3):
-            chord[0, c] = db * v_b[j, c] - da * v_a[i, c]
-        tol = chord_sin * np.sqrt(row_dot3(chord, 0, chord, 0)) + 1e-9
-        out[k] = abs(row_dot3(chord, 0, n_a, i)) <= tol and abs(row_dot3(chord, 0, n_b, j)) <= tol
+        out[k] = same_surface_pair(d_a, n_a, o_a, v_a, ia[k], d_b, n_b, o_b, v_b, ib[k], chord_sin, chord)
     return out
+
+
+@nb.njit(cache=True, nogil=True)
+def bisect_level(lo_d, lo_n, lo_o, lo_v, lo_p, lo_row, hi_d, hi_p, hi_row, act, mid_d, mid_n, mid_o, mid_v,
+                 mid_p, mid_row0, chord_sin):
+    """One level of :meth:`sim.sensors.sonar.ray_fan.RayFan.bisect`, in place: the mid ray
+    ``k`` of interval ``act[k]`` replaces its lower end where it lies on that end's surface or
+    both miss (else its upper end); ``lo_row``/``hi_row`` take its pool row ``mid_row0 + k``."""
+    chord = np.empty((1, 3))
+    for k in range(act.size):
+        i = act[k]
+        with_lo = same_surface_pair(lo_d, lo_n, lo_o, lo_v, i, mid_d, mid_n, mid_o, mid_v, k, chord_sin, chord)
+        if not with_lo and not np.isfinite(lo_d[i]) and not np.isfinite(mid_d[k]):
+            with_lo = True
+        if with_lo:
+            lo_d[i], lo_o[i], lo_p[i], lo_row[i] = mid_d[k], mid_o[k], mid_p[k], mid_row0 + k
+            for c in range(3):
+                lo_n[i, c] = mid_n[k, c]
+                lo_v[i, c] = mid_v[k, c]
+        else:
+            hi_d[i], hi_p[i], hi_row[i] = mid_d[k], mid_p[k], mid_row0 + k
 
 
 @nb.njit(cache=True, nogil=True)
