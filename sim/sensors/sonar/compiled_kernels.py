@@ -266,17 +266,19 @@ def row_dot3(a, i, b, j):
     return (a[i, 0] * b[j, 0] + a[i, 2] * b[j, 2]) + a[i, 1] * b[j, 1]
 
 
-@nb.njit(cache=True, nogil=True, inline="always")
-def same_surface_pair(d_a, n_a, o_a, v_a, i, d_b, n_b, o_b, v_b, j, chord_sin, chord):
-    """:func:`sim.sensors.sonar.ray_fan.same_surface` of row ``i`` of the a arrays and row ``j``
-    of the b arrays, with the same float64 operations (``chord``: (1, 3) scratch)."""
-    da, db = d_a[i], d_b[j]
-    if not (np.isfinite(da) and np.isfinite(db) and o_a[i] == o_b[j]):
+@nb.njit(cache=True, nogil=True)
+def same_surface_pair(da, db, same_obj, va0, va1, va2, vb0, vb1, vb2, na0, na1, na2, nb0, nb1, nb2, chord_sin):
+    """:func:`sim.sensors.sonar.ray_fan.same_surface` of one pair of hits (ranges, whether the
+    object ids match, directions and normals by component), with the same float64 operations
+    (dot products summed as :func:`row_dot3` sums them). Scalars only: LLVM inlines it (a
+    call passing arrays would cost more than the test)."""
+    if not (np.isfinite(da) and np.isfinite(db) and same_obj):
         return False
-    for c in range(3):
-        chord[0, c] = db * v_b[j, c] - da * v_a[i, c]
-    tol = chord_sin * np.sqrt(row_dot3(chord, 0, chord, 0)) + 1e-9
-    return abs(row_dot3(chord, 0, n_a, i)) <= tol and abs(row_dot3(chord, 0, n_b, j)) <= tol
+    c0 = db * vb0 - da * va0
+    c1 = db * vb1 - da * va1
+    c2 = db * vb2 - da * va2
+    tol = chord_sin * np.sqrt((c0 * c0 + c2 * c2) + c1 * c1) + 1e-9
+    return abs((c0 * na0 + c2 * na2) + c1 * na1) <= tol and abs((c0 * nb0 + c2 * nb2) + c1 * nb1) <= tol
 
 
 @nb.njit(cache=True, nogil=True)
@@ -284,9 +286,11 @@ def same_surface(d_a, n_a, o_a, v_a, ia, d_b, n_b, o_b, v_b, ib, chord_sin):
     """:func:`sim.sensors.sonar.ray_fan.same_surface` of rows ``ia`` of the a arrays and
     ``ib`` of the b arrays, with the same float64 operations."""
     out = np.zeros(ia.size, dtype=np.bool_)
-    chord = np.empty((1, 3))
     for k in range(ia.size):
-        out[k] = same_surface_pair(d_a, n_a, o_a, v_a, ia[k], d_b, n_b, o_b, v_b, ib[k], chord_sin, chord)
+        i, j = ia[k], ib[k]
+        out[k] = same_surface_pair(d_a[i], d_b[j], o_a[i] == o_b[j], v_a[i, 0], v_a[i, 1], v_a[i, 2], v_b[j, 0],
+                                   v_b[j, 1], v_b[j, 2], n_a[i, 0], n_a[i, 1], n_a[i, 2], n_b[j, 0], n_b[j, 1],
+                                   n_b[j, 2], chord_sin)
     return out
 
 
@@ -296,10 +300,11 @@ def bisect_level(lo_d, lo_n, lo_o, lo_v, lo_p, lo_row, hi_d, hi_p, hi_row, act, 
     """One level of :meth:`sim.sensors.sonar.ray_fan.RayFan.bisect`, in place: the mid ray
     ``k`` of interval ``act[k]`` replaces its lower end where it lies on that end's surface or
     both miss (else its upper end); ``lo_row``/``hi_row`` take its pool row ``mid_row0 + k``."""
-    chord = np.empty((1, 3))
     for k in range(act.size):
         i = act[k]
-        with_lo = same_surface_pair(lo_d, lo_n, lo_o, lo_v, i, mid_d, mid_n, mid_o, mid_v, k, chord_sin, chord)
+        with_lo = same_surface_pair(lo_d[i], mid_d[k], lo_o[i] == mid_o[k], lo_v[i, 0], lo_v[i, 1], lo_v[i, 2],
+                                    mid_v[k, 0], mid_v[k, 1], mid_v[k, 2], lo_n[i, 0], lo_n[i, 1], lo_n[i, 2],
+                                    mid_n[k, 0], mid_n[k, 1], mid_n[k, 2], chord_sin)
         if not with_lo and not np.isfinite(lo_d[i]) and not np.isfinite(mid_d[k]):
             with_lo = True
         if with_lo:
