@@ -14,6 +14,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -124,8 +125,8 @@ def label_bins(segments: EchoSegments, n_lines: int, n_bins: int
     for k in ids:
         sel = obj == k
         r, ua_k, ub_k = rows[sel], ua[sel], ub[sel]
-        k0 = int(np.clip(np.floor(min(ua_k.min(), ub_k.min())), 0, n_bins - 1))
-        k1 = int(np.clip(np.floor(max(ua_k.max(), ub_k.max())), k0, n_bins - 1))
+        k0 = min(max(math.floor(min(ua_k.min(), ub_k.min())), 0), n_bins - 1)  # np.clip's, on scalars
+        k1 = min(max(math.floor(max(ua_k.max(), ub_k.max())), k0), n_bins - 1)
         windows.append((k, sel, int(r.min()), int(r.max()), k0, k1))
     if windows:
         # strongest object per bin, over the union of the objects' windows only

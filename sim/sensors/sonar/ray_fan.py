@@ -269,7 +269,7 @@ class RayFan:
                 continue
             u = c / dist
             beta = float(np.arcsin(radius / dist))
-            el_c = float(np.arcsin(np.clip(u[2], -1.0, 1.0)))
+            el_c = float(np.arcsin(min(max(float(u[2]), -1.0), 1.0)))
             if 2.0 * beta >= limit * coarse or el_c - beta > el1 or el_c + beta < el0:
                 continue
             spacing = 2.0 * beta / rays_across
