@@ -152,4 +152,7 @@ def _bilinear_gather(fixed_maps: tuple[NDArray[np.int16], NDArray[np.uint16]], p
     if np.any(~dx_ok & (f % 32 != 0)) or np.any(~dy_ok & (f // 32 != 0)):
         raise ValueError("fan maps weight a neighbour outside the polar image")
     step = dx_ok.view(np.uint8) | (dy_ok.view(np.uint8) << 1)
-    return idx.astype(np.int32), y * cols + x, f, step
+    # in the order the polar image is read (each pixel is independent: the same bytes, fewer
+    # cache misses than fan order)
+    order = np.argsort(y * cols + x, kind="stable")
+    return idx.astype(np.int32)[order], (y * cols + x)[order], f[order], step[order]
