@@ -41,8 +41,9 @@ def complement_uniform_f32(rng: np.random.Generator, shape: tuple[int, ...]) -> 
     Bit for bit those values, and the generator is left in the state that call leaves it in.
     For numpy's PCG64 the uint32 words (low half of each uint64 first, a spare half buffered
     as numpy does) come from the 128-bit LCG state stepped inside one compiled pass
-    (:mod:`sim.sensors.sonar.fused_passes`; PCG64's LCG step and XSL-RR output, [ONeill2014] in ``docs/references.md``),
-    four states side by side; any other bit generator takes ``rng.random``.
+    (:mod:`sim.sensors.sonar.fused_passes`; PCG64's LCG step and XSL-RR output, [ONeill2014]
+    in ``docs/references.md``), four states side by side; any other bit generator takes
+    ``rng.random``.
     """
     n = int(np.prod(shape, dtype=np.int64))
     bg = rng.bit_generator
