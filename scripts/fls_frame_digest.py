@@ -1,9 +1,9 @@
 """SHA-256 digests of every byte an FLS render returns, on the bench sequence and on dataset scenes.
 
 Run it on two versions of the code and compare the output: equal digests mean every frame is
-byte-identical (fan and polar images, polar and fan label masks, mean and realised
-intensities, each object's truth record, the pose, and the noise generator's state after
-each frame). Hooks :meth:`sim.sensors.fls.FlsSensor.render`, then drives ``auvsim bench fls``'s
+byte-identical (:func:`sim.sensors.fls_digest.update_with_render`: fan and polar images,
+polar and fan label masks, mean and realised intensities, each object's truth record, the
+pose, and the noise generator's state after each frame). Hooks :meth:`sim.sensors.fls.FlsSensor.render`, then drives ``auvsim bench fls``'s
 pose sequence (``--bench-frames``) and the first ``--dataset-frames`` frames of dataset scenes
 (``--scenes`` of each of the ``train``, ``wide`` and ``heldout`` randomizations).
 
@@ -16,25 +16,6 @@ from __future__ import annotations
 import argparse
 import hashlib
 import json
-
-import numpy as np
-
-
-def _update_render(h, render, rng) -> None:
-    """Feed every array and field of one :class:`sim.sensors.fls.FlsRender` into ``h``."""
-    f, t = render.frame, render.truth
-    for a in (f.polar, f.fan, t.mask_polar, t.mask_fan, render.mean_intensity, render.intensity, t.pos_ned, t.R_ns):
-        a = np.asarray(a)
-        h.update(f"{a.dtype}{a.shape}".encode())
-        h.update(np.ascontiguousarray(a).tobytes())
-    h.update(repr((f.t_s, t.t_s)).encode())
-    for o in t.objects:
-        fields = []
-        for name in o.__slots__:
-            v = getattr(o, name)
-            fields.append(np.asarray(v).tobytes().hex() if isinstance(v, np.ndarray) else repr(v))
-        h.update("|".join(fields).encode())
-    h.update(repr(rng.bit_generator.state).encode())
 
 
 def main() -> None:
@@ -51,13 +32,14 @@ def main() -> None:
     from sim.dataset.scene_render import render_frames
     from sim.rng import component_rng
     from sim.sensors.fls import FlsSensor
+    from sim.sensors.fls_digest import update_with_render
 
     current = {"h": None, "n": 0}
     inner = FlsSensor.render
 
     def hashed(self, *a, **kw):
         out = inner(self, *a, **kw)
-        _update_render(current["h"], out, self.rng)
+        update_with_render(current["h"], out, self.rng)
         current["n"] += 1
         return out
 
