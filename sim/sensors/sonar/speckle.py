@@ -81,7 +81,8 @@ def standard_exponential_f32(rng: np.random.Generator, shape: tuple[int, ...]) -
     in (0, 1], so samples are finite and at most 16.6 (exceeded with probability 6e-8 by the
     exact law).
     """
-    e = cv2.log(complement_uniform_f32(rng, shape))
+    u = complement_uniform_f32(rng, shape)
+    e = cv2.log(u, dst=u)  # in place
     np.negative(e, out=e)
     return e
 
@@ -113,6 +114,7 @@ def add_speckle_and_noise(mean: NDArray[np.float32], rng: np.random.Generator, k
     # echo and receiver noise are independent circular Gaussian fields: their sum is one,
     # of power (echo + noise), so one exponential draw models both:
     # (mean + noise) * -log(1 - U), in one pass
-    log_u = cv2.log(complement_uniform_f32(rng, mean.shape))
+    u = complement_uniform_f32(rng, mean.shape)
+    log_u = cv2.log(u, dst=u)  # in place
     kernels().scale_by_neg(np.ascontiguousarray(mean, dtype=np.float32), np.float32(noise_power), log_u, log_u)
     return log_u
