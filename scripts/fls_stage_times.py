@@ -3,8 +3,9 @@
 Wraps the stages of :meth:`sim.sensors.fls.FlsSensor.render` with process-time counters
 (steadier than wall time on a shared machine), renders ``--frames`` frames after a short
 warm-up and prints one JSON object: ``render`` (the whole frame) and each stage's ms per
-frame. Nested entries (``bisect`` and ``mj_multiRay`` inside ``refine_edges``/``cast``,
-``visible_fraction`` inside ``objects_truth``) are not added to ``other``.
+frame. Nested entries (``bisect``, ``same_surface`` and ``mj_multiRay`` inside
+``refine_edges``/``cast``, ``visible_fraction`` inside ``objects_truth``) are not added to
+``other``.
 
 ``--dataset-scenes N`` times the dataset generator's renders instead: the first
 ``--dataset-frames`` frames of scenes ``0..N-1`` of each randomization preset (rough and
