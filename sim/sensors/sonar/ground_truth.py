@@ -1,4 +1,4 @@
-"""Exact ground truth of a sonar frame from the rays that formed it (numpy, one compiled pass).
+"""Exact ground truth of a sonar frame from the rays that formed it (pure numpy).
 
 * Per-bin labels: in each (line, range bin) the scene object whose echo energy there is the
   strongest, :data:`sim.sensors.raycast.BACKGROUND_ID` where no object echoes
@@ -26,7 +26,6 @@ from sim.sensors.base import SceneObjectLike
 from sim.sensors.raycast import BACKGROUND_ID, RayCaster
 from sim.sensors.sonar.display import FanRemap
 from sim.sensors.sonar.echo_lines import EchoSegments, spread_segments
-from sim.sensors.sonar.fused_passes import kernels
 
 FloatArray = NDArray[np.float64]
 
@@ -181,15 +180,11 @@ def visible_fraction(caster: RayCaster, object_id: int, origin_ned: FloatArray, 
         sphere: the object's bounding sphere (centre (3,) NED m, radius m) if already known
             (default: asked of the caster).
         first_dist: (N,) range of each ray's first hit (m, ``inf`` for none), if known. Then
-            rays whose isolated answer the first hit already gives are not cast again: the
-            object lies inside its bounding sphere, so a ray meets it, if at all, where it runs
-            inside the sphere (``t0 <= t <= t1``), never nearer than its first hit; a ray that
-            crosses the sphere nowhere inside the window, or whose first hit lies beyond the
-            window or beyond ``t1`` (the object, were it hit, would have been hit first),
-            cannot hit it alone inside the window. The rays left are those the cone test and
-            the cast would count, so the fraction is the same; one compiled pass
-            (:mod:`sim.sensors.sonar.fused_passes`) finds them, with :data:`SPHERE_MARGIN_M`
-            of slack towards casting.
+            rays whose isolated answer the first hit already gives are not cast again: a ray
+            that crosses the sphere nowhere inside the window, or whose first hit lies beyond
+            the window or beyond where the ray leaves the sphere (the object, were it hit,
+            would have been hit first), cannot hit the object alone inside the window. The
+            fraction is the same; only fewer rays are cast.
 
     Returns:
         ``n_hit / (rays that hit the object alone inside the window)`` in [0, 1]; 0 when no ray
@@ -204,25 +199,39 @@ def visible_fraction(caster: RayCaster, object_id: int, origin_ned: FloatArray, 
     dist_c = float(np.linalg.norm(v))
     n_alone = 0
     if dist_c - radius <= window_far_m:
-        n_alone = n_hit
-        if first_dist is not None:  # one compiled pass: the sphere test implies the cone's
-            own = np.zeros(0, dtype=np.int64) if rows is None else np.where(rows, -1, -2)
-            idx = kernels().isolated_candidates(dirs_ned, first_obj, first_dist, own, int(object_id), v,
-                                                float(radius), window_near_m, window_far_m, SPHERE_MARGIN_M)
-            cand = idx if idx.size else None
+        if dist_c <= radius:
+            cand = np.ones(len(dirs_ned), dtype=bool)
         else:
-            if dist_c <= radius:
-                cand = np.ones(len(dirs_ned), dtype=bool)
-            else:
-                half = np.arcsin(min(1.0, radius / dist_c)) + ray_spacing_rad
-                cand = dirs_ned @ (v / dist_c) >= np.cos(min(half, np.pi))
-            # a ray whose first hit is k hits k alone at the same range: only the others are cast
-            cand &= first_obj != object_id
-            if rows is not None:
-                cand &= rows
-            cand = cand if cand.any() else None
-        if cand is not None:
+            half = np.arcsin(min(1.0, radius / dist_c)) + ray_spacing_rad
+            cand = dirs_ned @ (v / dist_c) >= np.cos(min(half, np.pi))
+        # a ray whose first hit is k hits k alone at the same range: only the others are cast
+        cand &= first_obj != object_id
+        if rows is not None:
+            cand &= rows
+        if first_dist is not None:
+            idx = np.flatnonzero(cand)
+            cand[idx[_answer_known(dirs_ned[idx], first_dist[idx], v, radius, window_near_m, window_far_m)]] = False
+        n_alone = n_hit
+        if cand.any():
             d_alone = caster.cast_isolated(origin_ned, dirs_ned[cand], max_range_m, object_id)
             n_alone += int(np.count_nonzero((d_alone >= window_near_m) & (d_alone <= window_far_m)))
     frac = n_hit / n_alone if n_alone > 0 else 0.0
     return min(frac, 1.0)
+
+
+def _answer_known(dirs: FloatArray, first_dist: FloatArray, centre_offset: FloatArray, radius: float,
+                  window_near_m: float, window_far_m: float) -> NDArray[np.bool_]:
+    """(M,) True for rays (unit ``dirs`` (M, 3), first-hit ranges (M,)) that cannot hit an object
+    inside the range window when cast against it alone: the object lies inside the sphere of
+    ``radius`` about ``centre_offset`` (3,) from the origin, and a ray meets it, if at all,
+    where it runs inside the sphere, ``t0 <= t <= t1``, never nearer than its first hit.
+    Known: no crossing, or ``t0 > far``, ``t1 < near``, first hit beyond ``far`` or beyond
+    ``t1`` (all with :data:`SPHERE_MARGIN_M` of slack towards casting)."""
+    r = radius + SPHERE_MARGIN_M
+    b = dirs @ centre_offset  # range of the point nearest the centre
+    disc = b * b - (float(centre_offset @ centre_offset) - r * r)
+    half = np.sqrt(np.maximum(disc, 0.0))
+    t0, t1 = b - half, b + half
+    m = SPHERE_MARGIN_M
+    return ((disc < 0.0) | (t0 > window_far_m + m) | (t1 < window_near_m - m)
+            | (first_dist > window_far_m + m) | (first_dist > t1 + m))
