@@ -227,7 +227,7 @@ class FlsSensor(Sensor[FlsRender]):
             rows = None if base_only else (owner < 0) | (owner == k)
             frac = visible_fraction(caster, k, origin, sampled.dirs, first_obj, n_hit, g.window_near_m,
                                     g.window_far_m, g.range_max_m, self._ray_spacing_rad, rows=rows,
-                                    sphere=None if spheres is None else spheres[k], first_dist=sampled.dist)
+                                    sphere=None if spheres is None else spheres[k])
             out.append(self._object_truth(obj, origin, R_ns, n_hit, frac, extents.get(k)))
         return tuple(out)
 

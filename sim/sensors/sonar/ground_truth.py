@@ -6,8 +6,7 @@
 * Visible fraction of object k: ``(rays whose first hit is k) / (rays that hit k when k is cast
   alone)``; the second count re-casts, against k's geoms alone, only the rays inside k's
   bounding cone whose first hit is not k (those that hit k hit it alone at the same range)
-  and whose answer is not already known from the first hit (:func:`visible_fraction`), so it
-  is exact for the ray set and cheap.
+  (:func:`visible_fraction`), so it is exact for the ray set and cheap.
 * Where the object is: slant range, azimuth and elevation of its centroid in the sonar frame
   (:func:`centroid_polar`).
 """
@@ -155,14 +154,10 @@ def centroid_polar(centroid_ned: FloatArray, origin_ned: FloatArray, R_ns: Float
     return float(r), float(a), float(e)
 
 
-SPHERE_MARGIN_M = 1e-6  # slack on the bounding sphere's radius and on the ranges compared with it (m)
-
-
 def visible_fraction(caster: RayCaster, object_id: int, origin_ned: FloatArray, dirs_ned: FloatArray,
                      first_obj: NDArray[np.int64], n_hit: int, window_near_m: float, window_far_m: float,
                      max_range_m: float, ray_spacing_rad: float, *, rows: NDArray[np.bool_] | None = None,
-                     sphere: tuple[FloatArray, float] | None = None,
-                     first_dist: FloatArray | None = None) -> float:
+                     sphere: tuple[FloatArray, float] | None = None) -> float:
     """Fraction of object ``object_id`` that the rays see unoccluded.
 
     Args:
@@ -179,12 +174,6 @@ def visible_fraction(caster: RayCaster, object_id: int, origin_ned: FloatArray, 
         rows: (N,) the rays to count (default all), so a caller need not copy a subset out.
         sphere: the object's bounding sphere (centre (3,) NED m, radius m) if already known
             (default: asked of the caster).
-        first_dist: (N,) range of each ray's first hit (m, ``inf`` for none), if known. Then
-            rays whose isolated answer the first hit already gives are not cast again: a ray
-            that crosses the sphere nowhere inside the window, or whose first hit lies beyond
-            the window or beyond where the ray leaves the sphere (the object, were it hit,
-            would have been hit first), cannot hit the object alone inside the window. The
-            fraction is the same; only fewer rays are cast.
 
     Returns:
         ``n_hit / (rays that hit the object alone inside the window)`` in [0, 1]; 0 when no ray
@@ -208,30 +197,9 @@ def visible_fraction(caster: RayCaster, object_id: int, origin_ned: FloatArray, 
         cand &= first_obj != object_id
         if rows is not None:
             cand &= rows
-        if first_dist is not None:
-            idx = np.flatnonzero(cand)
-            cand[idx[_answer_known(dirs_ned[idx], first_dist[idx], v, radius, window_near_m, window_far_m)]] = False
         n_alone = n_hit
         if cand.any():
             d_alone = caster.cast_isolated(origin_ned, dirs_ned[cand], max_range_m, object_id)
             n_alone += int(np.count_nonzero((d_alone >= window_near_m) & (d_alone <= window_far_m)))
     frac = n_hit / n_alone if n_alone > 0 else 0.0
     return min(frac, 1.0)
-
-
-def _answer_known(dirs: FloatArray, first_dist: FloatArray, centre_offset: FloatArray, radius: float,
-                  window_near_m: float, window_far_m: float) -> NDArray[np.bool_]:
-    """(M,) True for rays (unit ``dirs`` (M, 3), first-hit ranges (M,)) that cannot hit an object
-    inside the range window when cast against it alone: the object lies inside the sphere of
-    ``radius`` about ``centre_offset`` (3,) from the origin, and a ray meets it, if at all,
-    where it runs inside the sphere, ``t0 <= t <= t1``, never nearer than its first hit.
-    Known: no crossing, or ``t0 > far``, ``t1 < near``, first hit beyond ``far`` or beyond
-    ``t1`` (all with :data:`SPHERE_MARGIN_M` of slack towards casting)."""
-    r = radius + SPHERE_MARGIN_M
-    b = dirs @ centre_offset  # range of the point nearest the centre
-    disc = b * b - (float(centre_offset @ centre_offset) - r * r)
-    half = np.sqrt(np.maximum(disc, 0.0))
-    t0, t1 = b - half, b + half
-    m = SPHERE_MARGIN_M
-    return ((disc < 0.0) | (t0 > window_far_m + m) | (t1 < window_near_m - m)
-            | (first_dist > window_far_m + m) | (first_dist > t1 + m))
