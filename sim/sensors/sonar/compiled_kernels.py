@@ -315,3 +315,89 @@ def bisect_level(lo_d, lo_n, lo_o, lo_v, lo_p, lo_row, hi_d, hi_p, hi_row, act, 
         else:
             hi_d[i], hi_p[i], hi_row[i] = mid_d[k], mid_p[k], mid_row0 + k
 
+@nb.njit(cache=True, nogil=True, error_model="numpy")  # IEEE division: x / 0 -> inf or nan, as numpy
+def echo_segments(seg_a, seg_b, conn, col, phi, dist, obj, strength, range_slope, window_near, resolution):
+    """:func:`sim.sensors.sonar.echo_lines.echo_segments` in one pass per part, with the same
+    float64 operations in the same order and its rows in its order (connected intervals' first
+    parts, the second parts of folded ones, then the unconnected upper ends and lower ends),
+    dropping rows without positive ranges and energy. Returns (line, u0, u1, energy, obj)."""
+    m = seg_a.size
+    n_conn = 0
+    for k in range(m):
+        if conn[k]:
+            n_conn += 1
+    cap = n_conn * 2 + (m - n_conn) * 2
+    o_line = np.empty(cap, dtype=np.intp)
+    o_u0, o_u1, o_e = np.empty(cap), np.empty(cap), np.empty(cap)
+    o_obj = np.empty(cap, dtype=np.int64)
+    # per connected interval: its fold's range extremum and split (t_ext = 1: no fold)
+    f_r_ext, f_t, f_fold = np.empty(n_conn), np.empty(n_conn), np.zeros(n_conn, dtype=np.bool_)
+    f_e, f_rb = np.empty(n_conn), np.empty(n_conn)
+    f_row = np.empty(n_conn, dtype=np.intp)
+    f_obj = np.empty(n_conn, dtype=np.int64)
+    n = 0
+    j = 0
+    for k in range(m):
+        if not conn[k]:
+            continue
+        a, b = seg_a[k], seg_b[k]
+        dc = phi[b] - phi[a]
+        e_conn = 0.5 * (strength[a] + strength[b]) * dc
+        ra = dist[a] if np.isfinite(dist[a]) else 0.0
+        rb = dist[b] if np.isfinite(dist[b]) else 0.0
+        sa, sb = range_slope[a] * dc, range_slope[b] * dc
+        dd = ra - rb + sb
+        lin = 0.5 * (sa + sb - 2.0 * dd)
+        quad = 0.5 * (rb - ra - sa + dd)
+        t_ext = -lin / (2.0 * quad)
+        fold = sa * sb < 0.0 and t_ext > 0.0 and t_ext < 1.0
+        if fold:
+            r_ext = ra + lin * t_ext + quad * (t_ext * t_ext)
+            # bounded by the end tangents (_clamp_to_end_tangents)
+            near, far = min(ra, rb), max(ra, rb)
+            t_cross = (rb - sb - ra) / (sa - sb)
+            r_cross = ra + sa * t_cross
+            crosses = t_cross > 0.0 and t_cross < 1.0
+            if sa < 0.0:
+                lo = r_cross if crosses else near
+                hi = near
+            else:
+                lo = far
+                hi = r_cross if crosses else far
+            lo_b, hi_b = min(lo, hi), max(lo, hi)
+            r_ext = min(max(r_ext, lo_b), hi_b)
+            e_first = e_conn * t_ext
+        else:
+            t_ext = 1.0
+            r_ext = rb
+            e_first = e_conn * 1.0
+        f_r_ext[j], f_t[j], f_fold[j], f_e[j], f_rb[j] = r_ext, t_ext, fold, e_conn, rb
+        f_row[j], f_obj[j] = col[a], obj[a]
+        j += 1
+        energy = e_first * ra * r_ext
+        if ra > 0.0 and r_ext > 0.0 and energy > 0.0:
+            o_line[n], o_u0[n], o_u1[n] = col[a], (ra - window_near) / resolution, (r_ext - window_near) / resolution
+            o_e[n], o_obj[n] = energy, obj[a]
+            n += 1
+    for j in range(n_conn):  # the folds' second parts
+        if not f_fold[j]:
+            continue
+        r0, r1 = f_r_ext[j], f_rb[j]
+        energy = f_e[j] * (1.0 - f_t[j]) * r0 * r1
+        if r0 > 0.0 and r1 > 0.0 and energy > 0.0:
+            o_line[n], o_u0[n], o_u1[n] = f_row[j], (r0 - window_near) / resolution, (r1 - window_near) / resolution
+            o_e[n], o_obj[n] = energy, f_obj[j]
+            n += 1
+    for end in range(2):  # unconnected ends: each ray keeps half its share of the gap at its own range
+        for k in range(m):
+            if conn[k]:
+                continue
+            r = seg_a[k] if end == 0 else seg_b[k]
+            dphi = phi[seg_b[k]] - phi[seg_a[k]]
+            rr = dist[r] if np.isfinite(dist[r]) else 0.0
+            energy = 0.5 * strength[r] * dphi * rr * rr
+            if rr > 0.0 and energy > 0.0:
+                u = (rr - window_near) / resolution
+                o_line[n], o_u0[n], o_u1[n], o_e[n], o_obj[n] = col[r], u, u, energy, obj[r]
+                n += 1
+    return o_line[:n], o_u0[:n], o_u1[:n], o_e[:n], o_obj[:n]
