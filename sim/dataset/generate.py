@@ -17,9 +17,13 @@ scene index), never on the number of workers.
 
 from __future__ import annotations
 
+import gc
+import importlib
 import json
 import math
 import os
+import signal
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -236,16 +240,57 @@ def generate_dataset(out_dir: str | Path, n_frames: int, seed: int = 0, workers:
                 for job in jobs:
                     bar.update(_scene_job(job))
             else:
-                import multiprocessing as mp
-
-                with mp.get_context("spawn").Pool(min(n_workers, len(jobs))) as pool:
-                    for done in pool.imap_unordered(_scene_job, jobs):
-                        bar.update(done)
+                _run_pool(jobs, min(n_workers, len(jobs)), settings, bar)
     finally:
         bar.close()
     merge_parts(out_dir, manifest)
     write_atomic(man_path, json.dumps({**manifest, "complete": True}, indent=1))
     return out_dir / ANNOTATIONS_FILE
+
+
+def worker_modules(settings: RenderSettings | SssSettings) -> tuple[str, ...]:
+    """Modules a scene job imports beyond this one (lazily: a process that renders nothing skips them)."""
+    shared = ("cv2", "scipy.interpolate", "scenarios.schema", "sim.sensors.raycast", "sim.world", "sim.seabed",
+              "sim.target_meshes")
+    if isinstance(settings, SssSettings):
+        return shared + ("scenarios.config.sss", "sim.dataset.sss_generate", "sim.sensors.sss", "sim.sensors.sss_tiles")
+    return shared + ("sim.dataset.scene_render", "sim.sensors.fls")
+
+
+def _start_context(settings: RenderSettings | SssSettings):
+    """The multiprocessing context of the local workers.
+
+    On Linux the workers are forked from this process after it has imported
+    :func:`worker_modules` (about 1 s of CPU a spawned worker would pay again, each); the
+    parent has rendered nothing yet, so no OpenCV or MuJoCo thread pool is copied half-used
+    into a child (only OpenBLAS's idle threads, which it re-creates after a fork). Elsewhere
+    (macOS, Windows: fork is unsafe or absent) the workers are spawned and import for
+    themselves. Frames depend only on (seed, scene index), so both give the same files.
+    """
+    import multiprocessing as mp
+
+    if not sys.platform.startswith("linux"):
+        return mp.get_context("spawn")
+    for name in worker_modules(settings):
+        importlib.import_module(name)
+    return mp.get_context("fork")
+
+
+def _worker_init() -> None:
+    """A worker ends on SIGTERM (the pool's shutdown) as a spawned one does, whatever handler
+    a forked one inherited (``auvsim``'s turns SIGTERM into an exception)."""
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+def _run_pool(jobs: list[tuple], n_workers: int, settings: RenderSettings | SssSettings, bar) -> None:
+    ctx = _start_context(settings)
+    gc.freeze()  # the inherited objects stay out of the children's collections (and their pages shared)
+    try:
+        with ctx.Pool(n_workers, initializer=_worker_init) as pool:
+            for done in pool.imap_unordered(_scene_job, jobs):
+                bar.update(done)
+    finally:
+        gc.unfreeze()
 
 
 def _run_ray(jobs: list[tuple], address: str | None, bar) -> None:
