@@ -148,8 +148,8 @@ def _add_seabed(spec: mujoco.MjSpec, seabed: Seabed) -> list[mujoco.MjsGeom]:
             rgba=[0.55, 0.5, 0.4, 1.0],
         )
         return [geom]
-    mesh = seabed.terrain_mesh()
-    spec.add_mesh(name="seabed_mesh", file=_add_msh_asset(spec, "seabed", mesh.vertices, mesh.faces))
+    vertices, faces = seabed.terrain_arrays()
+    spec.add_mesh(name="seabed_mesh", file=_add_msh_asset(spec, "seabed", vertices, faces))
     geom = spec.worldbody.add_geom(
         name="seabed", type=mujoco.mjtGeom.mjGEOM_MESH, meshname="seabed_mesh", group=ACOUSTIC_GROUP,
         contype=0, conaffinity=0, rgba=[0.55, 0.5, 0.4, 1.0],

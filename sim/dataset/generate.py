@@ -250,7 +250,7 @@ def generate_dataset(out_dir: str | Path, n_frames: int, seed: int = 0, workers:
 
 def worker_modules(settings: RenderSettings | SssSettings) -> tuple[str, ...]:
     """Modules a scene job imports beyond this one (lazily: a process that renders nothing skips them)."""
-    shared = ("cv2", "scipy.interpolate", "scenarios.schema", "sim.sensors.raycast", "sim.world", "sim.seabed",
+    shared = ("cv2", "scenarios.schema", "sim.sensors.raycast", "sim.world", "sim.seabed",
               "sim.target_meshes")
     if isinstance(settings, SssSettings):
         return shared + ("scenarios.config.sss", "sim.dataset.sss_generate", "sim.sensors.sss", "sim.sensors.sss_tiles")

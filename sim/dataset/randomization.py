@@ -204,7 +204,7 @@ def resting_depth(target: TargetConfig, seabed_depth) -> float:
         base at depth 0: a lying cylinder's axis ends up one radius above a flat bed, a tilted
         rock's lowest corner on it.
     """
-    from sim.target_meshes import target_mesh  # trimesh (and scipy): not loaded where no scene is sampled
+    from sim.target_meshes import target_mesh
 
     R = rot_from_euler(*np.deg2rad(target.rpy_deg))
     v = target_mesh(target).vertices @ R.T
