@@ -18,12 +18,12 @@ scene index), never on the number of workers.
 from __future__ import annotations
 
 import gc
-import importlib
 import json
 import math
 import os
 import signal
 import sys
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -235,12 +235,7 @@ def generate_dataset(out_dir: str | Path, n_frames: int, seed: int = 0, workers:
         if use_ray:
             _run_ray(jobs, ray_address, bar)
         else:
-            n_workers = workers or os.cpu_count() or 1
-            if n_workers <= 1 or len(jobs) <= 1:
-                for job in jobs:
-                    bar.update(_scene_job(job))
-            else:
-                _run_pool(jobs, min(n_workers, len(jobs)), settings, bar)
+            _run_local(jobs, workers or os.cpu_count() or 1, bar)
     finally:
         bar.close()
     merge_parts(out_dir, manifest)
@@ -257,40 +252,65 @@ def worker_modules(settings: RenderSettings | SssSettings) -> tuple[str, ...]:
     return shared + ("sim.dataset.scene_render", "sim.sensors.fls")
 
 
-def _start_context(settings: RenderSettings | SssSettings):
-    """The multiprocessing context of the local workers.
-
-    On Linux the workers are forked from this process after it has imported
-    :func:`worker_modules` (about 1 s of CPU a spawned worker would pay again, each); the
-    parent has rendered nothing yet, so no OpenCV or MuJoCo thread pool is copied half-used
-    into a child (only OpenBLAS's idle threads, which it re-creates after a fork). Elsewhere
-    (macOS, Windows: fork is unsafe or absent) the workers are spawned and import for
-    themselves. Frames depend only on (seed, scene index), so both give the same files.
-    """
-    import multiprocessing as mp
-
-    if not sys.platform.startswith("linux"):
-        return mp.get_context("spawn")
-    for name in worker_modules(settings):
-        importlib.import_module(name)
-    return mp.get_context("fork")
-
-
 def _worker_init() -> None:
     """A worker ends on SIGTERM (the pool's shutdown) as a spawned one does, whatever handler
     a forked one inherited (``auvsim``'s turns SIGTERM into an exception)."""
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
-def _run_pool(jobs: list[tuple], n_workers: int, settings: RenderSettings | SssSettings, bar) -> None:
-    ctx = _start_context(settings)
-    gc.freeze()  # the inherited objects stay out of the children's collections (and their pages shared)
+@contextmanager
+def _opencv_single_threaded():
+    """OpenCV without its worker threads while this block runs (its previous thread count after).
+
+    A forked child keeps only the forking thread; OpenCV's pthreads pool would still count the
+    parent's workers (and a mutex one of them held at the fork would stay locked). With one
+    thread OpenCV joins its workers and runs every ``parallel_for`` inline; each output pixel
+    is computed the same way either way, so the images are unchanged.
+    """
+    import cv2
+
+    previous = cv2.getNumThreads()
+    cv2.setNumThreads(1)
     try:
-        with ctx.Pool(n_workers, initializer=_worker_init) as pool:
+        yield
+    finally:
+        cv2.setNumThreads(previous)
+
+
+def _run_local(jobs: list[tuple], n_workers: int, bar) -> None:
+    """Render ``jobs`` in this process (one worker) or in a pool of ``n_workers`` processes.
+
+    On Linux this process renders the first scene itself, then forks the workers: they inherit
+    the imports and the loaded compiled kernels (about 0.4 s of imports and 0.45 s of first-frame
+    set-up a spawned worker pays again, each) and render the rest. Elsewhere (macOS, Windows:
+    fork unsafe or absent) the workers are spawned. Frames depend only on (seed, scene index),
+    so every way gives the same files.
+    """
+    if n_workers <= 1 or len(jobs) <= 1:
+        for job in jobs:
+            bar.update(_scene_job(job))
+        return
+    import multiprocessing as mp
+
+    if not sys.platform.startswith("linux"):
+        with mp.get_context("spawn").Pool(min(n_workers, len(jobs)), initializer=_worker_init) as pool:
             for done in pool.imap_unordered(_scene_job, jobs):
                 bar.update(done)
-    finally:
-        gc.unfreeze()
+        return
+    with _opencv_single_threaded():
+        bar.update(_scene_job(jobs[0]))
+        rest = jobs[1:]
+        if len(rest) <= 1:
+            for job in rest:
+                bar.update(_scene_job(job))
+            return
+        gc.freeze()  # what the children inherit stays out of their collections (and its pages shared)
+        try:
+            with mp.get_context("fork").Pool(min(n_workers, len(rest)), initializer=_worker_init) as pool:
+                for done in pool.imap_unordered(_scene_job, rest):
+                    bar.update(done)
+        finally:
+            gc.unfreeze()
 
 
 def _run_ray(jobs: list[tuple], address: str | None, bar) -> None:
