@@ -23,8 +23,9 @@ def _files(d: Path) -> dict[str, bytes]:
     return {str(p.relative_to(d)): p.read_bytes() for p in sorted(d.rglob("*")) if p.is_file()}
 
 
-def _make(d: Path, n: int = 4, seed: int = 3, **kw) -> Path:
-    generate_dataset(d, n, seed=seed, workers=1, randomization=FAST, settings=SETTINGS, progress=False, **kw)
+def _make(d: Path, n: int = 4, seed: int = 3, workers_override: int = 1, **kw) -> Path:
+    generate_dataset(d, n, seed=seed, workers=workers_override, randomization=FAST, settings=SETTINGS, progress=False,
+                     **kw)
     return d
 
 
@@ -152,3 +153,25 @@ def test_bad_randomization_is_named():
         Randomization(altitude_m=(5.0, 2.0))
     with pytest.raises(ValueError, match="seabed_kinds"):
         Randomization(seabed_kinds=("plane", "lava"))
+
+
+def test_two_workers_write_the_same_files_and_end_quietly(tmp_path, capfd):
+    """Three scenes on two workers (on Linux the parent renders the first, then forks workers that
+    take the others): the same files as one worker. A SIGTERM handler that raises (``auvsim``'s)
+    is not inherited by the workers: the pool's shutdown ends them without a traceback."""
+    import signal
+
+    class Stop(BaseException):
+        pass
+
+    def raising(signum, frame):
+        raise Stop()
+
+    previous = signal.signal(signal.SIGTERM, raising)
+    try:
+        many = _make(tmp_path / "two", n=6, workers_override=2)
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+    one = _make(tmp_path / "one", n=6)
+    assert _files(many) == _files(one) and len(list((one / "images").glob("*.png"))) == 6
+    assert "Traceback" not in capfd.readouterr().err
