@@ -13,6 +13,7 @@ trimesh. :meth:`TriangleMesh.to_trimesh` gives a ``trimesh.Trimesh`` where one i
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import lru_cache
 
 import numpy as np
 from numpy.typing import NDArray
@@ -162,17 +163,30 @@ def tyre(radius_m: float, tube_radius_m: float, sections: int = 32, tube_section
 def target_mesh(cfg: TargetConfig) -> TriangleMesh:
     """The mesh for a target config, before its pose is applied.
 
+    Shared: the same object's mesh is built once for placing it on the seabed and once for the
+    scene, so recent meshes are kept (read-only arrays; callers transform copies).
+
     Raises:
         ValueError: an unknown ``cfg.shape``.
     """
-    if cfg.shape == "half_sphere":
-        return half_sphere(cfg.radius_m)
-    if cfg.shape == "truncated_cone":
-        return truncated_cone(cfg.radius_m, cfg.top_radius_m, cfg.height_m)
-    if cfg.shape == "cylinder":
-        return cylinder(cfg.radius_m, cfg.height_m)
-    if cfg.shape == "box":
-        return box(cfg.size_m)
-    if cfg.shape == "tyre":
-        return tyre(cfg.radius_m, cfg.tube_radius_m)
-    raise ValueError(f"unknown target shape {cfg.shape!r}")
+    return _shape_mesh(cfg.shape, cfg.radius_m, cfg.top_radius_m, cfg.height_m, tuple(cfg.size_m), cfg.tube_radius_m)
+
+
+@lru_cache(maxsize=128)
+def _shape_mesh(shape: str, radius_m: float, top_radius_m: float, height_m: float,
+                size_m: tuple[float, float, float], tube_radius_m: float) -> TriangleMesh:
+    if shape == "half_sphere":
+        mesh = half_sphere(radius_m)
+    elif shape == "truncated_cone":
+        mesh = truncated_cone(radius_m, top_radius_m, height_m)
+    elif shape == "cylinder":
+        mesh = cylinder(radius_m, height_m)
+    elif shape == "box":
+        mesh = box(size_m)
+    elif shape == "tyre":
+        mesh = tyre(radius_m, tube_radius_m)
+    else:
+        raise ValueError(f"unknown target shape {shape!r}")
+    mesh.vertices.setflags(write=False)
+    mesh.faces.setflags(write=False)
+    return mesh
