@@ -37,7 +37,7 @@ from sim.dataset.coco_io import (ANNOTATIONS_FILE, IMAGES_DIR, LABELS_DIR, write
 from sim.dataset.errors import DatasetError
 from sim.dataset.sss_generate import SssSettings
 from sim.dataset.randomization import (HELDOUT_RANDOMIZATION, TRAIN_RANDOMIZATION, WIDE_RANDOMIZATION,
-                                      Randomization, SceneSpec, sample_scene)
+                                      Randomization, SceneSpec, draw_world_seed_and_seabed_kind, sample_scene)
 from sim.outputs.run_dir import check_output_dir, write_marker
 from sim.rng import component_rng
 
@@ -279,14 +279,27 @@ def _opencv_single_threaded():
         cv2.setNumThreads(previous)
 
 
+def _builds_terrain_mesh(job: tuple) -> bool:
+    """Whether an FLS scene job's seabed is a terrain mesh (a few times the work of a flat one:
+    the mesh to build and compile); side-scan jobs count as flat (their order is kept)."""
+    seed, index, rz_json, settings = job[:4]
+    if isinstance(settings, SssSettings):
+        return False
+    rz = Randomization.model_validate_json(rz_json)
+    _, kind = draw_world_seed_and_seabed_kind(component_rng(seed, f"dataset/scene/{index}"), rz)
+    return kind in ("rough", "ripple")
+
+
 def _run_local(jobs: list[tuple], n_workers: int, bar) -> None:
     """Render ``jobs`` in this process (one worker) or in a pool of ``n_workers`` processes.
 
-    On Linux this process renders the first scene itself, then forks the workers: they inherit
-    the imports and the loaded compiled kernels (about 0.4 s of imports and 0.45 s of first-frame
-    set-up a spawned worker pays again, each) and render the rest. Elsewhere (macOS, Windows:
+    On Linux this process renders one scene itself, a flat-bed one if there is one (the workers
+    wait for it), then forks the workers: they inherit the imports and the loaded compiled
+    kernels (about 0.4 s of imports and 0.45 s of first-frame set-up a spawned worker pays
+    again, each). The pool takes the terrain-mesh scenes first, so the last scenes, which one
+    worker may finish while the others idle, are the short ones. Elsewhere (macOS, Windows:
     fork unsafe or absent) the workers are spawned. Frames depend only on (seed, scene index),
-    so every way gives the same files.
+    so every way and order gives the same files.
     """
     if n_workers <= 1 or len(jobs) <= 1:
         for job in jobs:
@@ -294,14 +307,16 @@ def _run_local(jobs: list[tuple], n_workers: int, bar) -> None:
         return
     import multiprocessing as mp
 
+    heavy = [_builds_terrain_mesh(j) for j in jobs]
+    jobs = [j for j, h in zip(jobs, heavy) if h] + [j for j, h in zip(jobs, heavy) if not h]  # stable
     if not sys.platform.startswith("linux"):
         with mp.get_context("spawn").Pool(min(n_workers, len(jobs)), initializer=_worker_init) as pool:
             for done in pool.imap_unordered(_scene_job, jobs):
                 bar.update(done)
         return
     with _opencv_single_threaded():
-        bar.update(_scene_job(jobs[0]))
-        rest = jobs[1:]
+        bar.update(_scene_job(jobs[-1]))
+        rest = jobs[:-1]
         if len(rest) <= 1:
             for job in rest:
                 bar.update(_scene_job(job))

@@ -175,3 +175,15 @@ def test_two_workers_write_the_same_files_and_end_quietly(tmp_path, capfd):
     one = _make(tmp_path / "one", n=6)
     assert _files(many) == _files(one) and len(list((one / "images").glob("*.png"))) == 6
     assert "Traceback" not in capfd.readouterr().err
+
+
+def test_pool_order_puts_terrain_mesh_scenes_first_from_the_first_draws_alone():
+    """The pool's expensive-first order reads each scene's seabed kind from its first two draws,
+    the ones ``sample_scene`` makes: it agrees with the sampled scenes."""
+    from sim.dataset.randomization import TRAIN_RANDOMIZATION
+
+    rz_json = TRAIN_RANDOMIZATION.model_dump_json()
+    kinds = [gen.scene_spec(5, i, TRAIN_RANDOMIZATION).seabed.kind for i in range(12)]
+    assert {"rough", "ripple"} & set(kinds) and {"plane", "slope"} & set(kinds)
+    predicted = [gen._builds_terrain_mesh((5, i, rz_json, RenderSettings())) for i in range(12)]
+    assert predicted == [k in ("rough", "ripple") for k in kinds]
