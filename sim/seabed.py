@@ -122,8 +122,8 @@ class Seabed:
 
 def _bilinear_applies(n_m: NDArray, e_m: NDArray, z: NDArray) -> bool:
     """Whether :func:`grid_bilinear` reproduces scipy's interpolator on this grid: the cases its
-    compiled fast path covers (float64 writeable values, two or more ascending nodes an axis)."""
-    return (z.dtype == np.float64 and z.flags.writeable and len(n_m) >= 2 and len(e_m) >= 2
+    compiled fast path covers (native float64 writeable values, two or more ascending nodes an axis)."""
+    return (z.dtype == np.float64 and z.dtype.isnative and z.flags.writeable and len(n_m) >= 2 and len(e_m) >= 2
             and bool(np.all(np.diff(n_m) > 0)) and bool(np.all(np.diff(e_m) > 0)))
 
 

@@ -13,7 +13,7 @@ Work is split into scenes (one compiled world, several sonar poses). A scene cou
 done when its part file exists, so an interrupted run resumes where it stopped and a
 finished dataset is identical to an uninterrupted one. Frames depend only on (seed,
 scene index), never on the number of workers. Local workers on Linux are forked after the
-parent has rendered the first scene, so they start with its imports and loaded kernels
+parent has rendered one scene, so they start with its imports and loaded kernels
 (:func:`_run_local`).
 """
 
