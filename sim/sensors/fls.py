@@ -180,7 +180,8 @@ class FlsSensor(Sensor[FlsRender]):
         if n_cols != g.n_beams:
             mean = cv2.resize(mean, (self.n_bins, g.n_beams), interpolation=cv2.INTER_LINEAR)
             mask = mask[self._beam_col]
-        intensity = self.echo.realise(mean, self.rng, noise=noise, clutter=mask < 0)
+        clutter = (mask < 0) if self.echo.speckle == "k" else None  # only the K texture reads it
+        intensity = self.echo.realise(mean, self.rng, noise=noise, clutter=clutter)
         polar_u8 = self.echo.display(intensity)
         fan_u8 = self._remap.image(polar_u8)
 
@@ -226,7 +227,7 @@ class FlsSensor(Sensor[FlsRender]):
             rows = None if base_only else (owner < 0) | (owner == k)
             frac = visible_fraction(caster, k, origin, sampled.dirs, first_obj, n_hit, g.window_near_m,
                                     g.window_far_m, g.range_max_m, self._ray_spacing_rad, rows=rows,
-                                    sphere=None if spheres is None else spheres[k])
+                                    sphere=None if spheres is None else spheres[k], first_dist=sampled.dist)
             out.append(self._object_truth(obj, origin, R_ns, n_hit, frac, extents.get(k)))
         return tuple(out)
 

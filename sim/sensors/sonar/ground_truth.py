@@ -1,4 +1,4 @@
-"""Exact ground truth of a sonar frame from the rays that formed it (pure numpy).
+"""Exact ground truth of a sonar frame from the rays that formed it (numpy, one compiled pass).
 
 * Per-bin labels: in each (line, range bin) the scene object whose echo energy there is the
   strongest, :data:`sim.sensors.raycast.BACKGROUND_ID` where no object echoes
@@ -6,13 +6,15 @@
 * Visible fraction of object k: ``(rays whose first hit is k) / (rays that hit k when k is cast
   alone)``; the second count re-casts, against k's geoms alone, only the rays inside k's
   bounding cone whose first hit is not k (those that hit k hit it alone at the same range)
-  (:func:`visible_fraction`), so it is exact for the ray set and cheap.
+  and whose answer is not already known from the first hit (:func:`visible_fraction`), so it
+  is exact for the ray set and cheap.
 * Where the object is: slant range, azimuth and elevation of its centroid in the sonar frame
   (:func:`centroid_polar`).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -24,6 +26,7 @@ from sim.sensors.base import SceneObjectLike
 from sim.sensors.raycast import BACKGROUND_ID, RayCaster
 from sim.sensors.sonar.display import FanRemap
 from sim.sensors.sonar.echo_lines import EchoSegments, spread_segments
+from sim.sensors.sonar.fused_passes import kernels
 
 FloatArray = NDArray[np.float64]
 
@@ -122,16 +125,15 @@ def label_bins(segments: EchoSegments, n_lines: int, n_bins: int
     for k in ids:
         sel = obj == k
         r, ua_k, ub_k = rows[sel], ua[sel], ub[sel]
-        k0 = int(np.clip(np.floor(min(ua_k.min(), ub_k.min())), 0, n_bins - 1))
-        k1 = int(np.clip(np.floor(max(ua_k.max(), ub_k.max())), k0, n_bins - 1))
-        windows.append((k, sel, int(r.min()), int(r.max()), k0, k1))
+        k0 = min(max(math.floor(min(ua_k.min(), ub_k.min())), 0), n_bins - 1)  # np.clip's, on scalars
+        k1 = min(max(math.floor(max(ua_k.max(), ub_k.max())), k0), n_bins - 1)
+        windows.append((k, sel, r, ua_k, ub_k, int(r.min()), int(r.max()), k0, k1))
     if windows:
         # strongest object per bin, over the union of the objects' windows only
-        u_c0, u_k0 = min(w[2] for w in windows), min(w[4] for w in windows)
-        u_c1, u_k1 = max(w[3] for w in windows), max(w[5] for w in windows)
+        u_c0, u_k0 = min(w[5] for w in windows), min(w[7] for w in windows)
+        u_c1, u_k1 = max(w[6] for w in windows), max(w[8] for w in windows)
         best_u = np.zeros((u_c1 - u_c0 + 1, u_k1 - u_k0 + 1))
-        for k, sel, c0, c1, k0, k1 in windows:
-            r, ua_k, ub_k = rows[sel], ua[sel], ub[sel]
+        for k, sel, r, ua_k, ub_k, c0, c1, k0, k1 in windows:
             e_k = spread_segments(c1 - c0 + 1, k1 - k0 + 1, r - c0, ua_k - k0, ub_k - k0, energy[sel])
             win = best_u[c0 - u_c0:c1 - u_c0 + 1, k0 - u_k0:k1 - u_k0 + 1]
             take = e_k > np.maximum(win, 1e-6 * e_k.max())  # ignore cumsum round-off
@@ -154,10 +156,14 @@ def centroid_polar(centroid_ned: FloatArray, origin_ned: FloatArray, R_ns: Float
     return float(r), float(a), float(e)
 
 
+SPHERE_MARGIN_M = 1e-6  # slack on the bounding sphere's radius and on the ranges compared with it (m)
+
+
 def visible_fraction(caster: RayCaster, object_id: int, origin_ned: FloatArray, dirs_ned: FloatArray,
                      first_obj: NDArray[np.int64], n_hit: int, window_near_m: float, window_far_m: float,
                      max_range_m: float, ray_spacing_rad: float, *, rows: NDArray[np.bool_] | None = None,
-                     sphere: tuple[FloatArray, float] | None = None) -> float:
+                     sphere: tuple[FloatArray, float] | None = None,
+                     first_dist: FloatArray | None = None) -> float:
     """Fraction of object ``object_id`` that the rays see unoccluded.
 
     Args:
@@ -174,6 +180,16 @@ def visible_fraction(caster: RayCaster, object_id: int, origin_ned: FloatArray, 
         rows: (N,) the rays to count (default all), so a caller need not copy a subset out.
         sphere: the object's bounding sphere (centre (3,) NED m, radius m) if already known
             (default: asked of the caster).
+        first_dist: (N,) range of each ray's first hit (m, ``inf`` for none), if known. Then
+            rays whose isolated answer the first hit already gives are not cast again: the
+            object lies inside its bounding sphere, so a ray meets it, if at all, where it runs
+            inside the sphere (``t0 <= t <= t1``), never nearer than its first hit; a ray that
+            crosses the sphere nowhere inside the window, or whose first hit lies beyond the
+            window or beyond ``t1`` (the object, were it hit, would have been hit first),
+            cannot hit it alone inside the window. The rays left are those the cone test and
+            the cast would count, so the fraction is the same; one compiled pass
+            (:mod:`sim.sensors.sonar.fused_passes`) finds them, with :data:`SPHERE_MARGIN_M`
+            of slack towards casting.
 
     Returns:
         ``n_hit / (rays that hit the object alone inside the window)`` in [0, 1]; 0 when no ray
@@ -188,17 +204,24 @@ def visible_fraction(caster: RayCaster, object_id: int, origin_ned: FloatArray, 
     dist_c = float(np.linalg.norm(v))
     n_alone = 0
     if dist_c - radius <= window_far_m:
-        if dist_c <= radius:
-            cand = np.ones(len(dirs_ned), dtype=bool)
-        else:
-            half = np.arcsin(min(1.0, radius / dist_c)) + ray_spacing_rad
-            cand = dirs_ned @ (v / dist_c) >= np.cos(min(half, np.pi))
-        # a ray whose first hit is k hits k alone at the same range: only the others are cast
-        cand &= first_obj != object_id
-        if rows is not None:
-            cand &= rows
         n_alone = n_hit
-        if cand.any():
+        if first_dist is not None:  # one compiled pass: the sphere test implies the cone's
+            own = np.zeros(0, dtype=np.int64) if rows is None else np.where(rows, -1, -2)
+            idx = kernels().isolated_candidates(dirs_ned, first_obj, first_dist, own, int(object_id), v,
+                                                float(radius), window_near_m, window_far_m, SPHERE_MARGIN_M)
+            cand = idx if idx.size else None
+        else:
+            if dist_c <= radius:
+                cand = np.ones(len(dirs_ned), dtype=bool)
+            else:
+                half = np.arcsin(min(1.0, radius / dist_c)) + ray_spacing_rad
+                cand = dirs_ned @ (v / dist_c) >= np.cos(min(half, np.pi))
+            # a ray whose first hit is k hits k alone at the same range: only the others are cast
+            cand &= first_obj != object_id
+            if rows is not None:
+                cand &= rows
+            cand = cand if cand.any() else None
+        if cand is not None:
             d_alone = caster.cast_isolated(origin_ned, dirs_ned[cand], max_range_m, object_id)
             n_alone += int(np.count_nonzero((d_alone >= window_near_m) & (d_alone <= window_far_m)))
     frac = n_hit / n_alone if n_alone > 0 else 0.0

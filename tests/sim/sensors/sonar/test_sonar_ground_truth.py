@@ -98,3 +98,42 @@ def test_visible_fraction_over_a_row_subset_matches_the_copied_subset():
     got = visible_fraction(caster, 1, np.zeros(3), dirs, first, n_hit, 1.0, 30.0, 50.0, 0.001, rows=rows,
                            sphere=caster.object_bounding_sphere(1))
     assert 0.1 < ref < 0.9 and got == ref
+
+
+class _CountingCaster:
+    """Forwards to an analytic caster, counting the rays cast against one object alone."""
+
+    def __init__(self, caster):
+        self.caster, self.n_isolated = caster, 0
+
+    def cast(self, origin, dirs, max_range_m):
+        return self.caster.cast(origin, dirs, max_range_m)
+
+    def cast_isolated(self, origin, dirs, max_range_m, object_id):
+        self.n_isolated += len(dirs)
+        return self.caster.cast_isolated(origin, dirs, max_range_m, object_id)
+
+    def object_bounding_sphere(self, object_id):
+        return self.caster.object_bounding_sphere(object_id)
+
+
+@pytest.mark.parametrize("far_m", [30.0, 15.2, 14.7])
+def test_visible_fraction_with_first_hit_ranges_casts_fewer_rays_for_the_same_fraction(far_m):
+    """Rays whose isolated answer the first hit gives (past the bounding sphere, beyond the window,
+    missing it) are not cast again; the fraction is the one every candidate ray gives. The object
+    is two balls (bounding sphere 2 m about 15 m ahead), one half hidden by a plate inside that
+    sphere (rays stopped there must still be cast), with a floor behind; a far window edge
+    cutting the object (15.2 m, 14.7 m) exercises the window tests."""
+    balls = (AnalyticSphere(np.array([15.0, -1.5, 0.0]), 0.5, 1), AnalyticSphere(np.array([15.0, 1.5, 0.0]), 0.5, 1))
+    plate = AnalyticBox(np.array([14.2, 1.5, -0.5]), np.array([0.05, 0.6, 0.5]), 2)
+    floor = AnalyticBox(np.array([15.0, 0.0, 0.45 + 5.0]), np.array([20.0, 20.0, 5.0]), -1)
+    caster = _CountingCaster(AnalyticCaster(None, spheres=balls, boxes=(plate, floor)))
+    dirs = _ray_grid(9.0, 181)
+    hits = caster.cast(np.zeros(3), dirs, 50.0)
+    first, dist = hits.object_id, hits.dist_m
+    n_hit = int(np.count_nonzero((first == 1) & (dist <= far_m)))
+    ref = visible_fraction(caster, 1, np.zeros(3), dirs, first, n_hit, 1.0, far_m, 50.0, 0.01)
+    n_ref, caster.n_isolated = caster.n_isolated, 0
+    got = visible_fraction(caster, 1, np.zeros(3), dirs, first, n_hit, 1.0, far_m, 50.0, 0.01, first_dist=dist)
+    assert 0.05 < ref < 0.95 and got == ref
+    assert caster.n_isolated < 0.75 * n_ref
