@@ -3,8 +3,10 @@ the same bytes, no process left behind, a worker's failure reported."""
 
 from __future__ import annotations
 
+import copy
 import json
 import os
+import signal
 import subprocess
 import sys
 import time
@@ -17,9 +19,8 @@ from scenarios import load_scenario
 from sim.evaluation.detection_scoring import DetectionScorer
 from sim.mission import Mission
 from sim.outputs.trajectory_log import TrajectoryLog
-from sim.perception import Perception
 from sim.records import PerceptionResult
-from sim.sensors.fls import FlsRender
+from sim.sensors.fls import FlsRender, FlsSensor
 from sim.sonar_pipeline import PipelineError, SonarPipeline
 
 # Dived 10 m short of OPI1 heading for it, survey started at once: frames with targets from t = 0.
@@ -109,23 +110,24 @@ def test_pipeline_is_off_where_perception_feeds_back_or_is_absent():
         Mission(scn, workers=0)
 
 
-class _FailingPerception(Perception):
-    """Perception that fails on its second frame (in the worker process)."""
+class _FailingFls(FlsSensor):
+    """A sonar whose render fails on its second frame (in the render worker)."""
 
-    def process(self, render, nav):
-        if self.n_frames >= 1:
-            raise RuntimeError("perception failed on purpose")
-        return super().process(render, nav)
+    def measure(self, truth, scene):
+        self.n_rendered = getattr(self, "n_rendered", 0) + 1
+        if self.n_rendered >= 2:
+            raise RuntimeError("render failed on purpose")
+        return super().measure(truth, scene)
 
 
 def test_a_worker_failure_is_raised_with_its_traceback_and_ends_the_workers():
     m = Mission(load_scenario("cssn_lawnmower", OVER + ["autonomy.atr.detector=classical"]))
     m.reset()
-    p = m.parts.perception
-    failing = _FailingPerception(m.scenario, m.fls, m.physics.world.seabed, m.parts.waypoints_ne)
-    pipe = SonarPipeline(m.physics, m.fls, failing, frames=False)
+    failing = copy.copy(m.fls)
+    failing.__class__ = _FailingFls
+    pipe = SonarPipeline(m.physics, failing, m.parts.perception, frames=False)
     pids = pipe.pids
-    with pytest.raises(PipelineError, match="perception failed on purpose"):
+    with pytest.raises(PipelineError, match="render failed on purpose"):
         for _ in range(3):
             for _ in range(40):
                 m.physics.step(np.zeros(m.physics.params.n_thrusters))
@@ -133,7 +135,20 @@ def test_a_worker_failure_is_raised_with_its_traceback_and_ends_the_workers():
         list(pipe.ready(wait=True))
     assert not any(_alive(pid) for pid in pids)
     pipe.close()  # already closed: nothing more to do
-    assert p is m.parts.perception
+
+
+def test_a_killed_worker_is_reported():
+    m = Mission(load_scenario("cssn_lawnmower", OVER + ["autonomy.atr.detector=classical"]))
+    m.reset()
+    pipe = SonarPipeline(m.physics, m.fls, m.parts.perception, frames=False)
+    os.kill(pipe.pids[1], signal.SIGKILL)  # the detection worker
+    with pytest.raises(PipelineError, match="ended unexpectedly.*auvsim-detection -9"):
+        for _ in range(3):
+            for _ in range(40):
+                m.physics.step(np.zeros(m.physics.params.n_thrusters))
+            pipe.deliver("fls", pipe.capture(m.physics.truth()), m.nav_filter.estimate())
+        list(pipe.ready(wait=True))
+    assert not any(_alive(pid) for pid in pipe.pids)
 
 
 UNGUARDED = """
