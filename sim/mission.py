@@ -395,8 +395,14 @@ class Mission:
             for handler in self._by_type.get(type(msg), ()):
                 handler(msg)
         process = self._by_source.get(name)
+        if process is None:  # a navigation sensor's message: no result; straight to the observers
+            if self.observers:
+                with timer.stage("observers"):
+                    for obs in self.observers:
+                        obs.on_message(name, msg)
+            return
         with timer.stage("perception"):
-            result = process(msg, self.nav_filter.estimate()) if process is not None else None
+            result = process(msg, self.nav_filter.estimate())
         with timer.stage("nav_filter"):
             for handler in self._by_type.get(type(result), ()) if result is not None else ():
                 handler(result)  # onboard results the filter fuses (position fixes)
