@@ -4,6 +4,7 @@ the same bytes, no process left behind, a worker's failure reported."""
 from __future__ import annotations
 
 import copy
+import dataclasses
 import json
 import os
 import signal
@@ -19,6 +20,7 @@ from scenarios import load_scenario
 from sim.evaluation.detection_scoring import DetectionScorer
 from sim.mission import Mission
 from sim.outputs.trajectory_log import TrajectoryLog
+from sim.perception import Perception
 from sim.records import PerceptionResult
 from sim.sensors.fls import FlsRender, FlsSensor
 from sim.sonar_pipeline import PipelineError, SonarPipeline
@@ -108,6 +110,29 @@ def test_pipeline_is_off_where_perception_feeds_back_or_is_absent():
     assert m._pipeline is None
     with pytest.raises(ValueError, match="workers"):
         Mission(scn, workers=0)
+
+
+def test_perception_on_detections_made_elsewhere_equals_perception_on_the_frame():
+    # the pipeline detects on a worker and runs the rest of perception on an image-less view
+    m = Mission(load_scenario("cssn_lawnmower", OVER + ["autonomy.atr.detector=classical"]))
+    m.reset()
+    whole = Perception(m.scenario, m.fls, m.physics.world.seabed, m.parts.waypoints_ne)
+    split = Perception(m.scenario, m.fls, m.physics.world.seabed, m.parts.waypoints_ne)
+    n_detections = 0
+    for _ in range(6):
+        for _ in range(67):
+            m.physics.step(np.zeros(m.physics.params.n_thrusters))
+        render = m.fls.measure(m.physics.truth(), m.physics.scene())
+        nav = m.nav_filter.estimate()
+        detections = split.detector.detect(render.frame)
+        n_detections += len(detections)
+        view = dataclasses.replace(render, frame=dataclasses.replace(render.frame, polar=None, fan=None),
+                                   truth=None, mean_intensity=None, intensity=None)
+        a, b = whole.process(render, nav), split.process(view, nav, detections=detections)
+        assert repr(a) == repr(b)
+    assert n_detections > 0 and whole.n_frames == split.n_frames == 6
+    assert json.dumps(whole.world_model_json()) == json.dumps(split.world_model_json())
+    assert whole.world_model_json()["objects"]
 
 
 class _FailingFls(FlsSensor):
