@@ -47,6 +47,16 @@ def _worker_start() -> None:
     cv2.setNumThreads(1)
 
 
+def _command(conn: Any) -> tuple | None:
+    """The next message from the mission process; None for ``("stop",)`` or a closed connection
+    (the mission process ended)."""
+    try:
+        msg = conn.recv()
+    except EOFError:
+        return None
+    return None if msg[0] == "stop" else msg
+
+
 def _report(conn: Any) -> None:
     try:
         conn.send(("error", traceback.format_exc()))
@@ -79,11 +89,8 @@ def render_main(conn: Any, to_detection: Any, ring_detection: FrameRing, to_main
         objects, with_truth = s["objects"], s["truth_to_perception"]
         shared_ids = {id(v): name for name, v in shared_objects(sonar).items()}
         while True:
-            try:
-                msg = conn.recv()
-            except EOFError:
-                return
-            if msg[0] == "stop":
+            msg = _command(conn)
+            if msg is None:
                 return
             if msg[0] == "state":
                 conn.send(("state", sonar.rng.bit_generator.state))
@@ -125,13 +132,9 @@ def detection_main(conn: Any, from_render: Any, ring_in: FrameRing, to_main: Any
         while True:
             for src in wait(sources):
                 if src is conn:
-                    try:
-                        msg = conn.recv()
-                    except EOFError:
+                    if _command(conn) is None:
                         return
-                    if msg[0] == "stop":
-                        return
-                    continue
+                    continue  # nothing else is asked of this worker
                 try:
                     k, view = ring_in.get(from_render, shared)
                 except EOFError:

@@ -135,6 +135,15 @@ def test_perception_on_detections_made_elsewhere_equals_perception_on_the_frame(
     assert whole.world_model_json()["objects"]
 
 
+def _feed(m: Mission, pipe: SonarPipeline) -> None:
+    """Three frames through ``pipe``, 0.2 s apart, and wait for their results."""
+    for _ in range(3):
+        for _ in range(40):
+            m.physics.step(np.zeros(m.physics.params.n_thrusters))
+        pipe.deliver("fls", pipe.capture(m.physics.truth()), m.nav_filter.estimate())
+    list(pipe.ready(wait=True))
+
+
 class _FailingFls(FlsSensor):
     """A sonar whose render fails on its second frame (in the render worker)."""
 
@@ -153,11 +162,7 @@ def test_a_worker_failure_is_raised_with_its_traceback_and_ends_the_workers():
     pipe = SonarPipeline(m.physics, failing, m.parts.perception, frames=False)
     pids = pipe.pids
     with pytest.raises(PipelineError, match="render failed on purpose"):
-        for _ in range(3):
-            for _ in range(40):
-                m.physics.step(np.zeros(m.physics.params.n_thrusters))
-            pipe.deliver("fls", pipe.capture(m.physics.truth()), m.nav_filter.estimate())
-        list(pipe.ready(wait=True))
+        _feed(m, pipe)
     assert not any(_alive(pid) for pid in pids)
     pipe.close()  # already closed: nothing more to do
 
@@ -168,11 +173,7 @@ def test_a_killed_worker_is_reported():
     pipe = SonarPipeline(m.physics, m.fls, m.parts.perception, frames=False)
     os.kill(pipe.pids[1], signal.SIGKILL)  # the detection worker
     with pytest.raises(PipelineError, match="ended unexpectedly.*auvsim-detection -9"):
-        for _ in range(3):
-            for _ in range(40):
-                m.physics.step(np.zeros(m.physics.params.n_thrusters))
-            pipe.deliver("fls", pipe.capture(m.physics.truth()), m.nav_filter.estimate())
-        list(pipe.ready(wait=True))
+        _feed(m, pipe)
     assert not any(_alive(pid) for pid in pipe.pids)
 
 
