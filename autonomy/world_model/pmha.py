@@ -239,14 +239,15 @@ class PMHA:
         heap: list[tuple[float, int, int]] = []
         parent_stream: list[LazyRanked] = []
         parent_base: list[float] = []
-        for h, hyp in enumerate(self._hyps):
-            base = float(self._log_w[h]) + sum(map(log_miss_of.__getitem__, hyp))
+        for h, (log_w, hyp) in enumerate(zip(self._log_w.tolist(), self._hyps)):
+            base = log_w + sum(map(log_miss_of.__getitem__, hyp))
             stream = associator.ranked(hyp)
             parent_stream.append(stream)
             parent_base.append(base)
             first = stream.get(0)
             if first is not None:
-                heapq.heappush(heap, (first[0] - base, h, 0))
+                heap.append((first[0] - base, h, 0))
+        heapq.heapify(heap)
 
         update_cache: dict[tuple[int, int], Anchor] = {}
         birth_cache: dict[int, Anchor] = {}
