@@ -38,7 +38,9 @@ constant-position transition with a Kalman predictor (and its fixed-Gaussian fal
 identity position-fix measurement model with a Kalman updater and a single-measurement
 initiator, a same-scan clusterer, a Mahalanobis gater, a k-best (Murty) data associator and
 an update-time deleter for tentative anchors; PMHA adds the hypothesis tree, detection
-probabilities and class pmf.
+probabilities and class pmf. The Kalman and class posteriors of all gated (anchor,
+measurement) pairs of a scan are computed in one batch, bit for bit the per-pair ones
+(:meth:`autonomy.estimation.updater.KalmanUpdater.update_batch`); a child takes its pair's.
 """
 
 from __future__ import annotations
