@@ -3,10 +3,17 @@
 Wraps the stages of :meth:`sim.sensors.fls.FlsSensor.render` with process-time counters
 (steadier than wall time on a shared machine), renders ``--frames`` frames after a short
 warm-up and prints one JSON object: ``render`` (the whole frame) and each stage's ms per
-frame. Nested entries (``bisect`` and ``mj_multiRay`` inside ``refine_edges``/``cast``,
-``visible_fraction`` inside ``objects_truth``) are not added to ``other``.
+frame. Nested entries (``bisect``, ``same_surface`` and ``mj_multiRay`` inside
+``refine_edges``/``cast``, ``visible_fraction`` inside ``objects_truth``) are not added to
+``other``.
 
-Usage: ``python scripts/fls_stage_times.py [--frames 150] [--scenario cssn_lawnmower]``
+``--dataset-scenes N`` times the dataset generator's renders instead: the first
+``--dataset-frames`` frames of scenes ``0..N-1`` of each randomization preset (rough and
+rippled mesh seabeds, more objects), through :func:`sim.dataset.scene_render.render_frames`
+(scene builds excluded: only the wrapped stages and ``render`` are counted).
+
+Usage: ``python scripts/fls_stage_times.py [--frames 150] [--scenario cssn_lawnmower]
+[--dataset-scenes 4 --dataset-frames 4]``
 """
 
 from __future__ import annotations
@@ -36,6 +43,7 @@ NESTED = {  # counted inside a stage above
     "bisect": ("sim.sensors.sonar.ray_fan", "RayFan.bisect"),
     "mj_multiRay": ("sim.sensors.raycast", "MujocoRayCaster._raw"),
     "visible_fraction": ("sim.sensors.fls", "visible_fraction"),
+    "same_surface": ("sim.sensors.sonar.ray_fan", "same_surface_rows"),
 }
 
 
@@ -62,6 +70,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--frames", type=int, default=150)
     ap.add_argument("--scenario", default="cssn_lawnmower")
+    ap.add_argument("--dataset-scenes", type=int, default=0)
+    ap.add_argument("--dataset-frames", type=int, default=4)
     args = ap.parse_args()
 
     from scenarios.load import load_scenario
@@ -73,11 +83,32 @@ def main() -> None:
     scenario = load_scenario(args.scenario)
     bench_fls.run(scenario, 3)  # imports, compiled kernels, caches
     totals.clear()
-    result = bench_fls.run(scenario, args.frames)
-    n = args.frames + 1  # the bench's own warm-up frame is timed too
+    if args.dataset_scenes > 0:
+        n = _dataset_frames(args.dataset_scenes, args.dataset_frames)
+        extra = {"dataset_scenes": args.dataset_scenes, "cpu_frames_per_s": round(n / totals["render"], 2)}
+    else:
+        result = bench_fls.run(scenario, args.frames)
+        n = args.frames + 1  # the bench's own warm-up frame is timed too
+        extra = {"cpu_frames_per_s": result["cpu_frames_per_s"]}
     ms = {k: round(1e3 * v / n, 3) for k, v in sorted(totals.items(), key=lambda kv: -kv[1])}
     ms["other"] = round(ms["render"] - sum(ms.get(k, 0.0) for k in STAGES), 3)
-    print(json.dumps({"ms_per_frame": ms, "cpu_frames_per_s": result["cpu_frames_per_s"], "frames": args.frames}))
+    print(json.dumps({"ms_per_frame": ms, **extra, "frames": n}))
+
+
+def _dataset_frames(n_scenes: int, n_frames: int) -> int:
+    """Render the first ``n_frames`` frames of scenes ``0..n_scenes-1`` of every randomization
+    preset (dataset seed 0); returns the number of frames rendered."""
+    from sim.dataset.generate import RANDOMIZATION_PRESETS, RenderSettings, fls_config, scene_spec
+    from sim.dataset.scene_render import render_frames
+    from sim.rng import component_rng
+
+    n = 0
+    for rz in RANDOMIZATION_PRESETS.values():
+        for i in range(n_scenes):
+            spec = scene_spec(0, i, rz)
+            n += len(render_frames(spec, fls_config(spec, RenderSettings()), component_rng(0, f"dataset/fls/{i}"),
+                                   n_frames))
+    return n
 
 
 if __name__ == "__main__":

@@ -1,4 +1,5 @@
-"""Seabed surfaces: analytic planes and trimesh terrain meshes (pure numpy + trimesh).
+"""Seabed surfaces: analytic planes and terrain meshes (numpy; trimesh only where a caller asks
+for a ``trimesh.Trimesh``).
 
 Depths are NED z (positive down). Rough seabeds are Gaussian random fields with a
 Gaussian correlation function; ripples are sinusoidal sand waves. Both are built as
@@ -8,12 +9,15 @@ triangle meshes, never MuJoCo height fields (whose ray casts are ~10x slower).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-import trimesh
 from numpy.typing import ArrayLike, NDArray
 
 from scenarios.config.world import SeabedConfig
+
+if TYPE_CHECKING:
+    import trimesh
 
 
 @dataclass(frozen=True)
@@ -46,18 +50,20 @@ class Seabed:
         return c.depth_m + k * ((n_m - c.center_ne_m[0]) * np.cos(az) + (e_m - c.center_ne_m[1]) * np.sin(az))
 
     def depth_at(self, n_m: ArrayLike, e_m: ArrayLike) -> NDArray[np.float64]:
-        """Seabed depth (NED z, m) under the given north/east positions."""
+        """Seabed depth (NED z, m) under the given north/east positions (bilinear on a mesh
+        seabed's grid, extended linearly beyond its edge; NaN at a NaN position)."""
         n = np.asarray(n_m, dtype=float)
         e = np.asarray(e_m, dtype=float)
         if not self.is_mesh:
             return self._plane_depth(n, e)
-        from scipy.interpolate import RegularGridInterpolator
+        n, e = np.broadcast_arrays(n, e)
+        z = self.depth_grid_m
+        if _bilinear_applies(self.grid_n_m, self.grid_e_m, z):
+            return grid_bilinear(self.grid_n_m, self.grid_e_m, z, n.ravel(), e.ravel()).reshape(n.shape)
+        from scipy.interpolate import RegularGridInterpolator  # other grids (read-only, float32, descending)
 
-        interp = RegularGridInterpolator(
-            (self.grid_n_m, self.grid_e_m), self.depth_grid_m, bounds_error=False, fill_value=None
-        )
-        pts = np.stack(np.broadcast_arrays(n, e), axis=-1)
-        return interp(pts.reshape(-1, 2)).reshape(pts.shape[:-1])
+        interp = RegularGridInterpolator((self.grid_n_m, self.grid_e_m), z, bounds_error=False, fill_value=None)
+        return interp(np.stack([n, e], axis=-1).reshape(-1, 2)).reshape(n.shape)
 
     def plane_normal_ned(self) -> NDArray[np.float64]:
         """Unit upward (towards the surface, -z) normal of a plane/slope seabed."""
@@ -70,19 +76,30 @@ class Seabed:
         return n / np.linalg.norm(n)
 
     def terrain_mesh(self) -> trimesh.Trimesh:
-        """Slab mesh (top = terrain, 1 m thick below the deepest node) for mesh seabeds.
+        """:meth:`terrain_arrays` as a ``trimesh.Trimesh`` (imports trimesh).
+
+        Raises:
+            ValueError: a plane seabed (no mesh).
+        """
+        import trimesh
+
+        return trimesh.Trimesh(*self.terrain_arrays(), process=False)
+
+    def terrain_arrays(self) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+        """Slab mesh (top = terrain, 1 m thick below the deepest node) for mesh seabeds:
+        (vertices (n, 3) m NED, faces (m, 3) vertex indices, wound outward).
 
         Closed for a complete grid; a grid with missing (NaN) nodes gets the terrain
         triangles of its complete cells only (holes over nodata, no bottom or rim).
 
         Raises:
-            ValueError: a plane seabed (no mesh).
+            ValueError: a plane seabed (no mesh), or a grid without a complete cell.
         """
         if not self.is_mesh:
             raise ValueError("plane seabeds have no terrain mesh")
         n, e, z = self.grid_n_m, self.grid_e_m, self.depth_grid_m
         if not np.all(np.isfinite(z)):
-            return self._holed_terrain_mesh()
+            return _holed_terrain_arrays(n, e, z)
         nx, ny = z.shape
         nn, ee = np.meshgrid(n, e, indexing="ij")
         top = np.c_[nn.ravel(), ee.ravel(), z.ravel()]
@@ -100,14 +117,40 @@ class Seabed:
         faces += [np.c_[r0, r0 + off, r1], np.c_[r1, r0 + off, r1 + off]]
         # wound outward by construction (closed, consistent, positive volume; checked against
         # trimesh in tests/sim/test_seabed_mesh.py), so no normal repair pass is needed
-        return trimesh.Trimesh(verts, np.vstack(faces), process=False)
-
-    def _holed_terrain_mesh(self) -> trimesh.Trimesh:
-        """Terrain triangles (normals up, -z) of the grid cells whose four nodes hold depths."""
-        return _holed_terrain_mesh_impl(self.grid_n_m, self.grid_e_m, self.depth_grid_m)
+        return verts, np.vstack(faces)
 
 
-def _holed_terrain_mesh_impl(n: NDArray, e: NDArray, z: NDArray) -> trimesh.Trimesh:
+def _bilinear_applies(n_m: NDArray, e_m: NDArray, z: NDArray) -> bool:
+    """Whether :func:`grid_bilinear` reproduces scipy's interpolator on this grid: the cases its
+    compiled fast path covers (native float64 writeable values, two or more ascending nodes an axis)."""
+    return (z.dtype == np.float64 and z.dtype.isnative and z.flags.writeable and len(n_m) >= 2 and len(e_m) >= 2
+            and bool(np.all(np.diff(n_m) > 0)) and bool(np.all(np.diff(e_m) > 0)))
+
+
+def grid_bilinear(n_m: NDArray, e_m: NDArray, z: NDArray, n_q: NDArray, e_q: NDArray) -> NDArray[np.float64]:
+    """Bilinear interpolation of ``z`` (nx, ny) on the ascending grid ``n_m`` (nx,), ``e_m`` (ny,)
+    at the points (``n_q``, ``e_q``) (k,), extended linearly from the edge cells outside the grid.
+
+    The arithmetic is that of scipy's ``RegularGridInterpolator(method="linear",
+    bounds_error=False, fill_value=None)`` (cell lookup, normalised distances, the four-term sum in
+    its order), so the values agree bit for bit (tested) without importing scipy.interpolate.
+    """
+    out = np.empty(len(n_q))
+    idx, frac = [], []
+    for grid, q in ((n_m, n_q), (e_m, e_q)):
+        i = np.clip(np.searchsorted(grid, q, side="right") - 1, 0, len(grid) - 2)
+        idx.append(i)
+        frac.append((q - grid[i]) / (grid[i + 1] - grid[i]))
+    (i0, i1), (y0, y1) = idx, frac
+    out[:] = (z[i0, i1] * (1 - y0) * (1 - y1) + z[i0, i1 + 1] * (1 - y0) * y1
+              + z[i0 + 1, i1] * y0 * (1 - y1) + z[i0 + 1, i1 + 1] * y0 * y1)
+    out[np.isnan(n_q) | np.isnan(e_q)] = np.nan
+    return out
+
+
+def _holed_terrain_arrays(n: NDArray, e: NDArray, z: NDArray) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """Terrain triangles (normals up, -z) of the grid cells whose four nodes hold depths, with the
+    vertices no triangle uses left out (the rest keep their order)."""
     nx, ny = z.shape
     nn, ee = np.meshgrid(n, e, indexing="ij")
     verts = np.c_[nn.ravel(), ee.ravel(), np.nan_to_num(z, nan=0.0).ravel()]
@@ -118,9 +161,11 @@ def _holed_terrain_mesh_impl(n: NDArray, e: NDArray, z: NDArray) -> trimesh.Trim
                    idx[:-1, 1:].ravel()[cell])
     if not len(a):
         raise ValueError("the depth grid has no complete cell to mesh")
-    mesh = trimesh.Trimesh(verts, np.vstack([np.c_[a, d, b], np.c_[b, d, c_]]), process=False)
-    mesh.remove_unreferenced_vertices()
-    return mesh
+    faces = np.vstack([np.c_[a, d, b], np.c_[b, d, c_]])
+    used = np.zeros(len(verts), dtype=bool)
+    used[faces] = True
+    renumber = np.cumsum(used) - 1
+    return verts[used], renumber[faces]
 
 
 def _gaussian_random_field(shape: tuple[int, int], spacing_m: float, rms_m: float, corr_m: float, rng: np.random.Generator) -> NDArray:

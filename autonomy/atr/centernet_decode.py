@@ -24,16 +24,15 @@ def decode_centernet(heatmap: NDArray, size_log: NDArray, offset: NDArray, strid
     c, h, w = heatmap.shape
     flat = heatmap.reshape(-1)
     idx = np.flatnonzero(flat >= score_threshold)
-    if idx.size == 0:  # the usual frame: nothing to decode
+    if idx.size == 0:  # nothing to decode
         return np.zeros((0, 4)), np.zeros(0), np.zeros(0, dtype=np.int64)
     if idx.size > max_detections:
         idx = idx[np.argpartition(-flat[idx], max_detections - 1)[:max_detections]]
     idx = idx[np.argsort(-flat[idx], kind="stable")]
     cls, rem = np.divmod(idx, h * w)
     iy, ix = np.divmod(rem, w)
-    cx = (ix + offset[0, iy, ix]) * stride
-    cy = (iy + offset[1, iy, ix]) * stride
-    bw = np.exp(np.clip(size_log[0, iy, ix], -4.0, 8.0))
-    bh = np.exp(np.clip(size_log[1, iy, ix], -4.0, 8.0))
-    boxes = np.stack([cx - 0.5 * bw, cy - 0.5 * bh, cx + 0.5 * bw, cy + 0.5 * bh], axis=1)
-    return boxes.astype(np.float64), flat[idx].astype(np.float64), cls.astype(np.int64)
+    # One gather per output for both channels; int64 cell + float32 offset -> float64 centre.
+    centre = (np.stack([ix, iy], axis=1) + offset.reshape(2, -1)[:, rem].T) * stride
+    half = 0.5 * np.exp(np.clip(size_log.reshape(2, -1)[:, rem], -4.0, 8.0)).T  # float32 (N, 2)
+    boxes = np.concatenate([centre - half, centre + half], axis=1)
+    return boxes, flat[idx].astype(np.float64), cls

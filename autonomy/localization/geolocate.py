@@ -29,6 +29,8 @@ FloatArray = NDArray[np.float64]
 
 # Perturbed inputs, in this order: range, azimuth, altitude, roll, pitch, yaw, mount tilt.
 _STEPS = np.array([1e-4, 1e-6, 1e-4, 1e-6, 1e-6, 1e-6, 1e-6])
+_STEP_DIAG = np.diag(_STEPS)
+_TWO_STEPS = (2.0 * _STEPS)[:, None]
 
 
 @dataclass(frozen=True, slots=True)
@@ -83,11 +85,17 @@ def _rotations_zyx(rpy: FloatArray) -> FloatArray:
     cr, sr = np.cos(rpy[:, 0]), np.sin(rpy[:, 0])
     cp, sp = np.cos(rpy[:, 1]), np.sin(rpy[:, 1])
     cy, sy = np.cos(rpy[:, 2]), np.sin(rpy[:, 2])
-    return np.stack([
-        np.stack([cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr], axis=-1),
-        np.stack([sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr], axis=-1),
-        np.stack([-sp, cp * sr, cp * cr], axis=-1),
-    ], axis=-2)
+    R = np.empty((rpy.shape[0], 3, 3))
+    R[:, 0, 0] = cy * cp
+    R[:, 0, 1] = cy * sp * sr - sy * cr
+    R[:, 0, 2] = cy * sp * cr + sy * sr
+    R[:, 1, 0] = sy * cp
+    R[:, 1, 1] = sy * sp * sr + cy * cr
+    R[:, 1, 2] = sy * sp * cr - cy * sr
+    R[:, 2, 0] = -sp
+    R[:, 2, 1] = cp * sr
+    R[:, 2, 2] = cp * cr
+    return R
 
 
 def relative_points_ned(
@@ -102,8 +110,11 @@ def relative_points_ned(
     r, a = x[:, 0], x[:, 1]
     R_nb = _rotations_zyx(x[:, 3:6])
     k = len(x)
-    R_bs = _rotations_zyx(mount_euler_zyx(np.column_stack([np.full(k, mount_roll_rad), x[:, 6],
-                                                           np.full(k, mount_yaw_rad)])))
+    mount = np.empty((k, 3))
+    mount[:, 0] = mount_roll_rad
+    mount[:, 1] = x[:, 6]
+    mount[:, 2] = mount_yaw_rad
+    R_bs = _rotations_zyx(mount_euler_zyx(mount))
     R_ns = R_nb @ R_bs
     lever = R_nb @ np.asarray(mount_pos_body_m, dtype=float)
     if use_seabed:
@@ -147,12 +158,11 @@ def localize(
     )
 
     # x0 and its central-difference perturbations, evaluated in one batch
-    dx = np.diag(_STEPS)
-    pts = relative_points_ned(np.vstack([x0, x0 + dx, x0 - dx]), mount_pos_body_m, mount_rpy[0], mount_rpy[2],
-                              use_seabed)
+    pts = relative_points_ned(np.vstack([x0, x0 + _STEP_DIAG, x0 - _STEP_DIAG]), mount_pos_body_m, mount_rpy[0],
+                              mount_rpy[2], use_seabed)
     p_rel = pts[0]
     n_in = x0.size
-    J = ((pts[1:1 + n_in] - pts[1 + n_in:]) / (2.0 * _STEPS)[:, None]).T
+    J = ((pts[1:1 + n_in] - pts[1 + n_in:]) / _TWO_STEPS).T
 
     var_r = cfg.range_sigma_m**2
     var_a = cfg.azimuth_sigma_rad**2

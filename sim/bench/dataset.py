@@ -2,19 +2,20 @@
 
 Each configuration runs the way a user pays for it: a fresh ``auvsim dataset`` process
 (``python -m sim.cli dataset --n N_FRAMES --workers W``) writing into a new temporary folder,
-start-up (imports, numba cache load, spawning the worker processes) and the final merge of
-the labels included. Wall time is the process's; CPU time is that of the process and every
-worker process it spawned (``resource.getrusage(RUSAGE_CHILDREN)``: each worker is reaped by
-the pool, so its time reaches the dataset process and then this one, with no sampling gap).
-The two runs are timed in the same call, so a busy machine slows both alike: read
-``workers_speedup`` (one worker's wall time over N's) and ``cpu_frames_per_s`` (frames per
-CPU second, all processes: what each core gives).
+start-up (imports, numba cache load, starting the worker processes: on Linux forked after the
+parent rendered the first scene, elsewhere spawned) and the final merge of the labels included.
+Wall time is the process's; CPU time is that of the process and every worker process it started
+(``resource.getrusage(RUSAGE_CHILDREN)``: each worker is reaped by the pool, so its time reaches
+the dataset process and then this one, with no sampling gap). The two runs are timed in the
+same call, so a busy machine slows both alike: read ``workers_speedup`` (one worker's wall time
+over N's) and ``cpu_frames_per_s`` (frames per CPU second, all processes: what each core gives).
 
 Start-up is reported separately (``startup``): the wall and CPU time of a fresh interpreter
-importing what a dataset worker imports and rendering nothing (numba's load of the cached
-sonar kernels at a worker's first frame, about 0.3 s CPU more, is not in it; it is in the runs). The frames of both runs are
-compared byte for byte (``identical_across_workers``): a dataset does not depend on the number
-of workers.
+importing what a dataset worker imports (:func:`sim.dataset.generate.worker_modules`) and
+rendering nothing (the first frame's set-up, numba's load of the cached sonar kernels and
+the renderer's lazy imports, about 0.45 s CPU more, is not in it; it is in the runs, once per
+process that renders). The frames of both runs are compared byte for byte
+(``identical_across_workers``): a dataset does not depend on the number of workers.
 """
 
 from __future__ import annotations
@@ -30,8 +31,8 @@ from pathlib import Path
 from typing import Any
 
 N_FRAMES = 96  # 24 scenes of 4 frames: about 10-20 s for both runs together on an idle 2-core machine
-WORKER_IMPORTS = ("import sim.dataset.generate, sim.dataset.scene_render, sim.world, sim.sensors.fls, "
-                  "scenarios.schema")
+WORKER_IMPORTS = ("import importlib, sim.dataset.generate as g\n"
+                  "for name in g.worker_modules(g.RenderSettings()):\n    importlib.import_module(name)")
 
 
 def _children_cpu_s() -> float:

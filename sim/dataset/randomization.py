@@ -204,7 +204,7 @@ def resting_depth(target: TargetConfig, seabed_depth) -> float:
         base at depth 0: a lying cylinder's axis ends up one radius above a flat bed, a tilted
         rock's lowest corner on it.
     """
-    from sim.target_meshes import target_mesh  # trimesh (and scipy): not loaded where no scene is sampled
+    from sim.target_meshes import target_mesh
 
     R = rot_from_euler(*np.deg2rad(target.rpy_deg))
     v = target_mesh(target).vertices @ R.T
@@ -212,11 +212,16 @@ def resting_depth(target: TargetConfig, seabed_depth) -> float:
     return float(np.min(np.asarray(seabed_depth(v[:, 0], v[:, 1]), dtype=float) - v[:, 2]))
 
 
+def draw_world_seed_and_seabed_kind(rng: np.random.Generator, rz: Randomization) -> tuple[int, str]:
+    """The first draws of a scene: its world seed and seabed kind (what a scene costs to build
+    depends mostly on the kind: rough and rippled beds are terrain meshes)."""
+    return int(rng.integers(0, 2**31 - 1)), str(rng.choice(rz.seabed_kinds))
+
+
 def sample_scene(index: int, rng: np.random.Generator, rz: Randomization, seabed_depth_fn) -> SceneSpec:
     """Draw scene ``index``. ``seabed_depth_fn(seabed_cfg, world_seed)`` returns
     ``depth(n, e)`` of the seabed that will be built (rough/ripple beds are random fields)."""
-    world_seed = int(rng.integers(0, 2**31 - 1))
-    kind = str(rng.choice(rz.seabed_kinds))
+    world_seed, kind = draw_world_seed_and_seabed_kind(rng, rz)
     range_max = _u(rng, rz.range_max_m)
     seabed = SeabedConfig(
         kind=kind, depth_m=_u(rng, rz.seabed_depth_m), slope_deg=_u(rng, rz.slope_deg) if kind == "slope" else 0.0,

@@ -180,7 +180,8 @@ class FlsSensor(Sensor[FlsRender]):
         if n_cols != g.n_beams:
             mean = cv2.resize(mean, (self.n_bins, g.n_beams), interpolation=cv2.INTER_LINEAR)
             mask = mask[self._beam_col]
-        intensity = self.echo.realise(mean, self.rng, noise=noise, clutter=mask < 0)
+        clutter = (mask < 0) if self.echo.speckle == "k" else None  # only the K texture reads it
+        intensity = self.echo.realise(mean, self.rng, noise=noise, clutter=clutter)
         polar_u8 = self.echo.display(intensity)
         fan_u8 = self._remap.image(polar_u8)
 

@@ -96,6 +96,7 @@ class MujocoRayCaster:
                               for k in np.unique(self.geom_object_id[self.geom_object_id >= 0])}
         self._isolated_group = np.zeros(6, dtype=np.uint8)
         self._isolated_group[5] = 1
+        self._spheres: dict[int, tuple[bytes, FloatArray, float]] = {}  # id -> (geom poses, centre, radius)
 
     def _raw(self, origin_ned: FloatArray, dirs_ned: FloatArray, max_range_m: float, geomgroup: NDArray[np.uint8],
              body_exclude: int) -> tuple[NDArray[np.int32], FloatArray, FloatArray]:
@@ -139,10 +140,18 @@ class MujocoRayCaster:
         return d
 
     def object_bounding_sphere(self, object_id: int) -> tuple[FloatArray, float]:
-        """Sphere about the object's geom centres enclosing their bounding spheres."""
+        """Sphere about the object's geom centres enclosing their bounding spheres.
+
+        Kept per object while its geoms stay where they were (a static object's sphere is
+        formed once, a moving one's again on each move): the same numbers either way."""
         geoms = self._object_geoms[int(object_id)]
         pos = self.data.geom_xpos[geoms]
+        key = pos.tobytes()
+        cached = self._spheres.get(int(object_id))
+        if cached is not None and cached[0] == key:
+            return cached[1].copy(), cached[2]
         centre = np.add.reduce(pos, axis=0) / len(geoms)  # pos.mean(axis=0) without its overhead
         d = pos - centre
         radius = float((np.sqrt(np.add.reduce(d * d, axis=1)) + self.model.geom_rbound[geoms]).max())
+        self._spheres[int(object_id)] = (key, centre.copy(), radius)
         return centre, radius

@@ -71,3 +71,58 @@ def test_build_world_leaves_mujocos_mesh_cache_empty():
     build_world(Scenario(name="s", seed=spec.world_seed, world=WorldConfig(seabed=spec.seabed, basin=spec.basin,
                                                                         targets=spec.targets)), with_vehicle=False)
     assert mujoco.mj_getCacheSize(mujoco.mj_getCache()) == 0
+
+
+def test_depth_lookup_equals_scipys_regular_grid_interpolator_bit_for_bit():
+    """Bilinear inside the grid, linear extension outside, NaN for a NaN position: the values of
+    ``RegularGridInterpolator(bounds_error=False, fill_value=None)`` (the oracle) to the last bit."""
+    from scipy.interpolate import RegularGridInterpolator
+
+    rng = np.random.default_rng(5)
+    for bed in [p.values[0] for p in _mesh_beds()[:3]]:
+        n, e, z = bed.grid_n_m, bed.grid_e_m, bed.depth_grid_m
+        q = rng.uniform(n[0] - 5.0, n[-1] + 5.0, (3000, 2))
+        q[:40, 0] = rng.choice(n, 40)  # on grid lines and at the last node
+        q[40:80, 1] = rng.choice(e, 40)
+        q[80], q[81], q[82] = (n[-1], e[-1]), (n[0], e[0]), (np.nan, e[3])
+        ref = RegularGridInterpolator((n, e), z, bounds_error=False, fill_value=None)(q)
+        got = bed.depth_at(q[:, 0], q[:, 1])
+        assert np.array_equal(got, ref, equal_nan=True) and np.isnan(got[82])
+        assert bed.depth_at(q[5, 0], q[5, 1]).shape == ()  # scalars in, a 0-d depth out
+
+
+def test_depth_lookup_on_a_read_only_grid_falls_back_to_scipy():
+    bed = _mesh_beds()[0].values[0]
+    z = bed.depth_grid_m.copy()
+    z.setflags(write=False)
+    frozen = type(bed)(bed.cfg, bed.grid_n_m, bed.grid_e_m, z)
+    from scipy.interpolate import RegularGridInterpolator
+
+    q = np.array([[1.3, -2.7], [200.0, 0.0], [-3.1, 4.4]])
+    ref = RegularGridInterpolator((bed.grid_n_m, bed.grid_e_m), z, bounds_error=False, fill_value=None)(q)
+    assert np.array_equal(frozen.depth_at(q[:, 0], q[:, 1]), ref)
+    np.testing.assert_allclose(bed.depth_at(q[:, 0], q[:, 1]), ref, rtol=1e-14)
+
+
+def test_holed_grid_arrays_equal_trimeshs_unreferenced_vertex_removal():
+    bed = _mesh_beds()[0].values[0]
+    z = bed.depth_grid_m.copy()
+    z[10:30, 40:] = np.nan
+    holed = type(bed)(bed.cfg, bed.grid_n_m, bed.grid_e_m, z)
+    verts, faces = holed.terrain_arrays()
+    nn, ee = np.meshgrid(bed.grid_n_m, bed.grid_e_m, indexing="ij")
+    ref = trimesh.Trimesh(np.c_[nn.ravel(), ee.ravel(), np.nan_to_num(z, nan=0.0).ravel()],
+                          np.vstack(_cell_faces(z)), process=False)
+    ref.remove_unreferenced_vertices()
+    assert np.array_equal(verts, ref.vertices) and np.array_equal(faces, ref.faces)
+    assert len(verts) < z.size and np.isfinite(verts).all()
+
+
+def _cell_faces(z):
+    nx, ny = z.shape
+    idx = np.arange(nx * ny).reshape(nx, ny)
+    ok = np.isfinite(z)
+    cell = (ok[:-1, :-1] & ok[1:, :-1] & ok[1:, 1:] & ok[:-1, 1:]).ravel()
+    a, b, c, d = (idx[:-1, :-1].ravel()[cell], idx[1:, :-1].ravel()[cell], idx[1:, 1:].ravel()[cell],
+                  idx[:-1, 1:].ravel()[cell])
+    return [np.c_[a, d, b], np.c_[b, d, c]]

@@ -102,3 +102,42 @@ def test_all_target_shapes_and_walls():
     gid, dist = _cast(world, [-4.0, 17.0, 2.0], [[1, 0, 0], [0, 1, 0], [-1, -1, 0]])
     assert np.all(world.geom_object_id[gid] == BACKGROUND_ID)
     assert np.allclose(dist, 25.0, atol=0.1)
+
+
+def test_scene_without_vehicle_builds_no_target_hulls_and_rays_see_the_same_scene():
+    """Without a vehicle nothing can touch a target, so its mesh gets no convex hull; the reference
+    is the same spec recompiled with the targets colliding (hulls built): vertices, poses, each
+    mesh's bounding-volume tree and the hits of rays fanned at every target are identical."""
+    from scenarios.config.world import WorldConfig
+    from scenarios.schema import Scenario
+    from sim.dataset.generate import WIDE_RANDOMIZATION, scene_spec
+
+    spec = scene_spec(0, 3, WIDE_RANDOMIZATION)  # rippled terrain mesh, four targets
+    scenario = Scenario(name="hulls", seed=spec.world_seed,
+                        world=WorldConfig(seabed=spec.seabed, basin=spec.basin, targets=spec.targets))
+    world = build_world(scenario, with_vehicle=False)
+    targets = [o.geom_id for o in world.objects]
+    assert len(targets) == 4 and all(world.model.mesh_graphadr[world.model.geom_dataid[g]] == -1 for g in targets)
+    for g in world.spec.geoms:
+        if g.name.startswith("target:"):
+            g.contype = g.conaffinity = 1
+    ref = world.spec.compile()
+    ref_data = mujoco.MjData(ref)
+    mujoco.mj_forward(ref, ref_data)
+    assert all(ref.mesh_graphadr[ref.geom_dataid[g]] >= 0 for g in targets)  # the reference has hulls
+    m = world.model
+    for field in ("mesh_vert", "mesh_face", "mesh_pos", "mesh_quat", "geom_pos", "geom_quat", "geom_aabb", "geom_rbound"):
+        assert np.array_equal(getattr(m, field), getattr(ref, field)), field
+    for k in range(m.nmesh):
+        a, b, num = m.mesh_bvhadr[k], ref.mesh_bvhadr[k], m.mesh_bvhnum[k]
+        assert num == ref.mesh_bvhnum[k] and np.array_equal(m.bvh_aabb[a:a + num], ref.bvh_aabb[b:b + num])
+    rng = np.random.default_rng(0)
+    origin = np.array(spec.poses[0].pos_ned)
+    for obj in world.objects:
+        dirs = (obj.centroid_ned - origin) + rng.normal(0.0, 0.5, (2000, 3))
+        hits = _cast(world, origin, dirs)
+        ref_world = type(world)(world.spec, ref, ref_data, world.seabed, world.objects, world.geom_object_id,
+                                world.geom_reflectivity, world.vehicle_body_id)
+        ref_hits = _cast(ref_world, origin, dirs)
+        assert np.array_equal(hits[0], ref_hits[0]) and np.array_equal(hits[1], ref_hits[1])
+        assert np.any(hits[0] == obj.geom_id)  # the fan does reach the target

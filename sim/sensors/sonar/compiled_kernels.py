@@ -8,9 +8,110 @@ from __future__ import annotations
 
 import numba as nb
 import numpy as np
+from llvmlite import ir
+from numba.core import types
+from numba.extending import intrinsic
 
 f32 = np.float32
+u64 = np.uint64
 TWO_M24 = f32(2.0 ** -24)  # the float32 uniform's grid step
+LOW32 = u64(0xFFFFFFFF)
+
+
+@intrinsic
+def lcg128(typingctx, x_hi, x_lo, a_hi, a_lo, c_hi, c_lo):
+    """``a x + c`` mod 2^128 of 128-bit numbers held as (hi, lo) uint64 pairs, in LLVM's i128
+    arithmetic (three multiplies on x86-64); returns (hi, lo)."""
+    sig = types.UniTuple(types.uint64, 2)(types.uint64, types.uint64, types.uint64, types.uint64,
+                                          types.uint64, types.uint64)
+
+    def codegen(context, builder, signature, args):
+        i128, i64 = ir.IntType(128), ir.IntType(64)
+        sh = ir.Constant(i128, 64)
+
+        def join(hi, lo):
+            return builder.or_(builder.shl(builder.zext(hi, i128), sh), builder.zext(lo, i128))
+
+        y = builder.add(builder.mul(join(args[0], args[1]), join(args[2], args[3])), join(args[4], args[5]))
+        hi, lo = builder.trunc(builder.lshr(y, sh), i64), builder.trunc(y, i64)
+        return context.make_tuple(builder, signature.return_type, (hi, lo))
+
+    return sig, codegen
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def xsl_rr(hi, lo):
+    """PCG's XSL-RR output of a 128-bit state: ``rotr64(hi ^ lo, hi >> 58)``."""
+    v = hi ^ lo
+    r = hi >> u64(58)
+    return (v >> r) | (v << ((u64(64) - r) & u64(63)))
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def complement_of_word(w32):
+    """``1 - U`` of a float32 uniform ``U = (w >> 8) 2^-24`` (``w`` a uint32 in a uint64), exact."""
+    return f32(np.int64(16777216) - np.int64(w32 >> u64(8))) * TWO_M24
+
+
+@nb.njit(cache=True, nogil=True)
+def pcg64_complement_uniform_f32(s_hi, s_lo, m_hi, m_lo, inc_hi, inc_lo, jump_m, jump_c, first, has_first, out):
+    """:func:`complement_uniform_f32` drawing its words straight from a PCG64 state.
+
+    numpy's PCG64 step is ``s <- M s + inc`` (mod 2^128), then the output ``xsl_rr(s)``; a
+    uint64 gives two uint32 words, low half first. The states are the same whatever order
+    they are computed in, so four chains run side by side, each stepping four states at a
+    time with ``jump_m = M^4`` and ``jump_c = (M^3 + M^2 + M + 1) inc`` ((hi, lo) pairs):
+    independent multiplies instead of one long dependency chain. Returns the last state
+    stepped to (hi, lo) and the high half of the last uint64 drawn (the spare word numpy
+    buffers when the count is odd).
+    """
+    o = out.ravel()
+    n = o.size
+    j0 = 0
+    if has_first:
+        o[0] = complement_of_word(u64(first))
+        j0 = 1
+    need = n - j0
+    n64 = (need + 1) // 2
+    # the first four states after s
+    h0, l0 = lcg128(s_hi, s_lo, m_hi, m_lo, inc_hi, inc_lo)
+    h1, l1 = lcg128(h0, l0, m_hi, m_lo, inc_hi, inc_lo)
+    h2, l2 = lcg128(h1, l1, m_hi, m_lo, inc_hi, inc_lo)
+    h3, l3 = lcg128(h2, l2, m_hi, m_lo, inc_hi, inc_lo)
+    a_hi, a_lo = jump_m
+    c_hi, c_lo = jump_c
+    last_hi, last_lo, spare = s_hi, s_lo, u64(0)
+    i = 0
+    full = need // 2  # uint64 draws whose both halves are used
+    while i + 4 <= full:
+        w0, w1, w2, w3 = xsl_rr(h0, l0), xsl_rr(h1, l1), xsl_rr(h2, l2), xsl_rr(h3, l3)
+        k = j0 + 2 * i
+        o[k] = complement_of_word(w0 & LOW32)
+        o[k + 1] = complement_of_word(w0 >> u64(32))
+        o[k + 2] = complement_of_word(w1 & LOW32)
+        o[k + 3] = complement_of_word(w1 >> u64(32))
+        o[k + 4] = complement_of_word(w2 & LOW32)
+        o[k + 5] = complement_of_word(w2 >> u64(32))
+        o[k + 6] = complement_of_word(w3 & LOW32)
+        o[k + 7] = complement_of_word(w3 >> u64(32))
+        last_hi, last_lo, spare = h3, l3, w3 >> u64(32)
+        h0, l0 = lcg128(h0, l0, a_hi, a_lo, c_hi, c_lo)
+        h1, l1 = lcg128(h1, l1, a_hi, a_lo, c_hi, c_lo)
+        h2, l2 = lcg128(h2, l2, a_hi, a_lo, c_hi, c_lo)
+        h3, l3 = lcg128(h3, l3, a_hi, a_lo, c_hi, c_lo)
+        i += 4
+    # the rest one state at a time, from the next state in order (chain 0's)
+    h, l = h0, l0
+    while i < n64:
+        w = xsl_rr(h, l)
+        k = j0 + 2 * i
+        o[k] = complement_of_word(w & LOW32)
+        if k + 1 < n:
+            o[k + 1] = complement_of_word(w >> u64(32))
+        last_hi, last_lo, spare = h, l, w >> u64(32)
+        h, l = lcg128(h, l, m_hi, m_lo, inc_hi, inc_lo)
+        i += 1
+    return last_hi, last_lo, spare
 
 
 @nb.njit(cache=True, nogil=True)
@@ -166,18 +267,137 @@ def row_dot3(a, i, b, j):
 
 
 @nb.njit(cache=True, nogil=True)
+def same_surface_pair(da, db, same_obj, va0, va1, va2, vb0, vb1, vb2, na0, na1, na2, nb0, nb1, nb2, chord_sin):
+    """:func:`sim.sensors.sonar.ray_fan.same_surface` of one pair of hits (ranges, whether the
+    object ids match, directions and normals by component), with the same float64 operations
+    (dot products summed as :func:`row_dot3` sums them). Scalars only: LLVM inlines it (a
+    call passing arrays would cost more than the test)."""
+    if not (np.isfinite(da) and np.isfinite(db) and same_obj):
+        return False
+    c0 = db * vb0 - da * va0
+    c1 = db * vb1 - da * va1
+    c2 = db * vb2 - da * va2
+    tol = chord_sin * np.sqrt((c0 * c0 + c2 * c2) + c1 * c1) + 1e-9
+    return abs((c0 * na0 + c2 * na2) + c1 * na1) <= tol and abs((c0 * nb0 + c2 * nb2) + c1 * nb1) <= tol
+
+
+@nb.njit(cache=True, nogil=True)
 def same_surface(d_a, n_a, o_a, v_a, ia, d_b, n_b, o_b, v_b, ib, chord_sin):
     """:func:`sim.sensors.sonar.ray_fan.same_surface` of rows ``ia`` of the a arrays and
     ``ib`` of the b arrays, with the same float64 operations."""
     out = np.zeros(ia.size, dtype=np.bool_)
-    chord = np.empty((1, 3))
     for k in range(ia.size):
         i, j = ia[k], ib[k]
-        da, db = d_a[i], d_b[j]
-        if not (np.isfinite(da) and np.isfinite(db) and o_a[i] == o_b[j]):
-            continue
-        for c in range(3):
-            chord[0, c] = db * v_b[j, c] - da * v_a[i, c]
-        tol = chord_sin * np.sqrt(row_dot3(chord, 0, chord, 0)) + 1e-9
-        out[k] = abs(row_dot3(chord, 0, n_a, i)) <= tol and abs(row_dot3(chord, 0, n_b, j)) <= tol
+        out[k] = same_surface_pair(d_a[i], d_b[j], o_a[i] == o_b[j], v_a[i, 0], v_a[i, 1], v_a[i, 2], v_b[j, 0],
+                                   v_b[j, 1], v_b[j, 2], n_a[i, 0], n_a[i, 1], n_a[i, 2], n_b[j, 0], n_b[j, 1],
+                                   n_b[j, 2], chord_sin)
     return out
+
+
+@nb.njit(cache=True, nogil=True)
+def bisect_level(lo_d, lo_n, lo_o, lo_v, lo_p, lo_row, hi_d, hi_p, hi_row, act, mid_d, mid_n, mid_o, mid_v,
+                 mid_p, mid_row0, chord_sin):
+    """One level of :meth:`sim.sensors.sonar.ray_fan.RayFan.bisect`, in place: the mid ray
+    ``k`` of interval ``act[k]`` replaces its lower end where it lies on that end's surface or
+    both miss (else its upper end); ``lo_row``/``hi_row`` take its pool row ``mid_row0 + k``."""
+    for k in range(act.size):
+        i = act[k]
+        with_lo = same_surface_pair(lo_d[i], mid_d[k], lo_o[i] == mid_o[k], lo_v[i, 0], lo_v[i, 1], lo_v[i, 2],
+                                    mid_v[k, 0], mid_v[k, 1], mid_v[k, 2], lo_n[i, 0], lo_n[i, 1], lo_n[i, 2],
+                                    mid_n[k, 0], mid_n[k, 1], mid_n[k, 2], chord_sin)
+        if not with_lo and not np.isfinite(lo_d[i]) and not np.isfinite(mid_d[k]):
+            with_lo = True
+        if with_lo:
+            lo_d[i], lo_o[i], lo_p[i], lo_row[i] = mid_d[k], mid_o[k], mid_p[k], mid_row0 + k
+            for c in range(3):
+                lo_n[i, c] = mid_n[k, c]
+                lo_v[i, c] = mid_v[k, c]
+        else:
+            hi_d[i], hi_p[i], hi_row[i] = mid_d[k], mid_p[k], mid_row0 + k
+
+@nb.njit(cache=True, nogil=True, error_model="numpy")  # IEEE division: x / 0 -> inf or nan, as numpy
+def echo_segments(seg_a, seg_b, conn, col, phi, dist, obj, strength, range_slope, window_near, resolution):
+    """:func:`sim.sensors.sonar.echo_lines.echo_segments` in one pass per part, with the same
+    float64 operations in the same order and its rows in its order (connected intervals' first
+    parts, the second parts of folded ones, then the unconnected upper ends and lower ends),
+    dropping rows without positive ranges and energy. Returns (line, u0, u1, energy, obj)."""
+    m = seg_a.size
+    n_conn = 0
+    for k in range(m):
+        if conn[k]:
+            n_conn += 1
+    cap = n_conn * 2 + (m - n_conn) * 2
+    o_line = np.empty(cap, dtype=np.intp)
+    o_u0, o_u1, o_e = np.empty(cap), np.empty(cap), np.empty(cap)
+    o_obj = np.empty(cap, dtype=np.int64)
+    # per connected interval: its fold's range extremum and split (t_ext = 1: no fold)
+    f_r_ext, f_t, f_fold = np.empty(n_conn), np.empty(n_conn), np.zeros(n_conn, dtype=np.bool_)
+    f_e, f_rb = np.empty(n_conn), np.empty(n_conn)
+    f_row = np.empty(n_conn, dtype=np.intp)
+    f_obj = np.empty(n_conn, dtype=np.int64)
+    n = 0
+    j = 0
+    for k in range(m):
+        if not conn[k]:
+            continue
+        a, b = seg_a[k], seg_b[k]
+        dc = phi[b] - phi[a]
+        e_conn = 0.5 * (strength[a] + strength[b]) * dc
+        ra = dist[a] if np.isfinite(dist[a]) else 0.0
+        rb = dist[b] if np.isfinite(dist[b]) else 0.0
+        sa, sb = range_slope[a] * dc, range_slope[b] * dc
+        dd = ra - rb + sb
+        lin = 0.5 * (sa + sb - 2.0 * dd)
+        quad = 0.5 * (rb - ra - sa + dd)
+        t_ext = -lin / (2.0 * quad)
+        fold = sa * sb < 0.0 and t_ext > 0.0 and t_ext < 1.0
+        if fold:
+            r_ext = ra + lin * t_ext + quad * (t_ext * t_ext)
+            # bounded by the end tangents (_clamp_to_end_tangents)
+            near, far = min(ra, rb), max(ra, rb)
+            t_cross = (rb - sb - ra) / (sa - sb)
+            r_cross = ra + sa * t_cross
+            crosses = t_cross > 0.0 and t_cross < 1.0
+            if sa < 0.0:
+                lo = r_cross if crosses else near
+                hi = near
+            else:
+                lo = far
+                hi = r_cross if crosses else far
+            lo_b, hi_b = min(lo, hi), max(lo, hi)
+            r_ext = min(max(r_ext, lo_b), hi_b)
+            e_first = e_conn * t_ext
+        else:
+            t_ext = 1.0
+            r_ext = rb
+            e_first = e_conn * 1.0
+        f_r_ext[j], f_t[j], f_fold[j], f_e[j], f_rb[j] = r_ext, t_ext, fold, e_conn, rb
+        f_row[j], f_obj[j] = col[a], obj[a]
+        j += 1
+        energy = e_first * ra * r_ext
+        if ra > 0.0 and r_ext > 0.0 and energy > 0.0:
+            o_line[n], o_u0[n], o_u1[n] = col[a], (ra - window_near) / resolution, (r_ext - window_near) / resolution
+            o_e[n], o_obj[n] = energy, obj[a]
+            n += 1
+    for j in range(n_conn):  # the folds' second parts
+        if not f_fold[j]:
+            continue
+        r0, r1 = f_r_ext[j], f_rb[j]
+        energy = f_e[j] * (1.0 - f_t[j]) * r0 * r1
+        if r0 > 0.0 and r1 > 0.0 and energy > 0.0:
+            o_line[n], o_u0[n], o_u1[n] = f_row[j], (r0 - window_near) / resolution, (r1 - window_near) / resolution
+            o_e[n], o_obj[n] = energy, f_obj[j]
+            n += 1
+    for end in range(2):  # unconnected ends: each ray keeps half its share of the gap at its own range
+        for k in range(m):
+            if conn[k]:
+                continue
+            r = seg_a[k] if end == 0 else seg_b[k]
+            dphi = phi[seg_b[k]] - phi[seg_a[k]]
+            rr = dist[r] if np.isfinite(dist[r]) else 0.0
+            energy = 0.5 * strength[r] * dphi * rr * rr
+            if rr > 0.0 and energy > 0.0:
+                u = (rr - window_near) / resolution
+                o_line[n], o_u0[n], o_u1[n], o_e[n], o_obj[n] = col[r], u, u, energy, obj[r]
+                n += 1
+    return o_line[:n], o_u0[:n], o_u1[:n], o_e[:n], o_obj[:n]

@@ -67,6 +67,24 @@ def echo_segments(rays: RayTable, segments: Segments, strength: FloatArray, rang
                   window_near_m: float, range_resolution_m: float) -> EchoSegments:
     """Turn the elevation intervals of the columns into range intervals with their energy.
 
+    What :func:`echo_segments_reference` gives, bit for bit and row for row, in one compiled
+    pass (:mod:`sim.sensors.sonar.fused_passes`); see there for the model.
+    """
+    f64 = np.float64
+    line, u0, u1, energy, obj = kernels().echo_segments(
+        np.ascontiguousarray(segments.a, dtype=np.intp), np.ascontiguousarray(segments.b, dtype=np.intp),
+        np.ascontiguousarray(segments.connected, dtype=np.bool_), np.ascontiguousarray(rays.col, dtype=np.intp),
+        np.ascontiguousarray(rays.phi, dtype=f64), np.ascontiguousarray(rays.dist, dtype=f64),
+        np.ascontiguousarray(rays.obj, dtype=np.int64), np.ascontiguousarray(strength, dtype=f64),
+        np.ascontiguousarray(range_slope, dtype=f64), float(window_near_m), float(range_resolution_m))
+    return EchoSegments(line, u0, u1, energy, obj)
+
+
+def echo_segments_reference(rays: RayTable, segments: Segments, strength: FloatArray, range_slope: FloatArray,
+                            window_near_m: float, range_resolution_m: float) -> EchoSegments:
+    """Turn the elevation intervals of the columns into range intervals with their energy
+    (plain numpy: the specification :func:`echo_segments` is tested against).
+
     Args:
         rays: the cast rays.
         segments: the intervals (:meth:`sim.sensors.sonar.ray_fan.RayFan.refine_edges`).

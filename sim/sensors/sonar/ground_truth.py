@@ -13,6 +13,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -122,16 +123,15 @@ def label_bins(segments: EchoSegments, n_lines: int, n_bins: int
     for k in ids:
         sel = obj == k
         r, ua_k, ub_k = rows[sel], ua[sel], ub[sel]
-        k0 = int(np.clip(np.floor(min(ua_k.min(), ub_k.min())), 0, n_bins - 1))
-        k1 = int(np.clip(np.floor(max(ua_k.max(), ub_k.max())), k0, n_bins - 1))
-        windows.append((k, sel, int(r.min()), int(r.max()), k0, k1))
+        k0 = min(max(math.floor(min(ua_k.min(), ub_k.min())), 0), n_bins - 1)  # np.clip's, on scalars
+        k1 = min(max(math.floor(max(ua_k.max(), ub_k.max())), k0), n_bins - 1)
+        windows.append((k, sel, r, ua_k, ub_k, int(r.min()), int(r.max()), k0, k1))
     if windows:
         # strongest object per bin, over the union of the objects' windows only
-        u_c0, u_k0 = min(w[2] for w in windows), min(w[4] for w in windows)
-        u_c1, u_k1 = max(w[3] for w in windows), max(w[5] for w in windows)
+        u_c0, u_k0 = min(w[5] for w in windows), min(w[7] for w in windows)
+        u_c1, u_k1 = max(w[6] for w in windows), max(w[8] for w in windows)
         best_u = np.zeros((u_c1 - u_c0 + 1, u_k1 - u_k0 + 1))
-        for k, sel, c0, c1, k0, k1 in windows:
-            r, ua_k, ub_k = rows[sel], ua[sel], ub[sel]
+        for k, sel, r, ua_k, ub_k, c0, c1, k0, k1 in windows:
             e_k = spread_segments(c1 - c0 + 1, k1 - k0 + 1, r - c0, ua_k - k0, ub_k - k0, energy[sel])
             win = best_u[c0 - u_c0:c1 - u_c0 + 1, k0 - u_k0:k1 - u_k0 + 1]
             take = e_k > np.maximum(win, 1e-6 * e_k.max())  # ignore cumsum round-off

@@ -269,7 +269,7 @@ class RayFan:
                 continue
             u = c / dist
             beta = float(np.arcsin(radius / dist))
-            el_c = float(np.arcsin(np.clip(u[2], -1.0, 1.0)))
+            el_c = float(np.arcsin(min(max(float(u[2]), -1.0), 1.0)))
             if 2.0 * beta >= limit * coarse or el_c - beta > el1 or el_c + beta < el0:
                 continue
             spacing = 2.0 * beta / rays_across
@@ -410,16 +410,12 @@ class RayFan:
             else:
                 col, az, weight, a_p, b_p = lo_t.col[act], lo_t.az[act], lo_t.weight[act], lo_p[act], hi_p[act]
             mid = self.cast_rays(caster, origin_ned, R_ns, col, az, 0.5 * (a_p + b_p), weight, max_range_m)
-            with_lo = same_surface_rows(lo_d, lo_n, lo_o, lo_v, act, mid.dist, mid.normal, mid.obj, mid.dirs,
-                                        np.arange(act.size))
-            with_lo |= ~np.isfinite(lo_d[act]) & ~np.isfinite(mid.dist)
-            mid_row = n_pool + np.arange(act.size)
+            # the mid ray replaces the end whose surface it lies on (the lower end also where
+            # both miss): one compiled pass (:func:`same_surface`'s test, then the updates)
+            kernels().bisect_level(lo_d, lo_n, lo_o, lo_v, lo_p, lo_row, hi_d, hi_p, hi_row, act, mid.dist,
+                                   mid.normal, mid.obj, mid.dirs, mid.phi, n_pool, SURFACE_CHORD_SIN)
             pool.append(mid)
             n_pool += act.size
-            to_lo, to_hi = act[with_lo], act[~with_lo]
-            lo_d[to_lo], lo_n[to_lo], lo_o[to_lo] = mid.dist[with_lo], mid.normal[with_lo], mid.obj[with_lo]
-            lo_v[to_lo], lo_p[to_lo], lo_row[to_lo] = mid.dirs[with_lo], mid.phi[with_lo], mid_row[with_lo]
-            hi_d[to_hi], hi_p[to_hi], hi_row[to_hi] = mid.dist[~with_lo], mid.phi[~with_lo], mid_row[~with_lo]
         if len(pool) == 2:
             return lo_t, hi_t
         every = RayTable.stack(pool)

@@ -163,3 +163,22 @@ def test_batched_points_equal_the_scalar_chain():
             want = sonar_point_ned(row[0], row[1], np.zeros(3), row[3:6], mount, (0.01, row[6], -0.02),
                                    altitude_m=row[2] if use_seabed else None)
             assert np.allclose(p, want, atol=1e-9)
+
+
+def test_batched_rotations_bit_identical_to_stacked_form_and_equal_rot_from_euler():
+    """``_rotations_zyx`` fills one (K, 3, 3) array; same bits as the stacked form it replaced
+    (issue 18: localisation outputs unchanged) and equal to ``rot_from_euler`` per row."""
+    from autonomy.localization.geolocate import _rotations_zyx
+
+    rpy = np.random.default_rng(4).uniform(-np.pi, np.pi, (40, 3))
+    cr, sr, cp, sp = np.cos(rpy[:, 0]), np.sin(rpy[:, 0]), np.cos(rpy[:, 1]), np.sin(rpy[:, 1])
+    cy, sy = np.cos(rpy[:, 2]), np.sin(rpy[:, 2])
+    stacked = np.stack([
+        np.stack([cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr], axis=-1),
+        np.stack([sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr], axis=-1),
+        np.stack([-sp, cp * sr, cp * cr], axis=-1),
+    ], axis=-2)
+    got = _rotations_zyx(rpy)
+    np.testing.assert_array_equal(got, stacked)
+    for R, angles in zip(got, rpy):
+        np.testing.assert_allclose(R, rot_from_euler(*angles), atol=1e-15)

@@ -23,8 +23,9 @@ def _files(d: Path) -> dict[str, bytes]:
     return {str(p.relative_to(d)): p.read_bytes() for p in sorted(d.rglob("*")) if p.is_file()}
 
 
-def _make(d: Path, n: int = 4, seed: int = 3, **kw) -> Path:
-    generate_dataset(d, n, seed=seed, workers=1, randomization=FAST, settings=SETTINGS, progress=False, **kw)
+def _make(d: Path, n: int = 4, seed: int = 3, workers_override: int = 1, **kw) -> Path:
+    generate_dataset(d, n, seed=seed, workers=workers_override, randomization=FAST, settings=SETTINGS, progress=False,
+                     **kw)
     return d
 
 
@@ -152,3 +153,37 @@ def test_bad_randomization_is_named():
         Randomization(altitude_m=(5.0, 2.0))
     with pytest.raises(ValueError, match="seabed_kinds"):
         Randomization(seabed_kinds=("plane", "lava"))
+
+
+def test_two_workers_write_the_same_files_and_end_quietly(tmp_path, capfd):
+    """Three scenes on two workers (on Linux the parent renders the first, then forks workers that
+    take the others): the same files as one worker. A SIGTERM handler that raises (``auvsim``'s)
+    is not inherited by the workers: the pool's shutdown ends them without a traceback."""
+    import signal
+
+    class Stop(BaseException):
+        pass
+
+    def raising(signum, frame):
+        raise Stop()
+
+    previous = signal.signal(signal.SIGTERM, raising)
+    try:
+        many = _make(tmp_path / "two", n=6, workers_override=2)
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+    one = _make(tmp_path / "one", n=6)
+    assert _files(many) == _files(one) and len(list((one / "images").glob("*.png"))) == 6
+    assert "Traceback" not in capfd.readouterr().err
+
+
+def test_pool_order_puts_terrain_mesh_scenes_first_from_the_first_draws_alone():
+    """The pool's expensive-first order reads each scene's seabed kind from its first two draws,
+    the ones ``sample_scene`` makes: it agrees with the sampled scenes."""
+    from sim.dataset.randomization import TRAIN_RANDOMIZATION
+
+    rz_json = TRAIN_RANDOMIZATION.model_dump_json()
+    kinds = [gen.scene_spec(5, i, TRAIN_RANDOMIZATION).seabed.kind for i in range(12)]
+    assert {"rough", "ripple"} & set(kinds) and {"plane", "slope"} & set(kinds)
+    predicted = [gen._builds_terrain_mesh((5, i, rz_json, RenderSettings())) for i in range(12)]
+    assert predicted == [k in ("rough", "ripple") for k in kinds]

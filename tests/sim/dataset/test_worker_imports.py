@@ -1,6 +1,8 @@
 """What a dataset process loads: the scenario schema and the dataset driver pull in no
-navigation filter, estimation roles, scipy.stats or target meshes (each spawned worker and the
-parent of a multi-worker run pay their imports); the lazy package exports still resolve."""
+navigation filter, estimation roles, scipy.stats or target meshes (the parent of a multi-worker
+run, and each worker where they are spawned, pay their imports); what a scene job imports
+builds meshes and looks up depths with numpy (no trimesh, no scipy.interpolate or
+scipy.spatial, about 0.4 s of CPU a process); the lazy package exports still resolve."""
 
 from __future__ import annotations
 
@@ -25,6 +27,17 @@ def test_dataset_driver_and_schema_load_no_navigation_estimation_or_meshes():
     unused = {"autonomy.navigation.ekf", "autonomy.estimation.gater", "autonomy.atr.classical",
               "autonomy.world_model.pmha", "scenarios.load", "scipy.stats", "trimesh", "sim.target_meshes"}
     assert not unused & loaded
+
+
+def test_scene_job_modules_load_no_trimesh_or_scipy_interpolation():
+    code = ("import importlib, sys, sim.dataset.generate as g\n"
+            "for name in g.worker_modules(g.RenderSettings()) + g.worker_modules(g.SssSettings()):\n"
+            "    importlib.import_module(name)\n"
+            "print(' '.join(sorted(sys.modules)))")
+    loaded = set(subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True,
+                                check=True).stdout.split())
+    assert {"sim.world", "sim.target_meshes", "sim.sensors.fls", "sim.sensors.sss"} <= loaded  # the probe ran
+    assert not {"trimesh", "scipy.interpolate", "scipy.spatial"} & loaded
 
 
 @pytest.mark.parametrize("package", LAZY_PACKAGES)

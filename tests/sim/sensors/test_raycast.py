@@ -98,3 +98,17 @@ def test_bad_tables_rejected():
     caster = scene()
     with pytest.raises(ValueError, match="geom_object_id"):
         MujocoRayCaster(caster.model, caster.data, np.zeros(2), np.zeros(4), -1)
+
+
+def test_bounding_sphere_follows_a_moved_object():
+    """The sphere is kept while the object's geoms stay put and formed again once they move."""
+    caster = scene()
+    c0, r0 = caster.object_bounding_sphere(0)
+    c0[:] = 0.0  # a caller's copy: changing it leaves the kept sphere alone
+    c1, r1 = caster.object_bounding_sphere(0)
+    assert c1 == pytest.approx(SPHERE_C) and r1 == r0
+    gid = mujoco.mj_name2id(caster.model, mujoco.mjtObj.mjOBJ_GEOM, "sphere")
+    caster.model.geom_pos[gid] = SPHERE_C + [1.5, -0.5, 0.25]
+    mujoco.mj_forward(caster.model, caster.data)
+    c2, r2 = caster.object_bounding_sphere(0)
+    assert c2 == pytest.approx(SPHERE_C + [1.5, -0.5, 0.25]) and r2 == pytest.approx(SPHERE_R)

@@ -11,7 +11,7 @@ from sim.sensors.sonar.display import FanRemap, to_uint8_db
 from sim.sensors.sonar.speckle import add_speckle_and_noise, complement_uniform_f32
 
 
-@pytest.mark.parametrize("shape", [(7, 5), (3, 4, 5), (1,), (2, 3)])
+@pytest.mark.parametrize("shape", [(7, 5), (3, 4, 5), (1,), (2, 3), (301, 257), (722, 1142)])
 @pytest.mark.parametrize("spare_word", [False, True])
 def test_complement_uniform_is_one_minus_generator_random(shape, spare_word):
     a, b = np.random.default_rng(11), np.random.default_rng(11)
