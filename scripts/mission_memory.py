@@ -4,7 +4,7 @@ Runs ``python -m sim.cli run`` (the real command, with its observers: trajectory
 detection scoring, rerun recording unless ``--no-rerun``) in a child process whose stderr is a
 pseudo-terminal, so its progress bar redraws twice a second with the simulated time. Every
 ``--sample-s`` wall seconds the ``VmRSS`` (``/proc/PID/status``, Linux) of the child and its
-descendants (``--run-arg=--workers=2``: the sonar render and perception workers, where the
+descendants (``--run-arg=--workers=2``: the sonar render and detection workers, where the
 world model then lives) is summed and recorded with the latest simulated time; pages the
 processes share (libraries) count once per process, so with workers the sum is an upper bound. At the end the samples after ``--warmup-s`` simulated seconds
 are fitted with a straight line (least squares) and the line is extrapolated to 86400 s.

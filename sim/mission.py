@@ -61,7 +61,7 @@ class Mission:
         timer: a :class:`sim.stage_timer.StageTimer` to time the loop's stages (benchmarks);
             default: none.
         workers: processes the loop may use. 1: the serial loop. 2 or more: the sonar's frames
-            and their perception run in two worker processes (:mod:`sim.sonar_pipeline`) when
+            and their ATR detection run in two worker processes (:mod:`sim.sonar_pipeline`) when
             nothing in the loop reads perception back (survey perception; not target tracking),
             with the serial loop's results bit for bit; observers get frames and perception
             results once ready, in order (frames only if an observer takes them: one without
@@ -142,8 +142,8 @@ class Mission:
 
     @property
     def perception(self):
-        """The perception chain (None without one); pipelined frames are finished first and the
-        workers' world model copied into it."""
+        """The perception chain (None without one); pipelined frames delivered so far are
+        finished first."""
         self.flush()
         if self._pipeline is not None:
             self._pipeline.sync()
@@ -323,7 +323,9 @@ class Mission:
                     handler(cmd)
         rec = self._record(truth, nav, parts.fsm.mode)
         if self._pipeline is not None and self._pipeline.busy:
-            self._to_observers(self._pipeline.ready())
+            with timer.stage("perception"):  # this process's part: geolocalisation, world model
+                ready = list(self._pipeline.ready())
+            self._to_observers(ready)
         self._wall_s = time.perf_counter() - self._wall_start
         return rec
 
@@ -393,8 +395,14 @@ class Mission:
             for handler in self._by_type.get(type(msg), ()):
                 handler(msg)
         process = self._by_source.get(name)
+        if process is None:  # a navigation sensor's message: no result; straight to the observers
+            if self.observers:
+                with timer.stage("observers"):
+                    for obs in self.observers:
+                        obs.on_message(name, msg)
+            return
         with timer.stage("perception"):
-            result = process(msg, self.nav_filter.estimate()) if process is not None else None
+            result = process(msg, self.nav_filter.estimate())
         with timer.stage("nav_filter"):
             for handler in self._by_type.get(type(result), ()) if result is not None else ():
                 handler(result)  # onboard results the filter fuses (position fixes)

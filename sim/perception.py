@@ -16,7 +16,7 @@ import numpy as np
 from autonomy.atr import build_detector
 from autonomy.frames import euler_from_rot
 from autonomy.localization import fls_visibility, localize
-from autonomy.messages import NavEstimate
+from autonomy.messages import Detection, NavEstimate
 from autonomy.world_model import CLASS_NAMES, PMHA
 from autonomy.world_model.surface import SonarFootprint
 from scenarios.schema import Scenario
@@ -81,12 +81,18 @@ class Perception:
                            rate_body_radps=np.zeros(3), cov_pos_ned=np.zeros((3, 3)), cov_yaw_rad2=0.0,
                            altitude_m=altitude)
 
-    def process(self, render: FlsRender, nav: NavEstimate) -> PerceptionResult:
+    def process(self, render: FlsRender, nav: NavEstimate,
+                detections: list[Detection] | None = None) -> PerceptionResult:
         """Run perception on one delivered frame; returns the detections, their
-        geolocalisation and the updated world model."""
+        geolocalisation and the updated world model.
+
+        ``detections``: this frame's ATR detections when already made (the pipelined loop
+        runs the detector, which reads only the frame, in a worker process; then ``render``
+        need not carry the images); None: run :attr:`detector` on ``render.frame``."""
         frame = render.frame
         self.n_frames += 1
-        detections = self.detector.detect(frame)
+        if detections is None:
+            detections = self.detector.detect(frame)
 
         nav_loc = self._truth_nav(render) if self.nav_source == "truth" else nav
         localized = [localize(d, nav_loc, self.fls.mount_pos_body_m, self.fls.mount_rpy_rad, self.loc_cfg,

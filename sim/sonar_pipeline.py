@@ -8,29 +8,32 @@ of its delivery time (capture + latency), in other processes, while the mission 
 on. Processes, not threads: the render and the perception are largely Python and small numpy
 operations that hold the GIL, so threads of one process take turns on one core.
 
-Two ``spawn``-started workers (:mod:`sim.sonar_workers`): one renders, one perceives; with the
-mission process that makes three busy processes, which a two-core machine's scheduler shares
-out. The results are the serial loop's bit for bit:
+Two ``spawn``-started workers (:mod:`sim.sonar_workers`): one renders, one runs the ATR
+detector (which reads only the frame); the mission process runs the rest of perception
+(geolocalisation with the navigation estimate of each frame's delivery, the world model) on
+the detections as they come back. That makes three busy processes of similar load, which a
+two-core machine's scheduler shares out. The results are the serial loop's bit for bit:
 
 * the render worker holds a copy of the ``MjModel`` with its own ``MjData`` and the sonar
   with its noise generator; at each capture it gets the poses of the geoms on moving bodies
   (what the ray casts read; the static geoms are sent once) and the true vehicle state, and
   renders the frames in capture order, so the noise is drawn in the same order;
-* the perception worker holds the mission's perception (world model included; the detector
-  rebuilt from its config) and processes the frames in delivery order, each with the estimate
-  the serial loop would pass, sent at its delivery;
+* the detection worker holds the mission's detector (rebuilt from its config) and detects on
+  each frame as it comes; the mission's own perception then geolocalises the detections and
+  updates its world model in delivery order, each frame with the estimate the serial loop
+  would pass (kept at its delivery), so the mission's perception holds its state throughout;
 * frames go from worker to worker through shared memory (:class:`sim.frame_transport.FrameRing`);
   they come back to the mission process only when an observer takes them (an observer sets
-  ``sonar_frames = False`` when it ignores the sonar's renders); results come back in order
-  and reach the observers on the mission process, in the serial loop's order, once ready;
-* :meth:`SonarPipeline.sync` copies the workers' state back (the world model and frame count
-  into the mission's perception, the noise generator's state into its sonar), so the mission
-  reads the same world model and continues the same noise stream as the serial loop.
+  ``sonar_frames = False`` when it ignores the sonar's renders); detections come back the same
+  way, and results reach the observers on the mission process, in the serial loop's order,
+  once ready;
+* :meth:`SonarPipeline.sync` finishes the frames delivered so far and copies the render
+  worker's noise generator state into the mission's sonar, so the mission reads the same world
+  model and continues the same noise stream as the serial loop.
 """
 
 from __future__ import annotations
 
-import io
 import multiprocessing as mp
 import os
 import pickle
@@ -47,13 +50,14 @@ import numpy as np
 from sim.frame_transport import FrameRing, shared_objects
 from sim.physics import Physics
 from sim.sensors.base import Sensor
-from sim.sonar_workers import perception_main, render_main
+from sim.sonar_workers import detection_main, render_main
 from sim.truth import VehicleTruth
 
 RING_SLOTS = 4  # frames in flight between two processes
 CAPTURES_IN_FLIGHT = 2 * RING_SLOTS  # captures sent and not yet rendered before a capture waits
 STOP_TIMEOUT_S = 10.0  # wait for a worker to end before terminating it
 THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
+DETECTIONS_SLOT_BYTES = 1 << 20  # a frame's detections and image-less view (arrays beyond it go in band)
 NO_MAIN_GUARD_EXIT = 86  # a worker's exit status when spawn found the script unguarded (see SonarPipeline)
 
 
@@ -85,25 +89,17 @@ def _one_thread_per_library() -> Iterator[None]:
                 os.environ[k] = v
 
 
-class _Persist(pickle.Pickler):
-    """Pickles the perception with its detector (an inference session) left out."""
-
-    def __init__(self, file, detector: Any) -> None:
-        super().__init__(file, protocol=pickle.HIGHEST_PROTOCOL)
-        self._detector = detector
-
-    def persistent_id(self, obj: Any) -> Any:
-        return "detector" if obj is self._detector else None
-
-
 class SonarPipeline:
-    """Renders ``sonar``'s frames and runs ``perception`` on them in two worker processes.
+    """Renders ``sonar``'s frames and runs ``perception``'s detector on them in two worker
+    processes; the rest of ``perception`` runs in this process as the detections come back.
 
     Args:
         physics: the mission's world (its model is copied to the render worker once; the poses
             of its moving geoms at each capture).
         sonar: the sensor whose frames are pipelined (copied with its noise state).
-        perception: the mission's :class:`sim.perception.Perception` (copied with its state).
+        perception: the mission's :class:`sim.perception.Perception` (its detector is rebuilt
+            in the detection worker from ``perception.scenario.autonomy.atr``; the rest runs
+            here, on this object, through ``process(render, nav, detections=...)``).
         frames: send each rendered frame back to this process (observers that read them).
         slots: frames in flight in each shared-memory ring.
 
@@ -129,18 +125,21 @@ class SonarPipeline:
         self.frames = bool(frames)
         self._procs: list[Any] = []
         self._rings: list[FrameRing] = []
-        self._render = self._perceive = self._frames_in = None
+        self._render = self._detect = self._detections_in = self._frames_in = None
         self._n_captured = self._n_rendered = 0
-        self._pending: deque[tuple[str, int]] = deque()  # delivered, result not yet handed on
-        self._results: dict[int, Any] = {}
+        self._pending: deque[tuple[str, int, Any]] = deque()  # delivered (with their estimate), not yet perceived
+        self._perceived: deque[tuple[str, int, Any]] = deque()  # perceived, not yet handed on
+        self._detections: dict[int, tuple[Any, Any]] = {}
         self._frames: dict[int, Any] = {}
         self._closed = False
         model, data, world = physics.model, physics.data, physics.world
         self._moving = np.flatnonzero(model.geom_bodyid != 0)
         self._static_objects = world.objects
         ctx = mp.get_context("spawn")
-        to_perception, whole = self._frame_bytes(sonar)
-        self._rings = [FrameRing(ctx, slots, to_perception)]
+        to_detection, whole = self._frame_bytes(sonar)
+        # render -> detection (frames), detection -> mission (detections, the frames' views
+        # without images), render -> mission (whole frames, for the observers)
+        self._rings = [FrameRing(ctx, slots, to_detection), FrameRing(ctx, slots, DETECTIONS_SLOT_BYTES)]
         if self.frames:
             self._rings.append(FrameRing(ctx, slots, whole))
         self._shared = shared_objects(sonar)
@@ -150,19 +149,20 @@ class SonarPipeline:
             "geom_xpos": data.geom_xpos.copy(), "geom_xmat": data.geom_xmat.copy(), "moving_geoms": self._moving,
             "objects": physics.objects(), "truth_to_perception": getattr(perception, "nav_source", "") == "truth",
         }, protocol=pickle.HIGHEST_PROTOCOL)
-        buf = io.BytesIO()
-        _Persist(buf, getattr(perception, "detector", None)).dump(perception)
+        detect_setup = pickle.dumps({"atr": perception.scenario.autonomy.atr, "shared": self._shared},
+                                    protocol=pickle.HIGHEST_PROTOCOL)
         self._render, render_end = ctx.Pipe()
-        self._perceive, perceive_end = ctx.Pipe()
+        self._detect, detect_end = ctx.Pipe()
         between_r, between_w = ctx.Pipe(duplex=False)
+        detections_r, detections_w = ctx.Pipe(duplex=False)
         frames_r, frames_w = ctx.Pipe(duplex=False) if self.frames else (None, None)
-        self._frames_in = frames_r
+        self._detections_in, self._frames_in = detections_r, frames_r
         self._procs = [
             ctx.Process(target=render_main, name="auvsim-sonar-render", daemon=True,
                         args=(render_end, between_w, self._rings[0], frames_w,
-                              self._rings[1] if self.frames else None)),
-            ctx.Process(target=perception_main, name="auvsim-perception", daemon=True,
-                        args=(perceive_end, between_r, self._rings[0])),
+                              self._rings[2] if self.frames else None)),
+            ctx.Process(target=detection_main, name="auvsim-detection", daemon=True,
+                        args=(detect_end, between_r, self._rings[0], detections_w, self._rings[1])),
         ]
         try:
             with _one_thread_per_library():
@@ -172,13 +172,13 @@ class SonarPipeline:
             self.close()
             raise
         finally:
-            for end in (render_end, perceive_end, between_r, between_w, frames_w):
+            for end in (render_end, detect_end, between_r, between_w, detections_w, frames_w):
                 if end is not None:
                     end.close()  # the workers hold them now: their ends close when they end
         # the setups (megabytes) go over the connections, not with the start: spawn writes the
         # start's data to the new process while holding the read end itself, so a worker that
         # ends before reading (an unguarded main script) would leave a large write hanging
-        for conn, setup in ((self._render, render_setup), (self._perceive, buf.getvalue())):
+        for conn, setup in ((self._render, render_setup), (self._detect, detect_setup)):
             try:
                 conn.send_bytes(setup)
             except OSError:
@@ -215,49 +215,46 @@ class SonarPipeline:
 
     def deliver(self, name: str, ticket: FrameTicket, nav: Any) -> None:
         """Queue perception of a delivered frame with the estimate ``nav`` of its delivery time."""
-        self._send(self._perceive, ("nav", ticket.k, nav))
-        self._pending.append((name, ticket.k))
+        self._pending.append((name, ticket.k, nav))
 
     def ready(self, wait: bool = False) -> Iterator[tuple[str, Any, Any]]:
         """``(name, frame or None, result)`` of the delivered frames processed so far, in delivery
         order (``wait``: all of them, waiting for the workers); the frame is None unless
-        ``frames``.
+        ``frames``. Runs this process's part of perception on the detections that came back.
 
         Raises:
             PipelineError: a worker failed or ended.
         """
-        while self._pending:
-            k = self._pending[0][1]
-            self._receive(block=False)
-            while wait and (k not in self._results or (self.frames and k not in self._frames)):
-                self._receive(block=True)
-            if k not in self._results or (self.frames and k not in self._frames):
-                return
-            name, _ = self._pending.popleft()
-            yield name, self._frames.pop(k, None), self._results.pop(k)
+        self._perceive(wait)
+        while self._perceived:
+            k = self._perceived[0][1]
+            if self.frames and k not in self._frames:
+                self._receive(block=False)
+                while wait and k not in self._frames:
+                    self._receive(block=True)
+                if k not in self._frames:
+                    return
+            name, _, result = self._perceived.popleft()
+            yield name, self._frames.pop(k, None), result
 
     @property
     def busy(self) -> bool:
-        return bool(self._pending)
+        return bool(self._pending or self._perceived)
 
     def sync(self) -> None:
-        """Copy the workers' state into the mission's objects (waits for the frames delivered
-        so far): the perception's world model and frame count, the sonar's noise state.
+        """Bring the mission's objects to the state of the serial loop: perception of every
+        frame delivered so far (waiting for its detections; the results are handed on by
+        :meth:`ready`), the sonar's noise state from the render worker.
 
         Raises:
             PipelineError: a worker failed or ended.
         """
-        self._send(self._perceive, ("state",))
+        self._perceive(wait=True)
         self._send(self._render, ("state",))
-        perception_state = render_state = None
-        while perception_state is None or render_state is None:
-            for conn, msg in self._receive(block=True, want_state=True):
-                if conn is self._perceive:
-                    perception_state = msg
-                else:
-                    render_state = msg
-        _, self.perception.pmha, self.perception.n_frames = perception_state
-        self.sonar.rng.bit_generator.state = render_state[1]
+        while True:
+            for _, msg in self._receive(block=True, want_state=True):
+                self.sonar.rng.bit_generator.state = msg[1]
+                return
 
     def close(self, sync: bool = True) -> None:
         """Stop the workers (frames delivered but not yet handed on are dropped); ``sync``
@@ -269,7 +266,7 @@ class SonarPipeline:
             if sync and self._procs and all(p.is_alive() for p in self._procs):
                 self.sync()
         finally:
-            for conn in (self._render, self._perceive):
+            for conn in (self._render, self._detect):
                 try:
                     if conn is not None:
                         conn.send(("stop",))
@@ -281,13 +278,14 @@ class SonarPipeline:
                 if p.is_alive():
                     p.kill()  # the workers ignore SIGTERM
                     p.join()
-            for conn in (self._render, self._perceive, self._frames_in):
+            for conn in (self._render, self._detect, self._detections_in, self._frames_in):
                 if conn is not None:
                     conn.close()
             for ring in self._rings:
                 ring.close()
                 ring.unlink()
             self._pending.clear()
+            self._perceived.clear()
 
     @property
     def pids(self) -> list[int]:
@@ -301,12 +299,27 @@ class SonarPipeline:
         except (OSError, ValueError):
             self._fail(self._why_ended())
 
+    def _perceive(self, wait: bool) -> None:
+        """Perception (this process's part) of the delivered frames whose detections came back,
+        in delivery order (``wait``: of all of them)."""
+        while self._pending:
+            k = self._pending[0][1]
+            if k not in self._detections:
+                self._receive(block=False)
+                while wait and k not in self._detections:
+                    self._receive(block=True)
+                if k not in self._detections:
+                    return
+            name, _, nav = self._pending.popleft()
+            detections, view = self._detections.pop(k)
+            self._perceived.append((name, k, self.perception.process(view, nav, detections=detections)))
+
     def _receive(self, block: bool, want_state: bool = False) -> list[tuple[Any, Any]]:
         """Read what the workers sent (``block``: wait for at least one message); results and
         frames are kept by frame index; ``state`` replies are returned as (connection, message).
         A worker that ended (its process sentinel ready) with nothing left to read fails the
         pipeline."""
-        sources = [c for c in (self._render, self._perceive, self._frames_in) if c is not None]
+        sources = [c for c in (self._render, self._detect, self._detections_in, self._frames_in) if c is not None]
         ended = {p.sentinel: p for p in self._procs}
         states = []
         got = False
@@ -318,8 +331,13 @@ class SonarPipeline:
                 if conn in ended:
                     continue
                 try:
+                    if conn is self._detections_in:
+                        k, detections, view = self._rings[1].get(conn, self._shared)
+                        self._detections[k] = (detections, view)
+                        got = True
+                        continue
                     if conn is self._frames_in:
-                        k, render = self._rings[1].get(conn, self._shared)
+                        k, render = self._rings[2].get(conn, self._shared)
                         self._frames[k] = render
                         got = True
                         continue
@@ -330,8 +348,6 @@ class SonarPipeline:
                     self._fail(f"sonar pipeline worker failed:\n{msg[1]}")
                 if msg[0] == "rendered":
                     self._n_rendered = msg[1] + 1
-                elif msg[0] == "result":
-                    self._results[msg[1]] = msg[2]
                 elif msg[0] == "state" and want_state:
                     states.append((conn, msg))
                 got = True

@@ -1,4 +1,4 @@
-"""The two worker processes of :mod:`sim.sonar_pipeline`: sonar rendering and perception.
+"""The two worker processes of :mod:`sim.sonar_pipeline`: sonar rendering and ATR detection.
 
 Each runs a loop over messages from the mission process (``multiprocessing`` connections,
 ``spawn`` start) and ends on ``("stop",)`` or when the mission process's end of its connection
@@ -14,17 +14,17 @@ Render worker (:func:`render_main`): holds its own ``MjData`` over a copy of the
 when objects move, the scene objects, at capture), ``("state",)``, ``("stop",)``. It renders
 frame ``k`` exactly as the serial loop (same geom poses, same draws in the same order), sends
 the perception's view of it (the frame; with ``nav_source='truth'`` also its truth) to the
-perception worker, and, when the mission's observers take frames, ``(k, render)`` to the
+detection worker, and, when the mission's observers take frames, ``(k, render)`` to the
 mission process over a connection of its own, both through shared memory (:class:`sim.frame_transport.FrameRing`).
 ``("rendered", k)`` then tells the mission process it is done with capture ``k`` (which bounds the
 captures in flight); ``("state",)`` answers ``("state", noise generator state)``.
 
-Perception worker (:func:`perception_main`): holds the mission's
-:class:`sim.perception.Perception` (its detector rebuilt from the ATR config). Messages in:
-``("nav", k, nav)`` at frame ``k``'s delivery, ``("state",)``, ``("stop",)``; frames from the
-render worker. Handled strictly in order (a ``nav`` waits for its frame): frame ``k`` is
-processed with ``nav`` and ``("result", k, result)`` sent back; ``("state",)`` answers
-``("state", pmha, n_frames)``, the perception's state after every frame delivered before it.
+Detection worker (:func:`detection_main`): holds the mission's ATR detector (rebuilt from its
+config; it reads only the frame, not the navigation). Messages in: ``("stop",)``; frames from
+the render worker, in capture order. For frame ``k`` it runs the detector and sends ``(k,
+detections, the frame's view without its images)`` to the mission process through shared
+memory, where the rest of perception (geolocalisation with the estimate of the frame's
+delivery, the world model) runs in delivery order.
 """
 
 from __future__ import annotations
@@ -32,7 +32,6 @@ from __future__ import annotations
 import pickle
 import signal
 import traceback
-from collections import deque
 from multiprocessing.connection import wait
 from typing import Any
 
@@ -40,12 +39,26 @@ from sim.frame_transport import FrameRing, shared_objects
 
 
 def _worker_start() -> None:
-    """Ignore Ctrl-C and SIGTERM (the mission process stops the worker) and keep OpenCV to one thread."""
+    """Ignore Ctrl-C and SIGTERM (the mission process stops the worker), keep OpenCV to one
+    thread and set the garbage collector for the loop (:mod:`sim.gc_policy`)."""
     import cv2
 
+    from sim.gc_policy import set_loop_thresholds
+
+    set_loop_thresholds()
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
     cv2.setNumThreads(1)
+
+
+def _command(conn: Any) -> tuple | None:
+    """The next message from the mission process; None for ``("stop",)`` or a closed connection
+    (the mission process ended)."""
+    try:
+        msg = conn.recv()
+    except EOFError:
+        return None
+    return None if msg[0] == "stop" else msg
 
 
 def _report(conn: Any) -> None:
@@ -55,7 +68,7 @@ def _report(conn: Any) -> None:
         pass
 
 
-def render_main(conn: Any, to_perception: Any, ring_perception: FrameRing, to_main: Any,
+def render_main(conn: Any, to_detection: Any, ring_detection: FrameRing, to_main: Any,
                 ring_main: FrameRing | None) -> None:
     """Render-worker loop (see the module doc); frames for the mission's observers go over
     ``to_main`` through ``ring_main`` (None: not wanted). The first message on ``conn`` is the
@@ -80,11 +93,8 @@ def render_main(conn: Any, to_perception: Any, ring_perception: FrameRing, to_ma
         objects, with_truth = s["objects"], s["truth_to_perception"]
         shared_ids = {id(v): name for name, v in shared_objects(sonar).items()}
         while True:
-            try:
-                msg = conn.recv()
-            except EOFError:
-                return
-            if msg[0] == "stop":
+            msg = _command(conn)
+            if msg is None:
                 return
             if msg[0] == "state":
                 conn.send(("state", sonar.rng.bit_generator.state))
@@ -97,62 +107,49 @@ def render_main(conn: Any, to_perception: Any, ring_perception: FrameRing, to_ma
             # the perception's view: the frame (and the truth where it navigates by it), no images
             view = dataclasses.replace(render, **{f.name: None for f in dataclasses.fields(render)
                                                   if f.name != "frame" and not (with_truth and f.name == "truth")})
-            ring_perception.put(to_perception, (k, view), shared_ids)
+            ring_detection.put(to_detection, (k, view), shared_ids)
             if ring_main is not None:
                 ring_main.put(to_main, (k, render), shared_ids)
             conn.send(("rendered", k))
     except BaseException:
         _report(conn)
     finally:
-        ring_perception.close()
+        ring_detection.close()
         if ring_main is not None:
             ring_main.close()
 
 
-def perception_main(conn: Any, from_render: Any, ring: FrameRing) -> None:
-    """Perception-worker loop (see the module doc). The first message on ``conn`` (bytes): the mission's ``Perception``
-    pickled with its detector as the persistent id ``"detector"`` (rebuilt here from
-    ``perception.scenario.autonomy.atr``)."""
+def detection_main(conn: Any, from_render: Any, ring_in: FrameRing, to_main: Any, ring_out: FrameRing) -> None:
+    """Detection-worker loop (see the module doc). The first message on ``conn`` (bytes): the
+    pickled dict ``atr`` (the ATR config the detector is built from) and ``shared`` (the sonar's
+    fixed tables, :func:`sim.frame_transport.shared_objects`)."""
     _worker_start()
     try:
-        import io
+        import dataclasses
 
         from autonomy.atr import build_detector
 
-        class _Loader(pickle.Unpickler):
-            def persistent_load(self, pid: Any) -> Any:
-                return None  # the detector, rebuilt below
-
-        perception = _Loader(io.BytesIO(conn.recv_bytes())).load()
-        perception.detector = build_detector(perception.scenario.autonomy.atr)
-        shared = shared_objects(perception.fls)
-        frames: dict[int, Any] = {}
-        todo: deque[tuple] = deque()
+        s = pickle.loads(conn.recv_bytes())
+        detector, shared = build_detector(s["atr"]), s["shared"]
+        shared_ids = {id(v): name for name, v in shared.items()}
         sources = [conn, from_render]
-        while sources:
+        while True:
             for src in wait(sources):
-                try:
-                    if src is from_render:
-                        k, view = ring.get(from_render, shared)
-                        frames[k] = view
-                    else:
-                        todo.append(conn.recv())
-                except EOFError:
-                    if src is conn:
+                if src is conn:
+                    if _command(conn) is None:
                         return
-                    sources.remove(src)  # the render worker ended (its error went to the mission)
-            while todo:
-                msg = todo[0]
-                if msg[0] == "stop":
-                    return
-                if msg[0] == "state":
-                    conn.send(("state", perception.pmha, perception.n_frames))
-                elif msg[1] in frames:
-                    conn.send(("result", msg[1], perception.process(frames.pop(msg[1]), msg[2])))
-                else:
-                    break  # this nav's frame is still being rendered
-                todo.popleft()
+                    continue  # nothing else is asked of this worker
+                try:
+                    k, view = ring_in.get(from_render, shared)
+                except EOFError:
+                    sources.remove(from_render)  # the render worker ended (its error went to the mission)
+                    continue
+                detections = detector.detect(view.frame)
+                # the frame without its images: what perception reads besides the detections
+                frame = dataclasses.replace(view.frame, polar=None, fan=None)
+                ring_out.put(to_main, (k, detections, dataclasses.replace(view, frame=frame)), shared_ids)
     except BaseException:
         _report(conn)
     finally:
-        ring.close()
+        ring_in.close()
+        ring_out.close()

@@ -113,6 +113,41 @@ def _component_stream(
         yield total, tuple(labels[c] for c in cols)
 
 
+def _row_groups(options: Sequence[Sequence[tuple[int, float]]]) -> list[list[int]]:
+    """Rows linked by a shared label (union-find), each group's rows ascending, groups in
+    order of their first row."""
+    n = len(options)
+    owner: dict[int, int] = {}
+    linked = False
+    for j, opts in enumerate(options):
+        for lab, _ in opts:
+            if lab >= 0:
+                if owner.setdefault(lab, j) != j:
+                    linked = True
+    if not linked:  # the common case: every row its own group
+        return [[j] for j in range(n)]
+    parent = list(range(n))
+
+    def find(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    owner.clear()
+    for j, opts in enumerate(options):
+        for lab, _ in opts:
+            if lab >= 0:
+                if lab in owner:
+                    parent[find(j)] = find(owner[lab])
+                else:
+                    owner[lab] = j
+    groups: dict[int, list[int]] = {}
+    for j in range(n):
+        groups.setdefault(find(j), []).append(j)
+    return list(groups.values())
+
+
 def ranked_associations(
     options: Sequence[Sequence[tuple[int, float]]],
     row_cache: dict | None = None,
@@ -124,71 +159,77 @@ def ranked_associations(
     Yields ``(total_cost, label_of_row)``. Rows are split into independent groups (rows
     linked by a shared label); groups of one row are sorted lists, larger groups are
     ranked by :func:`murty_k_best`, and the product of the groups' ranked lists is walked
-    best-first, each index tuple reached from one parent so none repeats. ``row_cache``
-    (a dict shared between calls) memoises the sorted lists of one-row groups.
+    best-first, each index tuple reached from one parent so none repeats: a tuple's total
+    is its parent's minus the raised group's old cost plus its new one, and ties are
+    broken by the index tuple. ``row_cache`` (a dict shared between calls) memoises the
+    sorted lists of one-row groups.
     """
     n = len(options)
     if n == 0:
         yield 0.0, ()
         return
-    parent = list(range(n))
-
-    def find(i: int) -> int:
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-
-    owner: dict[int, int] = {}
-    for j, opts in enumerate(options):
-        for lab, _ in opts:
-            if lab >= 0:
-                if lab in owner:
-                    parent[find(j)] = find(owner[lab])
-                else:
-                    owner[lab] = j
-    groups: dict[int, list[int]] = {}
-    for j in range(n):
-        groups.setdefault(find(j), []).append(j)
-    comps = list(groups.values())
-    streams: list[LazyRanked] = []
+    comps = _row_groups(options)
+    # Per group: its ranked items (a complete list for one row; the growing prefix of a
+    # LazyRanked for Murty groups) and the LazyRanked that extends it (None when complete).
+    ranked_items: list[list[tuple[float, tuple[int, ...]]]] = []
+    lazies: list[LazyRanked | None] = []
     for rows in comps:
         if len(rows) == 1:
             key = tuple(options[rows[0]])
-            ranked = None if row_cache is None else row_cache.get(key)
-            if ranked is None:
-                ranked = LazyRanked(iter(sorted((c, (lab,)) for lab, c in key if math.isfinite(c))))
+            items = None if row_cache is None else row_cache.get(key)
+            if items is None:
+                items = sorted([(c, (lab,)) for lab, c in key if math.isfinite(c)])
                 if row_cache is not None:
-                    row_cache[key] = ranked
-            streams.append(ranked)
+                    row_cache[key] = items
+            if not items:
+                return
+            ranked_items.append(items)
+            lazies.append(None)
         else:
-            streams.append(LazyRanked(_component_stream(rows, options)))
-    firsts = [s.get(0) for s in streams]
-    if any(f is None for f in firsts):
-        return
-    n_c = len(streams)
+            lazy = LazyRanked(_component_stream(rows, options))
+            if lazy.get(0) is None:
+                return
+            ranked_items.append(lazy._items)
+            lazies.append(lazy)
+    n_c = len(comps)
     if n_c == 1:  # one group: its ranked list is the answer
+        rows, items, lazy = comps[0], ranked_items[0], lazies[0]
         k = 0
-        while (item := streams[0].get(k)) is not None:
+        while k < len(items) or (lazy is not None and lazy.get(k) is not None):
+            total, sol = items[k]
             labels = [0] * n
-            for r, lab in zip(comps[0], item[1]):
-                labels[r] = lab
-            yield item[0], tuple(labels)
-            k += 1
-        return
-    heap: list[tuple[float, tuple[int, ...], int]] = [(sum(f[0] for f in firsts), (0,) * n_c, 0)]
-    pop, push = heapq.heappop, heapq.heappush
-    while heap:
-        total, idx, last = pop(heap)
-        labels = [0] * n
-        for s, k, rows in zip(streams, idx, comps):
-            sol = s.get(k)[1]
             for r, lab in zip(rows, sol):
                 labels[r] = lab
-        yield total, tuple(labels)
+            yield total, tuple(labels)
+            k += 1
+        return
+    labels = [0] * n
+    for rows, items in zip(comps, ranked_items):
+        for r, lab in zip(rows, items[0][1]):
+            labels[r] = lab
+    # heap entries: (total, index tuple, last raised group, labels); the index tuples are
+    # distinct, so the labels are never compared
+    heap: list[tuple[float, tuple[int, ...], int, tuple[int, ...]]] = [
+        (sum(items[0][0] for items in ranked_items), (0,) * n_c, 0, tuple(labels))
+    ]
+    pop, push = heapq.heappop, heapq.heappush
+    while heap:
+        total, idx, last, labels_t = pop(heap)
+        yield total, labels_t
         for c in range(last, n_c):
-            s = streams[c]
+            items = ranked_items[c]
             k = idx[c]
-            nxt = s.get(k + 1)
-            if nxt is not None:
-                push(heap, (total - s.get(k)[0] + nxt[0], idx[:c] + (k + 1,) + idx[c + 1 :], c))
+            if k + 1 >= len(items):
+                lazy = lazies[c]
+                if lazy is None or lazy.get(k + 1) is None:
+                    continue
+            nxt = items[k + 1]
+            rows = comps[c]
+            if len(rows) == 1:
+                child = labels_t[: rows[0]] + nxt[1] + labels_t[rows[0] + 1 :]
+            else:
+                lab_list = list(labels_t)
+                for r, lab in zip(rows, nxt[1]):
+                    lab_list[r] = lab
+                child = tuple(lab_list)
+            push(heap, (total - items[k][0] + nxt[0], idx[:c] + (k + 1,) + idx[c + 1 :], c, child))

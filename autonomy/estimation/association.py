@@ -29,8 +29,9 @@ class KBestAssociator:
     def __init__(self, gated: Sequence[Sequence[Option]], private: Sequence[Sequence[Option]]) -> None:
         if len(gated) != len(private):
             raise ValueError(f"KBestAssociator: {len(gated)} gated rows but {len(private)} private rows")
-        self._gated = gated
-        self._private = private
+        self._private = [tuple(pv) for pv in private]
+        #: Rows with gated objects: (row, its gated options, its private options).
+        self._gated_rows = [(j, tuple(g), pv) for j, (g, pv) in enumerate(zip(gated, self._private)) if g]
         #: Every object label gated with some measurement: a hypothesis's options depend only on
         #: which of these it holds, so that set keys the shared streams.
         self._gated_labels = frozenset(o[0] for g in gated for o in g)
@@ -43,9 +44,9 @@ class KBestAssociator:
         present = self._gated_labels.intersection(labels)
         stream = self._streams.get(present)
         if stream is None:
+            opts = list(self._private)
             if present:
-                opts = [[o for o in g if o[0] in present] + list(pv) for g, pv in zip(self._gated, self._private)]
-            else:
-                opts = self._private
+                for j, g, pv in self._gated_rows:
+                    opts[j] = tuple([o for o in g if o[0] in present]) + pv
             stream = self._streams[present] = LazyRanked(ranked_associations(opts, self._row_cache))
         return stream

@@ -81,8 +81,8 @@ class PositionFix:
         return P[..., self._index[:, None], self._index]
 
     def cross_covar(self, covar: ArrayLike) -> FloatArray:
-        """H P (m, n) for one ``covar`` (n, n)."""
-        return np.asarray(covar, dtype=float)[self._index, :]
+        """H P for ``covar`` (..., n, n) -> (..., m, n)."""
+        return np.asarray(covar, dtype=float)[..., self._index, :]
 
     def residual(self, z: ArrayLike, z_pred: ArrayLike) -> FloatArray:
         """z - z_pred (no angles to wrap)."""

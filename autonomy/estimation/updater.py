@@ -50,6 +50,32 @@ class KalmanUpdater:
         P_new = I_KH @ P @ I_KH.T + K @ R @ K.T
         return x_new, 0.5 * (P_new + P_new.T)
 
+    def update_batch(self, mean: ArrayLike, covar: ArrayLike, z: ArrayLike,
+                     noise_covar: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """:meth:`update` of N independent pairs at once: means (N, n), covariances (N, n, n),
+        measurements (N, m) and their noise (N, m, m) -> posterior means (N, n) and
+        covariances (N, n, n).
+
+        Each pair goes through the same floating-point operations as :meth:`update` (numpy's
+        batched ``solve`` and ``matmul`` run the per-matrix kernels of the single calls), so
+        row i equals ``update(mean[i], covar[i], z[i], noise_covar[i])`` bit for bit.
+
+        Raises:
+            numpy.linalg.LinAlgError: a singular innovation covariance (in any pair).
+        """
+        model = self.model
+        x = np.asarray(mean, dtype=float)
+        P = np.asarray(covar, dtype=float)
+        R = np.asarray(noise_covar, dtype=float)
+        S = model.project_covar(P) + R
+        K = np.linalg.solve(S, model.cross_covar(P)).swapaxes(-1, -2)  # (N, n, m)
+        r = model.residual(z, model.function(x))
+        x_new = x + np.matmul(K, r[..., None])[..., 0]
+        I_KH = np.broadcast_to(np.eye(model.ndim_state), P.shape).copy()
+        I_KH[..., :, model.mapping] -= K
+        P_new = I_KH @ P @ I_KH.swapaxes(-1, -2) + K @ R @ K.swapaxes(-1, -2)
+        return x_new, 0.5 * (P_new + P_new.swapaxes(-1, -2))
+
 
 class ExtendedKalmanUpdater:
     """Extended Kalman update for a nonlinear measurement model of the state (its ``function``

@@ -131,7 +131,8 @@ class NavigationFilter:
         self._usbl_model = RangeBearingElevation(
             self._r_usbl, cfg.usbl_range_noise_m, cfg.usbl_range_noise_frac, np.radians(cfg.usbl_angle_noise_deg)
         )
-        self._att_noise_var = np.asarray(self.noise.attitude_noise_rad, dtype=float) ** 2
+        # (3,) attitude noise variances, rad^2, as Python floats (scalar arithmetic in predict)
+        self._att_noise_var = tuple((np.asarray(self.noise.attitude_noise_rad, dtype=float) ** 2).tolist())
         self._F = np.eye(N_STATES)  # transition and process noise of the DVL prediction, written in place
         self._Q = np.zeros((N_STATES, N_STATES))
         self._t_s = float(t0_s)
@@ -227,10 +228,11 @@ class NavigationFilter:
         # F and Q are reused: every entry that varies is written here, the rest stays I or 0
         F, Q = self._F, self._Q
         ks, kn = -dt / one_s**2, -dt / one_s
-        F[0:3, 3:10] = [
-            [-j00 * dt, -j01 * dt, -j02 * dt, ks * (r00 * vm0 + r01 * vm1 + r02 * vm2), kn * r00, kn * r01, kn * r02],
-            [-j10 * dt, -j11 * dt, -j12 * dt, ks * (r10 * vm0 + r11 * vm1 + r12 * vm2), kn * r10, kn * r11, kn * r12],
-            [-j20 * dt, -j21 * dt, -j22 * dt, ks * (r20 * vm0 + r21 * vm1 + r22 * vm2), kn * r20, kn * r21, kn * r22]]
+        # F[0:3, 3:10], row by row (a flat tuple converts faster than nested lists)
+        F[0:3, 3:10].flat = (
+            -j00 * dt, -j01 * dt, -j02 * dt, ks * (r00 * vm0 + r01 * vm1 + r02 * vm2), kn * r00, kn * r01, kn * r02,
+            -j10 * dt, -j11 * dt, -j12 * dt, ks * (r10 * vm0 + r11 * vm1 + r12 * vm2), kn * r10, kn * r11, kn * r12,
+            -j20 * dt, -j21 * dt, -j22 * dt, ks * (r20 * vm0 + r21 * vm1 + r22 * vm2), kn * r20, kn * r21, kn * r22)
         s0, s1, s2 = (v * dt * dt for v in self._att_noise_var)  # J diag(sigma^2) J^T dt^2
         q00 = s0 * j00 * j00 + s1 * j01 * j01 + s2 * j02 * j02
         q01 = s0 * j00 * j10 + s1 * j01 * j11 + s2 * j02 * j12
@@ -238,7 +240,7 @@ class NavigationFilter:
         q11 = s0 * j10 * j10 + s1 * j11 * j11 + s2 * j12 * j12
         q12 = s0 * j10 * j20 + s1 * j11 * j21 + s2 * j12 * j22
         q22 = s0 * j20 * j20 + s1 * j21 * j21 + s2 * j22 * j22
-        Q[0:3, 0:3] = [[q00, q01, q02], [q01, q11, q12], [q02, q12, q22]]
+        Q[0:3, 0:3].flat = (q00, q01, q02, q01, q11, q12, q02, q12, q22)
         Q[5, 5] = self.noise.heading_rw_rad_per_sqrt_s**2 * dt
         # the held velocity goes stale: an unknown acceleration a ~ N(0, sigma_a^2) over the
         # age tau of the ping gives var(a tau) = sigma_a^2 tau^2; after lock loss, a random walk

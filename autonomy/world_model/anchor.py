@@ -60,6 +60,13 @@ def class_update(pmf: FloatArray, likelihood: FloatArray) -> FloatArray:
     return post / post.sum()
 
 
+def class_update_batch(pmf: FloatArray, likelihood: FloatArray) -> FloatArray:
+    """:func:`class_update` of N pairs at once: pmfs (N, 2) and likelihoods (N, 2) -> (N, 2),
+    row i bit for bit ``class_update(pmf[i], likelihood[i])``."""
+    post = pmf * likelihood
+    return post / post.sum(axis=-1, keepdims=True)
+
+
 def measurement_cov(z: LocalizedDetection, cfg: WorldModelConfig) -> FloatArray:
     """Measurement covariance (3, 3): the localisation's, or the configured fixed one."""
     if cfg.measurement_cov_m2 is not None:

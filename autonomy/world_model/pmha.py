@@ -38,7 +38,9 @@ constant-position transition with a Kalman predictor (and its fixed-Gaussian fal
 identity position-fix measurement model with a Kalman updater and a single-measurement
 initiator, a same-scan clusterer, a Mahalanobis gater, a k-best (Murty) data associator and
 an update-time deleter for tentative anchors; PMHA adds the hypothesis tree, detection
-probabilities and class pmf.
+probabilities and class pmf. The Kalman and class posteriors of all gated (anchor,
+measurement) pairs of a scan are computed in one batch, bit for bit the per-pair ones
+(:meth:`autonomy.estimation.updater.KalmanUpdater.update_batch`); a child takes its pair's.
 """
 
 from __future__ import annotations
@@ -63,7 +65,14 @@ from autonomy.estimation.predictor import KalmanPredictor
 from autonomy.estimation.transition import ConstantPosition
 from autonomy.estimation.updater import KalmanUpdater
 from autonomy.localization.geolocate import LocalizedDetection
-from autonomy.world_model.anchor import CLASS_NAMES, Anchor, class_likelihood, class_update, measurement_cov
+from autonomy.world_model.anchor import (
+    CLASS_NAMES,
+    Anchor,
+    class_likelihood,
+    class_update,
+    class_update_batch,
+    measurement_cov,
+)
 from autonomy.world_model.config import WorldModelConfig
 
 FloatArray = NDArray[np.float64]
@@ -200,15 +209,20 @@ class PMHA:
         if m:
             Z = np.stack([np.asarray(z.pos_ned, dtype=float) for z in measurements])
             R = np.stack([measurement_cov(z, cfg) for z in measurements])
+            Q = np.stack([class_likelihood(z.class_score, cfg) for z in measurements])  # (m, 2)
+        posterior: dict[tuple[int, int], tuple[FloatArray, FloatArray, FloatArray]] = {}
         if m and n_u:
             dt = np.maximum(t_s - np.array([a.t_last_s for a in anchors]), 0.0)
             P_pred = self.predictor.predict_covar(np.stack([a.cov_ned for a in anchors]), dt)
-            assoc = self._association_logw(anchors, X, P_pred, p_d, log_miss, measurements, Z, R)
+            pmf = np.stack([a.class_pmf for a in anchors])  # (n_u, 2)
+            assoc = self._association_logw(X, P_pred, p_d, log_miss, pmf, Z, R, Q)
+            inside = np.isfinite(assoc)
             gated = [
-                [(versions[u], -float(assoc[u, j])) for u in np.flatnonzero(np.isfinite(assoc[:, j]))]
+                [(versions[u], -float(assoc[u, j])) for u in np.flatnonzero(inside[:, j])]
                 for j in range(m)
             ]
             row_of = dict(zip(versions, range(n_u)))
+            posterior = self._posteriors(versions, X, P_pred, pmf, Z, R, Q, inside)
         else:
             gated = [[] for _ in range(m)]
         private_in = [(_NEW, -self._log_new), (_CLUTTER, -self._log_clutter)]
@@ -227,14 +241,15 @@ class PMHA:
         heap: list[tuple[float, int, int]] = []
         parent_stream: list[LazyRanked] = []
         parent_base: list[float] = []
-        for h, hyp in enumerate(self._hyps):
-            base = float(self._log_w[h]) + sum(map(log_miss_of.__getitem__, hyp))
+        for h, (log_w, hyp) in enumerate(zip(self._log_w.tolist(), self._hyps)):
+            base = log_w + sum(map(log_miss_of.__getitem__, hyp))
             stream = associator.ranked(hyp)
             parent_stream.append(stream)
             parent_base.append(base)
             first = stream.get(0)
             if first is not None:
-                heapq.heappush(heap, (first[0] - base, h, 0))
+                heap.append((first[0] - base, h, 0))
+        heapq.heapify(heap)
 
         update_cache: dict[tuple[int, int], Anchor] = {}
         birth_cache: dict[int, Anchor] = {}
@@ -286,7 +301,7 @@ class PMHA:
                     a = update_cache.get(key)
                     if a is None:
                         a = update_cache[key] = self._updated(
-                            anchor_of[lab], P_pred[row_of[lab]], measurements[j], Z[j], R[j], uids[j], t_s
+                            anchor_of[lab], posterior.get(key), P_pred[row_of[lab]], Z[j], R[j], Q[j], uids[j], t_s
                         )
                         if canon is not None:
                             self._register(a, canon, reps, id_of)
@@ -431,35 +446,60 @@ class PMHA:
 
     def _association_logw(
         self,
-        anchors: list[Anchor],
         X: FloatArray,
         P_pred: FloatArray,
         p_d: FloatArray,
         log_miss: FloatArray,
-        measurements: Sequence[LocalizedDetection],
+        pmf: FloatArray,
         Z: FloatArray,
         R: FloatArray,
+        Q: FloatArray,
     ) -> FloatArray:
         """Log weight (n_u, m) of each anchor-measurement pair relative to the anchor's miss;
-        -inf outside the gate."""
+        -inf outside the gate. ``pmf`` (n_u, 2): the anchors' class pmfs; ``Q`` (m, 2): the
+        measurements' class likelihoods."""
         cfg = self.cfg
         model = self.measurement_model
         maha2, loglik = innovation_log_likelihoods(model.function(X), model.project_covar(P_pred), Z, R)
         with np.errstate(divide="ignore"):
             logw = self._log_existing + np.log(p_d)[:, None] + loglik - log_miss[:, None]
         if cfg.use_class_likelihood:
-            Q = np.stack([class_likelihood(z.class_score, cfg) for z in measurements])  # (m, 2)
-            pmf = np.stack([a.class_pmf for a in anchors])  # (n_u, 2)
             logw = logw + np.log(pmf @ Q.T)
         logw[self.gater.rejects(maha2)] = -np.inf
         return logw
 
+    def _posteriors(
+        self, versions: list[int], X: FloatArray, P_pred: FloatArray, pmf: FloatArray, Z: FloatArray,
+        R: FloatArray, Q: FloatArray, inside: NDArray[np.bool_],
+    ) -> dict[tuple[int, int], tuple[FloatArray, FloatArray, FloatArray]]:
+        """Kalman and class posteriors of every gated (anchor u, measurement j) pair in one
+        batch, keyed ``(version of u, j)``: ``(pos_ned (3,), cov_ned (3, 3), class_pmf (2,))``,
+        each bit for bit what :meth:`_updated` computes for the pair alone
+        (:meth:`KalmanUpdater.update_batch`, :func:`class_update_batch`). Empty when an
+        innovation covariance is singular: the pairs are then updated one by one when drawn,
+        so the error is raised only for a pair a child uses, as before."""
+        us, js = np.nonzero(inside)
+        if us.size == 0:
+            return {}
+        try:
+            x, P = self.updater.update_batch(X[us], P_pred[us], Z[js], R[js])
+        except np.linalg.LinAlgError:
+            return {}
+        post = class_update_batch(pmf[us], Q[js])
+        return {(versions[u], j): (x[i], P[i], post[i]) for i, (u, j) in enumerate(zip(us.tolist(), js.tolist()))}
+
     def _updated(
-        self, anchor: Anchor, P_pred: FloatArray, z: LocalizedDetection, z_pos: FloatArray,
-        R: FloatArray, uid: int, t_s: float,
+        self, anchor: Anchor, posterior: tuple[FloatArray, FloatArray, FloatArray] | None, P_pred: FloatArray,
+        z_pos: FloatArray, R: FloatArray, q: FloatArray, uid: int, t_s: float,
     ) -> Anchor:
-        """New version of ``anchor`` after measurement ``z`` (Kalman and class updates)."""
-        x, P = self.updater.update(anchor.pos_ned, P_pred, z_pos, R)
+        """New version of ``anchor`` after measurement ``z_pos`` (3,) with noise ``R`` (3, 3)
+        and class likelihood ``q`` (2,): Kalman and class updates, or their ``posterior``
+        precomputed by :meth:`_posteriors`."""
+        if posterior is None:
+            x, P = self.updater.update(anchor.pos_ned, P_pred, z_pos, R)
+            pmf = class_update(anchor.class_pmf, q)
+        else:
+            x, P, pmf = (v.copy() for v in posterior)
         return Anchor(
             id=anchor.id,
             version=self._version(),
@@ -467,7 +507,7 @@ class PMHA:
             cov_ned=P,
             t_last_s=float(t_s),
             n_detections=anchor.n_detections + 1,
-            class_pmf=class_update(anchor.class_pmf, class_likelihood(z.class_score, self.cfg)),
+            class_pmf=pmf,
             measurement_ids=anchor.measurement_ids + (uid,),
         )
 

@@ -120,7 +120,7 @@ def run(scenario: Scenario, sim_time_s: float = 120.0, warmup_s: float = 30.0, *
     if len(loops) > 1:
         piped = loops[1]
         cores = os.cpu_count() or 1
-        names = ["mission", "render", "perception"][:len(cpu[1])]
+        names = ["mission", "render", "detection"][:len(cpu[1])]
         result["workers"] = {
             "workers": workers,
             "pipelined": piped._pipeline is not None,

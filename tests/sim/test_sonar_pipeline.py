@@ -3,8 +3,11 @@ the same bytes, no process left behind, a worker's failure reported."""
 
 from __future__ import annotations
 
+import copy
+import dataclasses
 import json
 import os
+import signal
 import subprocess
 import sys
 import time
@@ -19,7 +22,7 @@ from sim.mission import Mission
 from sim.outputs.trajectory_log import TrajectoryLog
 from sim.perception import Perception
 from sim.records import PerceptionResult
-from sim.sensors.fls import FlsRender
+from sim.sensors.fls import FlsRender, FlsSensor
 from sim.sonar_pipeline import PipelineError, SonarPipeline
 
 # Dived 10 m short of OPI1 heading for it, survey started at once: frames with targets from t = 0.
@@ -109,31 +112,69 @@ def test_pipeline_is_off_where_perception_feeds_back_or_is_absent():
         Mission(scn, workers=0)
 
 
-class _FailingPerception(Perception):
-    """Perception that fails on its second frame (in the worker process)."""
+def test_perception_on_detections_made_elsewhere_equals_perception_on_the_frame():
+    # the pipeline detects on a worker and runs the rest of perception on an image-less view
+    m = Mission(load_scenario("cssn_lawnmower", OVER + ["autonomy.atr.detector=classical"]))
+    m.reset()
+    whole = Perception(m.scenario, m.fls, m.physics.world.seabed, m.parts.waypoints_ne)
+    split = Perception(m.scenario, m.fls, m.physics.world.seabed, m.parts.waypoints_ne)
+    n_detections = 0
+    for _ in range(6):
+        for _ in range(67):
+            m.physics.step(np.zeros(m.physics.params.n_thrusters))
+        render = m.fls.measure(m.physics.truth(), m.physics.scene())
+        nav = m.nav_filter.estimate()
+        detections = split.detector.detect(render.frame)
+        n_detections += len(detections)
+        view = dataclasses.replace(render, frame=dataclasses.replace(render.frame, polar=None, fan=None),
+                                   truth=None, mean_intensity=None, intensity=None)
+        a, b = whole.process(render, nav), split.process(view, nav, detections=detections)
+        assert repr(a) == repr(b)
+    assert n_detections > 0 and whole.n_frames == split.n_frames == 6
+    assert json.dumps(whole.world_model_json()) == json.dumps(split.world_model_json())
+    assert whole.world_model_json()["objects"]
 
-    def process(self, render, nav):
-        if self.n_frames >= 1:
-            raise RuntimeError("perception failed on purpose")
-        return super().process(render, nav)
+
+def _feed(m: Mission, pipe: SonarPipeline) -> None:
+    """Three frames through ``pipe``, 0.2 s apart, and wait for their results."""
+    for _ in range(3):
+        for _ in range(40):
+            m.physics.step(np.zeros(m.physics.params.n_thrusters))
+        pipe.deliver("fls", pipe.capture(m.physics.truth()), m.nav_filter.estimate())
+    list(pipe.ready(wait=True))
+
+
+class _FailingFls(FlsSensor):
+    """A sonar whose render fails on its second frame (in the render worker)."""
+
+    def measure(self, truth, scene):
+        self.n_rendered = getattr(self, "n_rendered", 0) + 1
+        if self.n_rendered >= 2:
+            raise RuntimeError("render failed on purpose")
+        return super().measure(truth, scene)
 
 
 def test_a_worker_failure_is_raised_with_its_traceback_and_ends_the_workers():
     m = Mission(load_scenario("cssn_lawnmower", OVER + ["autonomy.atr.detector=classical"]))
     m.reset()
-    p = m.parts.perception
-    failing = _FailingPerception(m.scenario, m.fls, m.physics.world.seabed, m.parts.waypoints_ne)
-    pipe = SonarPipeline(m.physics, m.fls, failing, frames=False)
+    failing = copy.copy(m.fls)
+    failing.__class__ = _FailingFls
+    pipe = SonarPipeline(m.physics, failing, m.parts.perception, frames=False)
     pids = pipe.pids
-    with pytest.raises(PipelineError, match="perception failed on purpose"):
-        for _ in range(3):
-            for _ in range(40):
-                m.physics.step(np.zeros(m.physics.params.n_thrusters))
-            pipe.deliver("fls", pipe.capture(m.physics.truth()), m.nav_filter.estimate())
-        list(pipe.ready(wait=True))
+    with pytest.raises(PipelineError, match="render failed on purpose"):
+        _feed(m, pipe)
     assert not any(_alive(pid) for pid in pids)
     pipe.close()  # already closed: nothing more to do
-    assert p is m.parts.perception
+
+
+def test_a_killed_worker_is_reported():
+    m = Mission(load_scenario("cssn_lawnmower", OVER + ["autonomy.atr.detector=classical"]))
+    m.reset()
+    pipe = SonarPipeline(m.physics, m.fls, m.parts.perception, frames=False)
+    os.kill(pipe.pids[1], signal.SIGKILL)  # the detection worker
+    with pytest.raises(PipelineError, match="ended unexpectedly.*auvsim-detection -9"):
+        _feed(m, pipe)
+    assert not any(_alive(pid) for pid in pipe.pids)
 
 
 UNGUARDED = """

@@ -107,3 +107,23 @@ def test_chi_square_gate_keeps_the_stated_fraction_of_true_pairs():
     assert abs(kept - 0.99) < 4 * np.sqrt(0.99 * 0.01 / len(d))
     with pytest.raises(ValueError):
         MahalanobisGater(0.0)
+
+
+@pytest.mark.parametrize("ndim_state, mapping", [(3, (0, 1, 2)), (6, (0, 1, 2)), (4, (3, 1))])
+def test_batched_kalman_update_is_bit_identical_to_one_by_one(ndim_state, mapping):
+    """update_batch row i == update(pair i) exactly (the world model relies on it)."""
+    rng = np.random.default_rng(7)
+    model = PositionFix(ndim_state, mapping)
+    updater = KalmanUpdater(model)
+    n, m = 200, len(mapping)
+    scale = rng.uniform(1e-3, 10.0, (n, 1, 1))
+    P = np.stack([_random_spd(rng, ndim_state) for _ in range(n)]) * scale
+    R = np.stack([_random_spd(rng, m) for _ in range(n)]) * rng.uniform(1e-3, 10.0, (n, 1, 1))
+    x = rng.normal(0.0, 50.0, (n, ndim_state))
+    z = x[:, list(mapping)] + rng.normal(0.0, 1.0, (n, m))
+    xb, Pb = updater.update_batch(x, P, z, R)
+    for i in range(n):
+        xi, Pi = updater.update(x[i], P[i], z[i], R[i])
+        assert np.array_equal(xi, xb[i]) and np.array_equal(Pi, Pb[i])
+    with pytest.raises(np.linalg.LinAlgError):
+        updater.update_batch(x[:2], np.zeros((2, ndim_state, ndim_state)), z[:2], np.zeros((2, m, m)))
