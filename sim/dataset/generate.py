@@ -25,7 +25,7 @@ import math
 import os
 import signal
 import sys
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -256,8 +256,44 @@ def worker_modules(settings: RenderSettings | SssSettings) -> tuple[str, ...]:
 
 def _worker_init() -> None:
     """A worker ends on SIGTERM (the pool's shutdown) as a spawned one does, whatever handler
-    a forked one inherited (``auvsim``'s turns SIGTERM into an exception)."""
+    a forked one inherited (``auvsim``'s turns SIGTERM into an exception), and ignores Ctrl-C:
+    the terminal sends SIGINT to the whole process group, and the parent, which handles it,
+    ends the pool (a worker raising ``KeyboardInterrupt`` would print a traceback). SIGINT
+    stays blocked from before the fork (:func:`_sigint_blocked`) until it is ignored here, so
+    no Ctrl-C lands in between."""
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if hasattr(signal, "pthread_sigmask"):
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+
+
+@contextmanager
+def _sigint_blocked():
+    """SIGINT blocked in this thread while the block runs (where POSIX allows it); a Ctrl-C
+    that came meanwhile is delivered, as ``KeyboardInterrupt``, when the block ends. The pool's
+    workers and helper threads started inside inherit the mask; :func:`_worker_init` then
+    ignores SIGINT and unblocks it."""
+    if not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+
+@contextmanager
+def _worker_pool(start_method: str, n_processes: int):
+    """A ``multiprocessing`` pool of ``n_processes`` started by ``start_method``, its workers
+    ignoring Ctrl-C; terminated when the block ends, also when a Ctrl-C held back while it
+    started is delivered."""
+    import multiprocessing as mp
+
+    with ExitStack() as stack:
+        with _sigint_blocked():
+            pool = stack.enter_context(mp.get_context(start_method).Pool(n_processes, initializer=_worker_init))
+        yield pool
 
 
 @contextmanager
@@ -305,12 +341,10 @@ def _run_local(jobs: list[tuple], n_workers: int, bar) -> None:
         for job in jobs:
             bar.update(_scene_job(job))
         return
-    import multiprocessing as mp
-
     heavy = [_builds_terrain_mesh(j) for j in jobs]
     jobs = [j for j, h in zip(jobs, heavy) if h] + [j for j, h in zip(jobs, heavy) if not h]  # stable
     if not sys.platform.startswith("linux"):
-        with mp.get_context("spawn").Pool(min(n_workers, len(jobs)), initializer=_worker_init) as pool:
+        with _worker_pool("spawn", min(n_workers, len(jobs))) as pool:
             for done in pool.imap_unordered(_scene_job, jobs):
                 bar.update(done)
         return
@@ -323,7 +357,7 @@ def _run_local(jobs: list[tuple], n_workers: int, bar) -> None:
             return
         gc.freeze()  # what the children inherit stays out of their collections (and its pages shared)
         try:
-            with mp.get_context("fork").Pool(min(n_workers, len(rest)), initializer=_worker_init) as pool:
+            with _worker_pool("fork", min(n_workers, len(rest))) as pool:
                 for done in pool.imap_unordered(_scene_job, rest):
                     bar.update(done)
         finally:

@@ -187,3 +187,56 @@ def test_pool_order_puts_terrain_mesh_scenes_first_from_the_first_draws_alone():
     assert {"rough", "ripple"} & set(kinds) and {"plane", "slope"} & set(kinds)
     predicted = [gen._builds_terrain_mesh((5, i, rz_json, RenderSettings())) for i in range(12)]
     assert predicted == [k in ("rough", "ripple") for k in kinds]
+
+
+def _sigint_self_then_pid(_: int) -> int:
+    """A pool task: Ctrl-C to its own process (as the terminal sends to the whole group), then
+    its process id (a worker that did not ignore it would raise instead and die)."""
+    import os
+    import signal
+    import time
+
+    os.kill(os.getpid(), signal.SIGINT)
+    time.sleep(0.05)  # the signal is handled at the next bytecode: let it land here
+    return os.getpid()
+
+
+@pytest.mark.parametrize("start_method", ["fork", "spawn"])
+def test_pool_workers_ignore_ctrl_c_and_a_ctrl_c_while_they_start_ends_the_pool(start_method):
+    """Ctrl-C reaches the workers too; they ignore it (the parent ends the pool), so none prints
+    a traceback. A Ctrl-C that arrives while the pool starts is held back until the pool is
+    built, then raised in the parent, and the workers end with the pool."""
+    import multiprocessing as mp
+    import os
+    import signal
+
+    if start_method not in mp.get_all_start_methods():
+        pytest.skip(f"no {start_method} start here")
+    mask_before = signal.pthread_sigmask(signal.SIG_BLOCK, set())
+    with gen._worker_pool(start_method, 2) as pool:
+        pids = pool.map_async(_sigint_self_then_pid, range(4), chunksize=1).get(timeout=60)
+    assert len(pids) == 4 and os.getpid() not in pids
+    assert signal.pthread_sigmask(signal.SIG_BLOCK, set()) == mask_before
+
+    workers, blocked_at_start = [], []
+    real_pool = mp.context.BaseContext.Pool
+
+    def pool_then_ctrl_c(self, *args, **kwargs):
+        blocked_at_start.append(signal.SIGINT in signal.pthread_sigmask(signal.SIG_BLOCK, set()))
+        p = real_pool(self, *args, **kwargs)
+        workers.extend(p._pool)
+        os.kill(os.getpid(), signal.SIGINT)  # lands while SIGINT is still blocked
+        return p
+
+    mp.context.BaseContext.Pool = pool_then_ctrl_c
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            with gen._worker_pool(start_method, 2):
+                pytest.fail("the held-back Ctrl-C must end the block before its body")
+    finally:
+        mp.context.BaseContext.Pool = real_pool
+    assert blocked_at_start == [True] and len(workers) == 2
+    for w in workers:
+        w.join(timeout=10)
+        assert not w.is_alive()
+    assert signal.pthread_sigmask(signal.SIG_BLOCK, set()) == mask_before
