@@ -6,7 +6,7 @@ checkout's detections. Prints the number of frames whose detections differ (clas
 bytes, range, azimuth compared exactly) and the CPU time per ``detect`` of each (one
 onnxruntime thread, as in the loop). Exit status 1 when any frame differs.
 
-    PYTHONPATH=. python scripts/atr_detect_ab.py --other /path/to/main/checkout [--sim-s 300]
+    python scripts/atr_detect_ab.py --other /path/to/main/checkout [--sim-s 300]
 
 The other checkout's ``autonomy/atr`` is copied into a temporary package (its
 ``autonomy.atr`` imports renamed), so both versions load in one process.
@@ -14,13 +14,19 @@ The other checkout's ``autonomy/atr`` is copied into a temporary package (its
 
 from __future__ import annotations
 
-import argparse
 import re
 import shutil
 import sys
 import tempfile
 import time
 from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from sim.cli.app import run_script, script_parser  # noqa: E402
+from sim.cli.args import positive_float  # noqa: E402
+from sim.cli.errors import CliError  # noqa: E402
 
 
 def load_other_atr(checkout: Path, tmp: Path):
@@ -39,24 +45,28 @@ def load_other_atr(checkout: Path, tmp: Path):
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    """Parse ``argv`` and run the A/B; bad arguments, a checkout without ``autonomy/atr`` or an
+    unknown scenario: one line, exit status 2. Returns the exit status (1 when frames differ)."""
+    ap = script_parser("atr_detect_ab.py", __doc__.splitlines()[0])
     ap.add_argument("--other", required=True, type=Path, help="checkout holding the other autonomy/atr")
-    ap.add_argument("--scenario", default="cssn_lawnmower")
-    ap.add_argument("--sim-s", type=float, default=None, help="simulated seconds (default: the whole mission)")
-    args = ap.parse_args(argv)
+    ap.add_argument("--scenario", default="cssn_lawnmower", help="shipped scenario name or YAML file")
+    ap.add_argument("--sim-s", type=positive_float, default=None,
+                    help="simulated seconds (default: the whole mission)")
+    return run_script(ap, ab, argv)
+
+
+def ab(args) -> int:
+    """The A/B of :func:`main`'s parsed ``args``; returns 1 when any frame's detections differ."""
     if not (args.other / "autonomy" / "atr" / "cnn_detector.py").is_file():
-        print(f"--other {args.other}: no autonomy/atr/cnn_detector.py there", file=sys.stderr)
-        return 2
-    if args.sim_s is not None and args.sim_s <= 0:
-        print(f"--sim-s must be > 0, got {args.sim_s}", file=sys.stderr)
-        return 2
+        raise CliError(f"--other {args.other}: not a checkout of this project (no autonomy/atr/cnn_detector.py there)")
 
     from scenarios.load import load_scenario
     from sim.mission import Mission
 
     with tempfile.TemporaryDirectory() as tmp:
+        scenario = load_scenario(args.scenario)
         other_build, OtherCfg = load_other_atr(args.other, Path(tmp))
-        mission = Mission(load_scenario(args.scenario))
+        mission = Mission(scenario)
         mission.reset()
         mine = mission.perception.detector
         other = other_build(OtherCfg(**mission.scenario.autonomy.atr.model_dump()))

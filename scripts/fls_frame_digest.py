@@ -13,19 +13,31 @@ Prints one JSON object: a digest per part and ``all``.
 
 from __future__ import annotations
 
-import argparse
 import hashlib
 import json
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from sim.cli.app import run_script, script_parser  # noqa: E402
+from sim.cli.args import non_negative_int, positive_int  # noqa: E402
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--bench-frames", type=int, default=60)
-    ap.add_argument("--scenes", type=int, default=4)
-    ap.add_argument("--dataset-frames", type=int, default=4)
-    ap.add_argument("--scenario", default="cssn_lawnmower")
-    args = ap.parse_args()
+def main(argv: list[str] | None = None) -> int:
+    """Parse ``argv`` and print the digests; bad arguments or an unknown scenario: one line,
+    exit status 2. Returns the exit status."""
+    ap = script_parser("fls_frame_digest.py", __doc__.splitlines()[0])
+    ap.add_argument("--bench-frames", type=positive_int, default=60, help="frames of the bench pose sequence")
+    ap.add_argument("--scenes", type=non_negative_int, default=4, help="dataset scenes of each randomization")
+    ap.add_argument("--dataset-frames", type=positive_int, default=4, help="frames of each dataset scene")
+    ap.add_argument("--scenario", default="cssn_lawnmower", help="shipped scenario name or YAML file (bench part)")
+    return run_script(ap, digest, argv)
 
+
+def digest(args) -> int:
+    """Render and hash the frames :func:`main` parsed ``args`` ask for; print the JSON object."""
     from scenarios.load import load_scenario
     from sim.bench import fls as bench_fls
     from sim.dataset.generate import RANDOMIZATION_PRESETS, RenderSettings, fls_config, scene_spec
@@ -52,7 +64,8 @@ def main() -> None:
         fn()
         digests[name], frames[name] = current["h"].hexdigest(), current["n"]
 
-    part("bench", lambda: bench_fls.run(load_scenario(args.scenario), args.bench_frames))
+    scenario = load_scenario(args.scenario)
+    part("bench", lambda: bench_fls.run(scenario, args.bench_frames))
     for rz_name in ("train", "wide", "heldout"):
         rz = RANDOMIZATION_PRESETS[rz_name]
         for i in range(args.scenes):
@@ -62,7 +75,8 @@ def main() -> None:
                                                          args.dataset_frames))
     total = hashlib.sha256("".join(f"{k}={v}" for k, v in digests.items()).encode()).hexdigest()
     print(json.dumps({"all": total, "frames": frames, "parts": digests}, indent=1))
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

@@ -78,3 +78,25 @@ def test_sea_trial_evaluation_refuses(argv, culprits, capsys, tmp_path):
     _refused(_script("evaluate_sea_trial"), argv, capsys, *culprits)
     assert (tmp_path / "f.txt").read_text() == "keep"
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("argv,culprits", [
+    ([], ("atr_detect_ab.py: error:", "--other")),
+    (["--other", "{missing}"], ("--other", "no autonomy/atr/cnn_detector.py")),
+    (["--other", "{root}", "--sim-s", "-3"], ("--sim-s", "> 0")),
+    (["--other", "{root}", "--sim-s", "nan"], ("--sim-s",)),
+    (["--other", "{root}", "--scenario", "cssn_lawnmowr", "--sim-s", "1"], ("cssn_lawnmowr", "no such scenario")),
+])
+def test_atr_detect_ab_refuses(argv, culprits, capsys, tmp_path):
+    argv = [a.format(missing=tmp_path / "nope", root=SCRIPTS.parent) for a in argv]
+    _refused(_script("atr_detect_ab"), argv, capsys, *culprits)
+
+
+@pytest.mark.parametrize("argv,culprits", [
+    (["--bench-frames", "0"], ("fls_frame_digest.py: error:", "--bench-frames", ">= 1")),
+    (["--dataset-frames", "0"], ("--dataset-frames", ">= 1")),
+    (["--scenes", "x"], ("--scenes", "'x'")),
+    (["--scenario", "cssn_lawnmowr"], ("cssn_lawnmowr", "no such scenario")),
+])
+def test_fls_frame_digest_refuses(argv, culprits, capsys):
+    _refused(_script("fls_frame_digest"), argv, capsys, *culprits)
