@@ -52,6 +52,7 @@ from sim.physics import Physics
 from sim.sensors.base import Sensor
 from sim.sonar_workers import detection_main, render_main
 from sim.truth import VehicleTruth
+from sim.worker_signals import sigint_blocked
 
 RING_SLOTS = 4  # frames in flight between two processes
 CAPTURES_IN_FLIGHT = 2 * RING_SLOTS  # captures sent and not yet rendered before a capture waits
@@ -132,14 +133,24 @@ class SonarPipeline:
         self._detections: dict[int, tuple[Any, Any]] = {}
         self._frames: dict[int, Any] = {}
         self._closed = False
-        model, data, world = physics.model, physics.data, physics.world
-        self._moving = np.flatnonzero(model.geom_bodyid != 0)
-        self._static_objects = world.objects
+        self._moving = np.flatnonzero(physics.model.geom_bodyid != 0)
+        self._static_objects = physics.world.objects
         ctx = mp.get_context("spawn")
+        try:
+            self._start(ctx, physics, sonar, perception, slots)
+        except BaseException:  # a Ctrl-C while starting too: no shared memory block or worker is left
+            self.close(sync=False)
+            raise
+
+    def _start(self, ctx: Any, physics: Physics, sonar: Sensor, perception: Any, slots: int) -> None:
+        """Create the rings and pipes, start the two workers and send them their setups; what
+        is made is recorded on ``self`` as it is made, for :meth:`close`."""
+        model, data, world = physics.model, physics.data, physics.world
         to_detection, whole = self._frame_bytes(sonar)
         # render -> detection (frames), detection -> mission (detections, the frames' views
         # without images), render -> mission (whole frames, for the observers)
-        self._rings = [FrameRing(ctx, slots, to_detection), FrameRing(ctx, slots, DETECTIONS_SLOT_BYTES)]
+        self._rings.append(FrameRing(ctx, slots, to_detection))
+        self._rings.append(FrameRing(ctx, slots, DETECTIONS_SLOT_BYTES))
         if self.frames:
             self._rings.append(FrameRing(ctx, slots, whole))
         self._shared = shared_objects(sonar)
@@ -165,12 +176,9 @@ class SonarPipeline:
                         args=(detect_end, between_r, self._rings[0], detections_w, self._rings[1])),
         ]
         try:
-            with _one_thread_per_library():
+            with _one_thread_per_library(), sigint_blocked():  # the workers ignore it from their start
                 for p in self._procs:
                     p.start()
-        except BaseException:
-            self.close()
-            raise
         finally:
             for end in (render_end, detect_end, between_r, between_w, detections_w, frames_w):
                 if end is not None:

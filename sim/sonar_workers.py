@@ -36,6 +36,7 @@ from multiprocessing.connection import wait
 from typing import Any
 
 from sim.frame_transport import FrameRing, shared_objects
+from sim.worker_signals import ignore_sigint
 
 
 def _worker_start() -> None:
@@ -46,8 +47,8 @@ def _worker_start() -> None:
     from sim.gc_policy import set_loop_thresholds
 
     set_loop_thresholds()
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    ignore_sigint()  # blocked since the start (the mission process starts the workers so)
     cv2.setNumThreads(1)
 
 

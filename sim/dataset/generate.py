@@ -40,6 +40,7 @@ from sim.dataset.randomization import (HELDOUT_RANDOMIZATION, TRAIN_RANDOMIZATIO
                                       Randomization, SceneSpec, draw_world_seed_and_seabed_kind, sample_scene)
 from sim.outputs.run_dir import check_output_dir, write_marker
 from sim.rng import component_rng
+from sim.worker_signals import ignore_sigint, sigint_blocked
 
 GENERATOR_VERSION = "1.3.0"
 MANIFEST_FILE = "manifest.json"
@@ -259,28 +260,10 @@ def _worker_init() -> None:
     a forked one inherited (``auvsim``'s turns SIGTERM into an exception), and ignores Ctrl-C:
     the terminal sends SIGINT to the whole process group, and the parent, which handles it,
     ends the pool (a worker raising ``KeyboardInterrupt`` would print a traceback). SIGINT
-    stays blocked from before the fork (:func:`_sigint_blocked`) until it is ignored here, so
-    no Ctrl-C lands in between."""
+    stays blocked from before the fork (:func:`_worker_pool`) until it is ignored here
+    (:mod:`sim.worker_signals`), so no Ctrl-C lands in between."""
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    if hasattr(signal, "pthread_sigmask"):
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
-
-
-@contextmanager
-def _sigint_blocked():
-    """SIGINT blocked in this thread while the block runs (where POSIX allows it); a Ctrl-C
-    that came meanwhile is delivered, as ``KeyboardInterrupt``, when the block ends. The pool's
-    workers and helper threads started inside inherit the mask; :func:`_worker_init` then
-    ignores SIGINT and unblocks it."""
-    if not hasattr(signal, "pthread_sigmask"):
-        yield
-        return
-    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-    try:
-        yield
-    finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+    ignore_sigint()
 
 
 @contextmanager
@@ -291,7 +274,7 @@ def _worker_pool(start_method: str, n_processes: int):
     import multiprocessing as mp
 
     with ExitStack() as stack:
-        with _sigint_blocked():
+        with sigint_blocked():
             pool = stack.enter_context(mp.get_context(start_method).Pool(n_processes, initializer=_worker_init))
         yield pool
 

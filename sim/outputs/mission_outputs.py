@@ -290,11 +290,11 @@ def run_mission(
 
             mcm_obs = McmFullObserver(scenario)
             mission.observers.append(mcm_obs)
-        mission.reset()
-        if workers > 1 and not mission.pipelined:
-            print(f"{scenario.name}: --workers {workers}: this mission runs the serial loop (the pipeline takes the "
-                  "FLS frames of a mission with perception and no tracker)", file=sys.stderr, flush=True)
-        try:
+        try:  # reset starts the pipeline's workers: a Ctrl-C from then on stops them too
+            mission.reset()
+            if workers > 1 and not mission.pipelined:
+                print(f"{scenario.name}: --workers {workers}: this mission runs the serial loop (the pipeline takes "
+                      "the FLS frames of a mission with perception and no tracker)", file=sys.stderr, flush=True)
             mission.run(progress=False)
         finally:
             mission.close()

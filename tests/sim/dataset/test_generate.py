@@ -209,6 +209,7 @@ def test_pool_workers_ignore_ctrl_c_and_a_ctrl_c_while_they_start_ends_the_pool(
     import multiprocessing as mp
     import os
     import signal
+    import threading
 
     if start_method not in mp.get_all_start_methods():
         pytest.skip(f"no {start_method} start here")
@@ -225,7 +226,7 @@ def test_pool_workers_ignore_ctrl_c_and_a_ctrl_c_while_they_start_ends_the_pool(
         blocked_at_start.append(signal.SIGINT in signal.pthread_sigmask(signal.SIG_BLOCK, set()))
         p = real_pool(self, *args, **kwargs)
         workers.extend(p._pool)
-        os.kill(os.getpid(), signal.SIGINT)  # lands while SIGINT is still blocked
+        signal.pthread_kill(threading.get_ident(), signal.SIGINT)  # held while this thread blocks it
         return p
 
     mp.context.BaseContext.Pool = pool_then_ctrl_c
