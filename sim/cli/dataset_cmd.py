@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import argparse
+import os
+import sys
 
 from sim.cli.args import MAX_DATASET_FRAMES, frame_count, non_negative_int, positive_float, positive_int
 from sim.cli.errors import CliError
@@ -27,8 +29,13 @@ def _cmd_dataset(args: argparse.Namespace) -> int:
         for opt, value in (("--tile-length", args.tile_length), ("--line-length", args.line_length)):
             if value is not None:
                 raise CliError(f"{opt}: only with --sensor sss (side-scan tiles)")
+    workers = args.workers
+    if workers is not None and args.ray is None and workers > usable_cpus():
+        workers = usable_cpus()  # more processes than CPUs render no faster, and each holds its own frames
+        print(f"dataset: --workers {args.workers}: more than the CPUs this process may use ({workers}); "
+              f"using {workers}", file=sys.stderr, flush=True)
     try:
-        path = generate_dataset(args.out, args.n, seed=args.seed, workers=args.workers,
+        path = generate_dataset(args.out, args.n, seed=args.seed, workers=workers,
                                 use_ray=args.ray is not None, ray_address=args.ray or None,
                                 randomization=RANDOMIZATION_PRESETS[preset], progress=not args.no_progress, **kw)
     except ImportError as exc:
@@ -37,6 +44,13 @@ def _cmd_dataset(args: argparse.Namespace) -> int:
         raise
     print(f"dataset: wrote {path}")
     return 0
+
+
+def usable_cpus() -> int:
+    """CPUs this process may run on (its affinity mask where the platform tells it, else all)."""
+    if hasattr(os, "sched_getaffinity"):
+        return max(1, len(os.sched_getaffinity(0)))
+    return os.cpu_count() or 1
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -54,7 +68,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", required=True,
                    help="output folder: new, or a dataset folder to resume with the same arguments")
     p.add_argument("--seed", type=non_negative_int, default=0)
-    p.add_argument("--workers", type=positive_int, default=None, help="local processes (default: all cores)")
+    p.add_argument("--workers", type=positive_int, default=None, help="local processes (default, and at most: the CPUs this process may use)")
     p.add_argument("--ray", nargs="?", const="", default=None, metavar="ADDRESS",
                    help="distribute with Ray (local instance, or the cluster at ADDRESS)")
     p.add_argument("--randomization", choices=sorted(RANDOMIZATION_PRESETS), default=None,
