@@ -51,6 +51,7 @@ from sim.frame_transport import FrameRing, shared_objects
 from sim.physics import Physics
 from sim.sensors.base import Sensor
 from sim.sonar_workers import detection_main, render_main
+from sim.spawn_guard import NO_MAIN_GUARD_EXIT, exit_if_spawn_reimport
 from sim.truth import VehicleTruth
 from sim.worker_signals import sigint_blocked
 
@@ -59,7 +60,6 @@ CAPTURES_IN_FLIGHT = 2 * RING_SLOTS  # captures sent and not yet rendered before
 STOP_TIMEOUT_S = 10.0  # wait for a worker to end before terminating it
 THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
 DETECTIONS_SLOT_BYTES = 1 << 20  # a frame's detections and image-less view (arrays beyond it go in band)
-NO_MAIN_GUARD_EXIT = 86  # a worker's exit status when spawn found the script unguarded (see SonarPipeline)
 
 
 class PipelineError(RuntimeError):
@@ -118,8 +118,7 @@ class SonarPipeline:
 
     def __init__(self, physics: Physics, sonar: Sensor, perception: Any, *, frames: bool = True,
                  slots: int = RING_SLOTS) -> None:
-        if getattr(mp.current_process(), "_inheriting", False):  # a spawned worker re-running the script
-            raise SystemExit(NO_MAIN_GUARD_EXIT)
+        exit_if_spawn_reimport()  # a spawned worker re-running an unguarded script
         if slots < 1:
             raise ValueError(f"SonarPipeline needs slots >= 1, got {slots}")
         self.physics, self.sonar, self.perception = physics, sonar, perception

@@ -40,6 +40,7 @@ from sim.dataset.randomization import (HELDOUT_RANDOMIZATION, TRAIN_RANDOMIZATIO
                                       Randomization, SceneSpec, draw_world_seed_and_seabed_kind, sample_scene)
 from sim.outputs.run_dir import check_output_dir, write_marker
 from sim.rng import component_rng
+from sim.spawn_guard import exit_if_spawn_reimport, main_guard_missing
 from sim.worker_signals import ignore_sigint, sigint_blocked
 
 GENERATOR_VERSION = "1.3.0"
@@ -194,10 +195,13 @@ def generate_dataset(out_dir: str | Path, n_frames: int, seed: int = 0, workers:
     distribute scenes with Ray (``ray_address`` None starts a local instance).
     Raises:
         DatasetError: ``n_frames`` < 1, side-scan settings out of range (a tile longer than
-            the line), or ``out_dir`` holds a dataset made with other parameters.
+            the line), ``out_dir`` holds a dataset made with other parameters, or (where workers
+            are spawned: macOS, Windows) ``workers`` > 1 from a main script without the
+            ``if __name__ == "__main__":`` guard (:mod:`sim.spawn_guard`).
         OutputDirError: ``out_dir`` is protected, a file, not creatable, or holds files
             that are not an auvsim dataset.
     """
+    exit_if_spawn_reimport()  # a spawned worker re-running an unguarded script: nothing written
     if n_frames < 1:
         raise DatasetError(f"--n: must be >= 1, got {n_frames}")
     if isinstance(settings, SssSettings):
@@ -327,6 +331,12 @@ def _run_local(jobs: list[tuple], n_workers: int, bar) -> None:
     heavy = [_builds_terrain_mesh(j) for j in jobs]
     jobs = [j for j, h in zip(jobs, heavy) if h] + [j for j, h in zip(jobs, heavy) if not h]  # stable
     if not sys.platform.startswith("linux"):
+        import multiprocessing as mp
+
+        if main_guard_missing(mp.get_context("spawn")):
+            raise DatasetError(f"workers={n_workers}: the worker processes start with spawn here, which runs the "
+                               "main script again; create the dataset under if __name__ == \"__main__\": "
+                               "(or use workers=1)")
         with _worker_pool("spawn", min(n_workers, len(jobs))) as pool:
             for done in pool.imap_unordered(_scene_job, jobs):
                 bar.update(done)

@@ -241,3 +241,29 @@ def test_pool_workers_ignore_ctrl_c_and_a_ctrl_c_while_they_start_ends_the_pool(
         w.join(timeout=10)
         assert not w.is_alive()
     assert signal.pthread_sigmask(signal.SIG_BLOCK, set()) == mask_before
+
+
+UNGUARDED_SPAWN = """
+import sim.dataset.generate as gen
+gen.sys = type("Platform", (), {"platform": "darwin"})()  # the spawn path (macOS, Windows)
+gen.generate_dataset(OUT, 8, workers=2, progress=False)
+"""
+
+
+def test_spawned_workers_from_a_script_without_the_main_guard_give_one_clear_error(tmp_path):
+    """Where workers are spawned, an unguarded script would re-run itself in each worker (an
+    endless respawn, hundreds of tracebacks): one probe process finds it out and the call raises
+    DatasetError saying what to do; nothing is rendered."""
+    import subprocess
+    import sys
+
+    script = tmp_path / "unguarded.py"
+    script.write_text(f"OUT = {str(tmp_path / 'ds')!r}\n" + UNGUARDED_SPAWN)
+    root = Path(__file__).resolve().parents[3]
+    out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=120,
+                         cwd=tmp_path, env={**__import__("os").environ, "PYTHONPATH": str(root)})
+    assert out.returncode == 1
+    assert out.stderr.count("Traceback") == 1, out.stderr[-2000:]
+    assert 'DatasetError: workers=2: the worker processes start with spawn here' in out.stderr
+    assert 'if __name__ == "__main__":' in out.stderr.splitlines()[-1]
+    assert not list((tmp_path / "ds" / "images").glob("*.png"))
