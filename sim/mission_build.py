@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -23,7 +23,6 @@ from autonomy.guidance.mission import MissionFsm
 from autonomy.guidance.survey import SurveyGuidance
 from autonomy.msis.localization import MsisLocalizer
 from autonomy.navigation import NavigationFilter, NavNoiseModel
-from autonomy.tracking.onboard import TrackingStack
 from scenarios.schema import Scenario
 from sim.perception import Perception
 from sim.physics import Physics
@@ -32,6 +31,9 @@ from sim.scheduler import SensorScheduler
 from sim.sensors.base import Sensor
 from sim.sensors.nav_noise import nav_noise_model
 from sim.sensors.registry import build_sensors
+
+if TYPE_CHECKING:
+    from autonomy.tracking.onboard import TrackingStack
 
 NAV_SOURCES = ("estimate", "truth")
 #: Sensor kinds whose mounts the navigation filter takes (first sensor of each kind).
@@ -143,6 +145,8 @@ def build_mission_parts(scenario: Scenario, physics: Physics, seed: int, *, nav_
             raise ValueError(f"autonomy.tracking needs sensors {auto.tracking.sonar_sensor!r} (fls) and "
                              f"{auto.tracking.usbl_sensor!r} (usbl)")
         sonar = fls
+        from autonomy.tracking.onboard import TrackingStack  # scipy.stats: only missions that track
+
         tracking = TrackingStack(auto.tracking, auto.atr.classical, usbl_mount_body_m=usbl.mount.pos_body_m,
                                  usbl_mount_rpy_rad=usbl.mount.rpy_rad, sonar_mount_body_m=fls.mount.pos_body_m,
                                  sonar_mount_rpy_rad=fls.mount.rpy_rad)

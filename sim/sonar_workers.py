@@ -39,9 +39,13 @@ from sim.frame_transport import FrameRing, shared_objects
 
 
 def _worker_start() -> None:
-    """Ignore Ctrl-C and SIGTERM (the mission process stops the worker) and keep OpenCV to one thread."""
+    """Ignore Ctrl-C and SIGTERM (the mission process stops the worker), keep OpenCV to one
+    thread and set the garbage collector for the loop (:mod:`sim.gc_policy`)."""
     import cv2
 
+    from sim.gc_policy import set_loop_thresholds
+
+    set_loop_thresholds()
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
     cv2.setNumThreads(1)

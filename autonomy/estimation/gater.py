@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.stats import chi2
+from scipy.special import gammaincinv
 
 FloatArray = NDArray[np.float64]
 _LOG_2PI = math.log(2.0 * math.pi)
@@ -70,7 +70,9 @@ class MahalanobisGater:
         """
         if not 0.0 < probability < 1.0 or dof < 1:
             raise ValueError(f"chi-square gate needs 0 < probability < 1 and dof >= 1, got {probability}, {dof}")
-        return cls(float(chi2.ppf(probability, dof)))
+        # the chi-square quantile as scipy.stats.chi2.ppf forms it (2 P^-1(m/2, p), same bits),
+        # without importing scipy.stats (~25 MB and ~0.3 s on the vehicle)
+        return cls(float(2 * gammaincinv(dof / 2, probability)))
 
     def rejects(self, maha2: ArrayLike) -> NDArray[np.bool_]:
         """Mask of the pairs outside the gate (same shape as ``maha2``)."""

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import errno
+import gc
 import os
 import signal
 import threading
@@ -24,6 +25,7 @@ from collections.abc import Callable, Sequence
 from sim.cli import bench_cmd, dataset_cmd, eval_atr_cmd, run_cmd, scenario_cmds, sweep_cmd, train_cmd
 from sim.cli.errors import (EXIT_INTERNAL_ERROR, EXIT_INTERRUPTED, EXIT_OK, EXIT_TERMINATED, EXIT_USAGE,
                             user_error_types)
+from sim.gc_policy import set_loop_thresholds
 
 DEBUG_ENV = "AUVSIM_DEBUG"
 
@@ -87,9 +89,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     debug = bool(args.debug or os.environ.get(DEBUG_ENV, "") not in ("", "0"))
     in_main_thread = threading.current_thread() is threading.main_thread()
     previous = signal.signal(signal.SIGTERM, _on_sigterm) if in_main_thread else None
+    gc_thresholds = set_loop_thresholds()
     try:
         return _dispatch(func, args, debug, f"auvsim {args.command}")
     finally:
+        gc.set_threshold(*gc_thresholds)
         if in_main_thread:
             signal.signal(signal.SIGTERM, previous)
 

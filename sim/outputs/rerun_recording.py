@@ -25,11 +25,17 @@ at most ``path_chunk_points`` points each, the last one re-logged every ``path_e
 grows, so the recording and the recorder's memory grow linearly with mission time (re-logging
 the whole path each time grew the file with the square of it).
 
+The per-step series (``world/vehicle`` and ``world/vehicles/<name>`` poses, ``nav/*`` errors, at
+the step rate) are kept in arrays and sent as column chunks of ``series_rows`` rows
+(:mod:`sim.outputs.rerun_columns`), not one ``rr.log`` row per step in the stream's batcher;
+the rest is logged row-wise and the batcher flushed every ``flush_every_s`` simulated seconds.
+
 An observer of the mission loop; it streams to an ``.rrd`` file as the mission runs.
 """
 
 from __future__ import annotations
 
+import os
 from datetime import timedelta
 from pathlib import Path
 
@@ -43,6 +49,7 @@ from autonomy.messages import PositionFixMsg
 from autonomy.sonar_geometry import FanGeometry
 from autonomy.tracking.onboard import TrackingFrameResult
 from autonomy.tracking.roi import PolarRoi
+from sim.outputs.rerun_columns import PoseColumn, ScalarColumn
 from sim.records import MissionInfo, MissionSummary, PerceptionResult, StepRecord
 from sim.sensors.fls import FlsRender
 from sim.sensors.msis import MsisRender
@@ -50,14 +57,26 @@ from sim.sensors.msis_scan import ScanImage
 from sim.target_meshes import target_mesh
 
 
-# The stream's batcher cuts a chunk per entity at every flush (rerun's default: every 0.2 s of
-# wall clock), and the recording process's memory grows with the number of chunks written
-# (measured: the same simulated hour of logging stays flat in large chunks and grows 87 MB in
-# 2-row chunks), so a mission running at a few times real time grew 150-200 MB per simulated
-# hour. Flushing every 10 s (or 8 MiB) makes the chunks 50x fewer and larger; what waits for
-# a flush stays within the 8 MiB.
+# The stream's batcher holds every logged row until it cuts a chunk per entity at a flush
+# (rerun's default: every 0.2 s of wall clock). Many small chunks cost memory (the file sink keeps
+# each chunk's entry for the footer manifest until the end), and rows held for long cost memory
+# in proportion to the run's speed (10 s of wall clock is 120 simulated s at 12x real time, 300 s
+# at 30x). The recorder flushes every ``flush_every_s`` of simulated time (without waiting for
+# the write), so what the batcher holds is bounded in simulated time whatever the run's speed;
+# the wall-clock tick and the byte limit are backstops.
 RECORDING_FLUSH_TICK_S = 10.0
 RECORDING_FLUSH_BYTES = 8 * 2**20
+
+
+# rerun's bindings (and pyarrow under them) allocate with mimalloc, which by default hands freed
+# pages back to the system only after a delay and only when the freeing thread allocates again;
+# with the stream's threads freeing each flushed chunk, the recording process's resident memory
+# grew about 25 MB per simulated hour (outside Python and outside glibc's heaps) and stayed flat
+# with these two options. mimalloc reads them when the library loads, so they are set here,
+# before the recorder first imports rerun (a value already in the environment is kept).
+MIMALLOC_OPTIONS = {"MIMALLOC_PURGE_DELAY": "0", "MIMALLOC_PURGE_DECOMMITS": "1"}
+for _key, _value in MIMALLOC_OPTIONS.items():
+    os.environ.setdefault(_key, _value)
 
 
 class _GrowingPath:
@@ -102,6 +121,10 @@ class RerunRecorder:
         msis_max_points: at most this many (max-pooled) bins per ping.
         msis_image_every: re-log the scan image every n-th ping.
         msis_image_px: side of the logged scan image, px.
+        series_rows: rows of the per-step series (vehicle poses, navigation errors) sent as one
+            column chunk (10 Hz steps: 60 s), :mod:`sim.outputs.rerun_columns`.
+        flush_every_s: simulated seconds between flushes of the stream's batcher (the rows it
+            holds until then are the recorder's working memory).
         scorer: a :class:`sim.evaluation.detection_scoring.DetectionScorer` placed before this
             recorder among the observers: detections are coloured true (green) or false (red)
             by it; without one they are drawn in one neutral colour.
@@ -111,7 +134,7 @@ class RerunRecorder:
 
     def __init__(self, path: Path, *, fls_every: int = 1, fls_scale: float = 0.5, path_every_s: float = 2.0,
                  path_chunk_points: int = 600, msis_point_threshold: int = 80, msis_max_points: int = 200, msis_image_every: int = 10,
-                 msis_image_px: int = 256, scorer=None) -> None:
+                 msis_image_px: int = 256, series_rows: int = 600, flush_every_s: float = 30.0, scorer=None) -> None:
         import rerun as rr
 
         self.scorer = scorer
@@ -126,7 +149,12 @@ class RerunRecorder:
         self._true = _GrowingPath("world/path/true", [40, 120, 220], self.path_chunk_points)
         self._est = _GrowingPath("world/path/estimated", [240, 140, 30], self.path_chunk_points)
         self._others: dict[str, _GrowingPath] = {}
+        self.series_rows = max(int(series_rows), 1)
+        self._series: dict[str, ScalarColumn | PoseColumn] = {}
         self._last_path_t = -np.inf
+        self._t_step: float | None = None
+        self._last_flush_t = 0.0
+        self.flush_every_s = float(flush_every_s)
         self._n_fls = 0
         self._frame_logged = False
         self.msis_point_threshold = int(msis_point_threshold)
@@ -173,25 +201,38 @@ class RerunRecorder:
                                                    colors=[[150, 150, 150]]), static=True)
 
     def on_step(self, r: StepRecord) -> None:
-        rr, rec = self._rr, self._rec
-        rec.set_time("sim_time", duration=r.t_s)
+        t = self._t_step = r.t_s
         tr = r.truth
-        rec.log("world/vehicle", rr.Transform3D(translation=tr.pos_ned, quaternion=_xyzw(quat_from_rot(tr.R_nb))))
+        self._pose("world/vehicle", t, tr.pos_ned, tr.R_nb)
         self._true.append(tr.pos_ned)
         self._est.append(r.nav.pos_ned)
-        err = float(np.linalg.norm(tr.pos_ned[:2] - r.nav.pos_ned[:2]))
-        rec.log("nav/horizontal_error_m", rr.Scalars(err))
-        rec.log("nav/sigma_horizontal_m", rr.Scalars(float(np.sqrt(np.trace(r.nav.cov_pos_ned[:2, :2])))))
-        rec.log("nav/depth_error_m", rr.Scalars(float(tr.pos_ned[2] - r.nav.pos_ned[2])))
+        self._scalar("nav/horizontal_error_m", t, float(np.linalg.norm(tr.pos_ned[:2] - r.nav.pos_ned[:2])))
+        self._scalar("nav/sigma_horizontal_m", t, float(np.sqrt(np.trace(r.nav.cov_pos_ned[:2, :2]))))
+        self._scalar("nav/depth_error_m", t, float(tr.pos_ned[2] - r.nav.pos_ned[2]))
         for name, other in r.others.items():
-            rec.log(f"world/vehicles/{name}", rr.Transform3D(translation=other.pos_ned,
-                                                             quaternion=_xyzw(quat_from_rot(other.R_nb))))
+            self._pose(f"world/vehicles/{name}", t, other.pos_ned, other.R_nb)
             if name not in self._others:
                 self._others[name] = _GrowingPath(f"world/path/{name}", [60, 200, 90], self.path_chunk_points)
             self._others[name].append(other.pos_ned)
+        if t - self._last_flush_t >= self.flush_every_s:
+            self._last_flush_t = t
+            self._rec.flush(timeout_sec=0.0)  # start the flush, do not wait for the write
         if r.t_s - self._last_path_t >= self.path_every_s:
-            self._last_path_t = r.t_s
+            self._last_path_t = t
+            self._rec.set_time("sim_time", duration=t)
             self._log_paths()
+
+    def _pose(self, entity: str, t_s: float, pos_ned, R_nb) -> None:
+        col = self._series.get(entity)
+        if col is None:
+            col = self._series[entity] = PoseColumn(entity, self.series_rows)
+        col.append(self._rec, self._rr, t_s, [*pos_ned, *_xyzw(quat_from_rot(R_nb))])
+
+    def _scalar(self, entity: str, t_s: float, value: float) -> None:
+        col = self._series.get(entity)
+        if col is None:
+            col = self._series[entity] = ScalarColumn(entity, self.series_rows)
+        col.append(self._rec, self._rr, t_s, value)
 
     def _log_paths(self) -> None:
         rr, rec = self._rr, self._rec
@@ -345,7 +386,11 @@ class RerunRecorder:
 
     def on_end(self, summary: MissionSummary) -> None:
         rec = self._rec
+        if self._t_step is not None:
+            rec.set_time("sim_time", duration=self._t_step)
         self._log_paths()
+        for col in self._series.values():
+            col.send(rec, self._rr)
         rec.flush()
         rec.disconnect()
 

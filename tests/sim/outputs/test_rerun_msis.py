@@ -17,10 +17,13 @@ rr = pytest.importorskip("rerun")
 
 
 class _FakeStream:
-    """Stands in for ``rr.RecordingStream``: keeps (entity, archetype) per log call."""
+    """Stands in for ``rr.RecordingStream``: keeps (entity, archetype) per log call and the
+    columns of each ``send_columns``."""
 
     def __init__(self) -> None:
         self.logs: dict[str, list] = defaultdict(list)
+        self.columns: dict[str, list] = defaultdict(list)  # entity -> [(indexes, columns)] per send_columns
+        self.flushes: list[float] = []  # timeout_sec of each flush
 
     def save(self, path) -> None:
         pass
@@ -31,8 +34,11 @@ class _FakeStream:
     def log(self, entity: str, archetype, static: bool = False) -> None:
         self.logs[entity].append(archetype)
 
-    def flush(self) -> None:
-        pass
+    def send_columns(self, entity: str, indexes, columns) -> None:
+        self.columns[entity].append((indexes, columns))
+
+    def flush(self, timeout_sec: float = 1e38) -> None:
+        self.flushes.append(timeout_sec)
 
     def disconnect(self) -> None:
         pass

@@ -30,11 +30,13 @@ class _Path:
 
 def test_paths_are_bounded_strips_that_join_into_the_whole_path(tmp_path):
     scn = load_scenario("cssn_lawnmower", ["duration_s=30", "sensors.fls.enabled=false"])
-    rec = RerunRecorder(tmp_path / "fake.rrd", path_chunk_points=40, path_every_s=1.0)
+    rec = RerunRecorder(tmp_path / "fake.rrd", path_chunk_points=40, path_every_s=1.0, flush_every_s=4.0)
     rec._rec = _FakeStream()
     seen = _Path()
     Mission(scn, observers=[rec, seen]).run(progress=False)
     logs = rec._rec.logs
+    # the batcher flushed every 4 simulated s without waiting (t = 4, 8, ..., 28), then once in full at the end
+    assert rec._rec.flushes == [0.0] * 7 + [1e38]
     for name, truth in (("true", seen.true), ("estimated", seen.est)):
         keys = sorted((k for k in logs if k.startswith(f"world/path/{name}/")), key=lambda k: int(k.rsplit("/", 1)[1]))
         assert len(keys) == int(np.ceil((len(truth) - 1) / 39)) > 5  # 40 points a strip, one shared with the next
