@@ -55,7 +55,11 @@ class Mission:
         scenario: the validated scenario.
         nav_source: pose used for target geolocalisation: ``estimate`` (navigation filter)
             or ``truth`` (true vehicle pose, as paper 000's simulated evaluation).
-        observers: readers of the mission's outputs (logs, plots, recordings).
+        observers: readers of the mission's outputs (logs, plots, recordings). The forward-looking
+            sonars compute their objects' ground truth and instance masks only when one of the
+            observers present at :meth:`reset` reads them (one without ``sonar_truth = False``;
+            see :class:`sim.records.MissionObserver`); otherwise the frames' truth holds the
+            sonar pose only (the images are the same bytes).
         perception: run ATR/localisation/world model on the sonar's frames (False: frames
             are still rendered at their rate when the sonar is enabled, but not processed).
         timer: a :class:`sim.stage_timer.StageTimer` to time the loop's stages (benchmarks);
@@ -221,6 +225,12 @@ class Mission:
         parts.autopilot.reset()
         if parts.perception is not None:
             parts.perception.reset()
+        #: Whether the sonars render their objects' ground truth and instance masks: some
+        #: observer reads them (one without ``sonar_truth = False``; decided here, at reset).
+        self.sonar_truth = any(getattr(o, "sonar_truth", True) for o in self.observers)
+        for sensor in parts.sensors.values():
+            if hasattr(sensor, "render_truth"):  # the forward-looking sonars (the pipeline's copy too)
+                sensor.render_truth = self.sonar_truth
         # pipelined only where perception is a sink and the sonar's latency is fixed (the
         # scheduler gets a ticket, not the frame, to time the delivery by)
         if (self.workers > 1 and parts.perception is not None and parts.tracking is None

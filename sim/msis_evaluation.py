@@ -28,6 +28,8 @@ class LocalizationErrorObserver:
         t_start_s: errors are recorded from this time on.
     """
 
+    sonar_truth = False  # reads no sonar ground truth (the sonar need not compute it)
+
     mission: object
     t_start_s: float = 0.0
     t_s: list[float] = field(default_factory=list)

@@ -126,6 +126,12 @@ class MissionObserver(Protocol):
     An observer that ignores the sonar's renders may set ``sonar_frames = False``: the
     pipelined loop (:mod:`sim.sonar_pipeline`) then does not ship them from its render worker
     when no observer takes them, and passes only the perception results.
+
+    An observer that does not read the forward-looking sonar's ground truth (a render's
+    ``truth.objects``, ``truth.mask_polar``, ``truth.mask_fan``; its pose ``t_s``, ``pos_ned``,
+    ``R_ns`` is always there) may set ``sonar_truth = False``: when every observer does, the
+    sonar skips that truth (:meth:`sim.sensors.fls.FlsSensor.render` with ``truth=False``), and
+    reading it raises :class:`sim.sensors.sonar.ground_truth.SonarTruthNotComputedError`.
     """
 
     def on_start(self, info: MissionInfo) -> None: ...

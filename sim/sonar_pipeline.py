@@ -17,7 +17,9 @@ two-core machine's scheduler shares out. The results are the serial loop's bit f
 * the render worker holds a copy of the ``MjModel`` with its own ``MjData`` and the sonar
   with its noise generator; at each capture it gets the poses of the geoms on moving bodies
   (what the ray casts read; the static geoms are sent once) and the true vehicle state, and
-  renders the frames in capture order, so the noise is drawn in the same order;
+  renders the frames in capture order, so the noise is drawn in the same order (the sonar
+  comes with its ``render_truth``: the objects' ground truth is rendered there only when an
+  observer reads it, :class:`sim.mission.Mission`);
 * the detection worker holds the mission's detector (rebuilt from its config) and detects on
   each frame as it comes; the mission's own perception then geolocalises the detections and
   updates its world model in delivery order, each frame with the estimate the serial loop

@@ -2,7 +2,9 @@
 
 Runs the scenario (sensors at their scenario rates, perception included unless ``sonar`` is
 off) for a fixed simulated time after a warm-up: once plain for the real-time factor, once with
-a :class:`sim.stage_timer.StageTimer` for the exclusive wall time of each loop stage.
+a :class:`sim.stage_timer.StageTimer` for the exclusive wall time of each loop stage. The loop is
+that of ``auvsim run --no-scoring --no-rerun``: its one observer is the trajectory log, so the
+sonar renders no ground truth of the objects (nothing reads it; :class:`sim.mission.Mission`).
 
 With ``workers`` > 1 a second mission of the same scenario and seed runs the pipelined loop
 (:mod:`sim.sonar_pipeline`); the serial and the pipelined loop are timed in alternating
@@ -64,6 +66,7 @@ def run(scenario: Scenario, sim_time_s: float = 120.0, warmup_s: float = 30.0, *
         ValueError: ``workers`` < 1.
     """
     from sim.mission import Mission
+    from sim.outputs.trajectory_log import TrajectoryLog
     from sim.stage_timer import NULL_TIMER, StageTimer
 
     if workers < 1:
@@ -72,7 +75,10 @@ def run(scenario: Scenario, sim_time_s: float = 120.0, warmup_s: float = 30.0, *
         sensors = {name: (cfg.model_copy(update={"enabled": False}) if cfg.kind == "fls" else cfg)
                    for name, cfg in scenario.sensors.root.items()}
         scenario = scenario.model_copy(update={"sensors": type(scenario.sensors)(sensors)})
-    loops = [Mission(scenario)] + ([Mission(scenario, workers=workers)] if workers > 1 else [])
+    # what ``auvsim run --no-scoring --no-rerun`` runs: the trajectory log as the only observer
+    # (so the sonar skips the ground truth no observer reads; its progress line is off here)
+    loops = [Mission(scenario, observers=[TrajectoryLog()])] + (
+        [Mission(scenario, observers=[TrajectoryLog()], workers=workers)] if workers > 1 else [])
     n_warm = int(round(warmup_s / loops[0].autonomy_dt_s))
     n_steps = int(round(sim_time_s / loops[0].autonomy_dt_s))
     frames0 = []

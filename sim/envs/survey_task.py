@@ -164,6 +164,8 @@ def _options(options: SurveyEnvOptions | dict | None) -> SurveyEnvOptions:
 class _LatestFls:
     """Mission observer keeping the latest fan image of the sonar named ``name``."""
 
+    sonar_truth = False  # keeps the fan image only
+
     def __init__(self, name: str = "fls") -> None:
         self.name = name
         self.fan: np.ndarray | None = None

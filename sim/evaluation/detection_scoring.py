@@ -28,6 +28,8 @@ class DetectionScorer:
     matched a visible target (observers after this one may colour detections by it).
     """
 
+    sonar_truth = True  # matches detections to the frames' objects
+
     def __init__(self, sonar_name: str, detector: str) -> None:
         self.sonar_name = sonar_name
         self.detector = detector

@@ -31,6 +31,8 @@ class DvlOnlyBaseline:
             the DVL-only one against the truth at each step, m.
     """
 
+    sonar_truth = False  # reads no sonar ground truth (the sonar need not compute it)
+
     def __init__(self, mission: Any) -> None:
         self.mission = mission
         self._nav = None

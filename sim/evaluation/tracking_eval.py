@@ -63,6 +63,8 @@ class TrackingEvaluation:
             width, the detector's clustering distance and the bubble's size), m.
     """
 
+    sonar_truth = False  # reads no sonar ground truth (the sonar need not compute it)
+
     def __init__(self, stack: TrackingStack, target_pos_at, bubbles_at, sonar_mount_body_m: FloatArray,
                  R_bs: FloatArray, fov_rad: float, window_m: tuple[float, float], vertical_beam_rad: float,
                  warmup_s: float = 10.0, match_m: float = 0.6, target_axis_at=None, breaths_at=None,

@@ -65,6 +65,8 @@ class McmFullObserver:
         ping_t_s, ping_ids: each ping's time and the object ids labelled in it.
     """
 
+    sonar_truth = False  # reads the side-scan's labels, not the forward-looking sonar's truth
+
     def __init__(self, scenario: Scenario) -> None:
         self.scenario = scenario
         self.sensor = scenario.mcm.sensor

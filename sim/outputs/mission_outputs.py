@@ -201,6 +201,7 @@ class _ProgressObserver:
     survey state machine stays ``idle``) shows its behaviour instead (``buddy follow``)."""
 
     sonar_frames = False  # ignores the sonar's renders (the pipelined loop need not ship them)
+    sonar_truth = False  # nor their ground truth (the sonar need not compute it)
 
     def __init__(self, progress: MissionProgress, buddy: str | None = None) -> None:
         self.progress = progress

@@ -130,6 +130,8 @@ class RerunRecorder:
             by it; without one they are drawn in one neutral colour.
     """
 
+    sonar_truth = True  # draws the frames' ground-truth boxes
+
     def __init__(self, path: Path, *, fls_every: int = 1, fls_scale: float = 0.5, path_every_s: float = 2.0,
                  path_chunk_points: int = 600, msis_point_threshold: int = 80, msis_max_points: int = 200, msis_image_every: int = 10,
                  msis_image_px: int = 256, series_rows: int = 600, flush_every_s: float = 30.0, scorer=None) -> None:

@@ -39,6 +39,7 @@ class TrajectoryLog:
     """
 
     sonar_frames = False  # ignores the sonar's renders (the pipelined loop need not ship them)
+    sonar_truth = False  # nor their ground truth (the sonar need not compute it)
 
     def __init__(self, *, block_rows: int = 4096, spool_dir: str | Path | None = None) -> None:
         self.block_rows = int(block_rows)

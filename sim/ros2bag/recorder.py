@@ -55,6 +55,8 @@ class RosbagRecorder:
         FileExistsError: ``path`` exists (raised by :meth:`on_start`).
     """
 
+    sonar_truth = False  # writes the frames' images, not their ground truth
+
     def __init__(self, path: Path, *, fls_every: int = 1) -> None:
         from rosbags.rosbag2 import StoragePlugin, Writer
 

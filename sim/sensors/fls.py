@@ -10,7 +10,10 @@ each echoes, is labelled and has its nearest range resolved. Each column becomes
 azimuth beam pattern, speckle, noise, TVG, gain; :mod:`sim.sensors.sonar.echo_chain`) and are
 resampled into the fan image. Ground truth comes from the same rays
 (:mod:`sim.sensors.sonar.ground_truth`): a polar/fan instance mask and, per object, its box,
-visible fraction and the true polar position of its centroid.
+visible fraction and the true polar position of its centroid. A render without them
+(``truth=False``, or :attr:`FlsSensor.render_truth` False: a mission none of whose observers
+reads them) skips the objects' truth (its extra isolated ray casts) and, unless the K-distributed
+texture reads the clutter mask, the mask; the image and the noise stream are the same bytes.
 """
 
 from __future__ import annotations
@@ -78,7 +81,14 @@ class FlsSensor(Sensor[FlsRender]):
             default ``(0, cfg.tilt_deg, 0)``.
         rng: generator for speckle and noise (``sim.rng.component_rng(seed, name)``).
         name: the sensor's entry name (default ``fls``).
+
+    Attributes:
+        render_truth: whether :meth:`render` (and so :meth:`measure`) computes the objects'
+            ground truth and the instance mask when not told (default True;
+            :class:`sim.mission.Mission` sets it from its observers' ``sonar_truth``).
     """
+
+    render_truth: bool = True
 
     def __init__(self, cfg: FlsConfig, mount_pos_body_m: ArrayLike = (0.0, 0.0, 0.0),
                  mount_rpy_rad: ArrayLike | None = None, rng: np.random.Generator | None = None, *,
@@ -150,7 +160,8 @@ class FlsSensor(Sensor[FlsRender]):
                                  g.window_near_m, g.window_far_m)
 
     def render(self, t_s: float, pos_ned: ArrayLike, R_nb: ArrayLike, caster: RayCaster,
-               objects: Sequence[SceneObjectLike] = (), *, noise: bool = True) -> FlsRender:
+               objects: Sequence[SceneObjectLike] = (), *, noise: bool = True,
+               truth: bool | None = None) -> FlsRender:
         """Render one frame.
 
         Args:
@@ -158,9 +169,17 @@ class FlsSensor(Sensor[FlsRender]):
             pos_ned: (3,) NED position of the sonar head.
             R_nb: (3, 3) body->NED rotation of the vehicle.
             caster: the scene (MuJoCo or analytic).
-            objects: scene objects to report ground truth for.
+            objects: scene objects to report ground truth for (their echoes are sampled
+                finely either way).
             noise: draw speckle and receiver noise (False: expected image).
+            truth: compute the objects' ground truth and the instance mask (None:
+                :attr:`render_truth`). False: the returned truth holds the sonar pose only
+                (reading its objects or masks raises
+                :class:`sim.sensors.sonar.ground_truth.SonarTruthNotComputedError`); the
+                frame, the intensities and the draws from the noise generator are the same.
         """
+        if truth is None:
+            truth = self.render_truth
         g, cfg = self.geometry, self.cfg
         origin = np.asarray(pos_ned, dtype=float).reshape(3)
         R_ns = np.asarray(R_nb, dtype=float) @ self.R_bs
@@ -176,21 +195,24 @@ class FlsSensor(Sensor[FlsRender]):
                                g.range_resolution_m)
         n_cols = self.rays.n_cols
         mean = self.echo.mean_intensity(echoes.lines(n_cols, self.n_bins, dtype=np.float32))
-        mask, extents = label_bins(echoes, n_cols, self.n_bins)
+        mask = extents = None
+        if truth or self.echo.speckle == "k":  # the K texture reads the clutter mask
+            mask, extents = label_bins(echoes, n_cols, self.n_bins)
         if n_cols != g.n_beams:
             mean = cv2.resize(mean, (self.n_bins, g.n_beams), interpolation=cv2.INTER_LINEAR)
-            mask = mask[self._beam_col]
+            if mask is not None:
+                mask = mask[self._beam_col]
         clutter = (mask < 0) if self.echo.speckle == "k" else None  # only the K texture reads it
         intensity = self.echo.realise(mean, self.rng, noise=noise, clutter=clutter)
         polar_u8 = self.echo.display(intensity)
         fan_u8 = self._remap.image(polar_u8)
 
-        objs = self._objects_truth(objects, origin, R_ns, sampled, owner, extents, caster, spheres)
+        objs = self._objects_truth(objects, origin, R_ns, sampled, owner, extents, caster, spheres) if truth else None
         frame = FlsFrame(t_s=float(t_s), polar=polar_u8, fan=fan_u8, geometry=self.fan_geometry,
                          mount_pos_body_m=self.mount_pos_body_m.copy(), mount_rpy_rad=self.mount_rpy_rad.copy())
-        truth = SonarGroundTruth(t_s=float(t_s), mask_polar=mask, objects=objs, pos_ned=origin.copy(), R_ns=R_ns,
-                                 fan_remap=self._remap)
-        return FlsRender(frame=frame, truth=truth, mean_intensity=mean, intensity=intensity)
+        record = SonarGroundTruth(t_s=float(t_s), mask_polar=mask if truth else None, objects=objs,
+                                  pos_ned=origin.copy(), R_ns=R_ns, fan_remap=self._remap)
+        return FlsRender(frame=frame, truth=record, mean_intensity=mean, intensity=intensity)
 
     # -- internals --------------------------------------------------------------------------
     def _add_object_rays(self, base: RayTable, caster: RayCaster, origin: FloatArray, R_ns: FloatArray,

@@ -9,6 +9,9 @@
   (:func:`visible_fraction`), so it is exact for the ray set and cheap.
 * Where the object is: slant range, azimuth and elevation of its centroid in the sonar frame
   (:func:`centroid_polar`).
+
+The record (:class:`SonarGroundTruth`) of a frame rendered without the objects' truth keeps the
+sonar pose only; reading its objects or labels raises :class:`SonarTruthNotComputedError`.
 """
 
 from __future__ import annotations
@@ -58,9 +61,20 @@ class SonarObjectTruth:
     pos_ned: FloatArray
 
 
-@dataclass(frozen=True)
+class SonarTruthNotComputedError(RuntimeError):
+    """The frame was rendered without its objects' ground truth and instance mask
+    (:meth:`sim.sensors.fls.FlsSensor.render` with ``truth=False``; in a mission: no observer
+    declared ``sonar_truth = True``)."""
+
+
+@dataclass(frozen=True, init=False)
 class SonarGroundTruth:
     """Per-frame truth: instance labels (object id, -1 = no object), objects, sonar pose.
+
+    A frame rendered without its objects' truth (``FlsSensor.render(..., truth=False)``) keeps
+    the pose (``t_s``, ``pos_ned``, ``R_ns``) but not the objects and labels: reading
+    ``objects``, ``mask_polar``, ``mask_fan`` or :meth:`object` then raises
+    :class:`SonarTruthNotComputedError` (``objects_computed`` tells which kind of frame it is).
 
     Attributes:
         t_s: capture time (s).
@@ -69,14 +83,61 @@ class SonarGroundTruth:
         pos_ned: (3,) sonar head position (NED, m).
         R_ns: (3, 3) sonar frame -> NED rotation.
         fan_remap: the polar -> fan resampling behind ``mask_fan`` (fan-shaped sonars).
+
+    Args:
+        mask_polar, objects: None (both) for a frame rendered without its objects' truth.
+
+    Raises:
+        ValueError: one of ``mask_polar`` and ``objects`` is None and the other is not.
     """
 
     t_s: float
-    mask_polar: NDArray[np.int16]
-    objects: tuple[SonarObjectTruth, ...]
     pos_ned: FloatArray
     R_ns: FloatArray
     fan_remap: FanRemap | None = field(default=None, repr=False, compare=False)
+    _mask_polar: NDArray[np.int16] | None = field(default=None, repr=False, compare=False)
+    _objects: tuple[SonarObjectTruth, ...] | None = field(default=None, compare=False)
+
+    def __init__(self, t_s: float, mask_polar: NDArray[np.int16] | None,
+                 objects: tuple[SonarObjectTruth, ...] | None, pos_ned: FloatArray, R_ns: FloatArray,
+                 fan_remap: FanRemap | None = None) -> None:
+        if (mask_polar is None) != (objects is None):
+            raise ValueError("SonarGroundTruth: mask_polar and objects are both given or both None")
+        for name, value in (("t_s", t_s), ("pos_ned", pos_ned), ("R_ns", R_ns), ("fan_remap", fan_remap),
+                            ("_mask_polar", mask_polar), ("_objects", objects)):
+            object.__setattr__(self, name, value)
+
+    @property
+    def objects_computed(self) -> bool:
+        """Whether the objects' truth and the instance mask were computed for this frame."""
+        return self._objects is not None
+
+    def _require(self, what: str) -> None:
+        if self._objects is None:
+            raise SonarTruthNotComputedError(
+                f"sonar frame at t = {self.t_s:.3f} s was rendered without its objects' ground truth, so it has no "
+                f"{what}: render with truth=True, or, in a mission, give the observer that reads it "
+                f"`sonar_truth = True` (see sim.records.MissionObserver)")
+
+    @property
+    def mask_polar(self) -> NDArray[np.int16]:
+        """(n_beams, n_bins) int16 object id per beam and range bin.
+
+        Raises:
+            SonarTruthNotComputedError: the frame was rendered without its objects' truth.
+        """
+        self._require("mask_polar")
+        return self._mask_polar
+
+    @property
+    def objects(self) -> tuple[SonarObjectTruth, ...]:
+        """One record per scene object asked for.
+
+        Raises:
+            SonarTruthNotComputedError: the frame was rendered without its objects' truth.
+        """
+        self._require("objects")
+        return self._objects
 
     @cached_property
     def mask_fan(self) -> NDArray[np.int16]:
@@ -84,6 +145,7 @@ class SonarGroundTruth:
 
         Raises:
             ValueError: the sonar has no fan image.
+            SonarTruthNotComputedError: the frame was rendered without its objects' truth.
         """
         if self.fan_remap is None:
             raise ValueError("this sonar frame has no fan image")
@@ -94,6 +156,7 @@ class SonarGroundTruth:
 
         Raises:
             KeyError: the object is not in this frame's truth.
+            SonarTruthNotComputedError: the frame was rendered without its objects' truth.
         """
         for o in self.objects:
             if o.id == object_id:
