@@ -46,6 +46,7 @@ def digest(args) -> int:
     from sim.sensors.fls import FlsSensor
     from sim.sensors.fls_digest import update_with_render
 
+    scenario = load_scenario(args.scenario)  # a bad name fails before the hook is set
     current = {"h": None, "n": 0}
     inner = FlsSensor.render
 
@@ -55,7 +56,6 @@ def digest(args) -> int:
         current["n"] += 1
         return out
 
-    FlsSensor.render = hashed
     digests: dict[str, str] = {}
     frames: dict[str, int] = {}
 
@@ -64,15 +64,18 @@ def digest(args) -> int:
         fn()
         digests[name], frames[name] = current["h"].hexdigest(), current["n"]
 
-    scenario = load_scenario(args.scenario)
-    part("bench", lambda: bench_fls.run(scenario, args.bench_frames))
-    for rz_name in ("train", "wide", "heldout"):
-        rz = RANDOMIZATION_PRESETS[rz_name]
-        for i in range(args.scenes):
-            spec = scene_spec(0, i, rz)
-            part(f"{rz_name}/{i}", lambda: render_frames(spec, fls_config(spec, RenderSettings()),
-                                                         component_rng(0, f"dataset/fls/{i}"),
-                                                         args.dataset_frames))
+    FlsSensor.render = hashed
+    try:
+        part("bench", lambda: bench_fls.run(scenario, args.bench_frames))
+        for rz_name in ("train", "wide", "heldout"):
+            rz = RANDOMIZATION_PRESETS[rz_name]
+            for i in range(args.scenes):
+                spec = scene_spec(0, i, rz)
+                part(f"{rz_name}/{i}", lambda: render_frames(spec, fls_config(spec, RenderSettings()),
+                                                             component_rng(0, f"dataset/fls/{i}"),
+                                                             args.dataset_frames))
+    finally:
+        FlsSensor.render = inner  # the process (a test calling main) keeps the real render
     total = hashlib.sha256("".join(f"{k}={v}" for k, v in digests.items()).encode()).hexdigest()
     print(json.dumps({"all": total, "frames": frames, "parts": digests}, indent=1))
     return 0

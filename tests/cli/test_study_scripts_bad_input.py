@@ -99,4 +99,8 @@ def test_atr_detect_ab_refuses(argv, culprits, capsys, tmp_path):
     (["--scenario", "cssn_lawnmowr"], ("cssn_lawnmowr", "no such scenario")),
 ])
 def test_fls_frame_digest_refuses(argv, culprits, capsys):
+    from sim.sensors.fls import FlsSensor
+
+    render = FlsSensor.render
     _refused(_script("fls_frame_digest"), argv, capsys, *culprits)
+    assert FlsSensor.render is render  # its digest hook does not outlive the call
