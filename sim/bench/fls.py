@@ -2,7 +2,10 @@
 
 ``auvsim bench fls`` renders the scenario's scene (the ``cssn_lawnmower`` basin by default)
 from a survey pose, 2 m above the seabed looking along the target rows, with the
-scenario's sonar limited to a 30 m range window, noise on, ground truth included.
+scenario's sonar limited to a 30 m range window, noise on, ground truth included; then the
+same frames again without the ground truth (what the mission renders when no observer reads
+it: no scoring, no recording), from the same noise state; the first frames are rendered again
+both ways, untimed, and compared byte for byte.
 """
 
 from __future__ import annotations
@@ -18,6 +21,8 @@ from sim.rng import component_rng
 from sim.sensors.fls import FlsSensor
 from sim.sensors.raycast import MujocoRayCaster
 from sim.world import build_world
+
+IDENTITY_FRAMES = 10  # frames rendered again, untimed, with and without the truth to compare
 
 
 class _TimedCaster:
@@ -56,7 +61,11 @@ def run(scenario: Scenario, n_frames: int = 60, range_window_m: tuple[float, flo
         refinement and occlusion casts included, per second of total frame time),
         ``raw_raycast_fraction`` (time inside ``mj_multiRay`` calls / total),
         ``n_rays`` (base rays per frame), ``rays_cast_per_frame``, ``n_beams``, ``n_bins``,
-        ``visible_objects`` (mean per frame).
+        ``visible_objects`` (mean per frame); ``no_truth`` the same frames rendered without the
+        ground truth (``frames_per_s``, ``ms_per_frame``, ``cpu_ms_per_frame``,
+        ``cpu_frames_per_s``, ``identical_frames``: the fan and polar images of the first
+        :data:`IDENTITY_FRAMES` frames byte-identical with and without the truth, rendered
+        again untimed from fresh noise states).
     """
     cfg = FlsConfig(**{**scenario.sensors.fls.model_dump(), "range_window_m": tuple(range_window_m)})
     world = build_world(scenario)
@@ -64,6 +73,7 @@ def run(scenario: Scenario, n_frames: int = 60, range_window_m: tuple[float, flo
                                           world.vehicle_body_id))
     mount = world.site_pos_body(cfg.mount_site) if cfg.mount_site in world.site_ids else np.zeros(3)
     sensor = FlsSensor(cfg, mount, np.deg2rad([0.0, cfg.tilt_deg, 0.0]), component_rng(scenario.seed, "fls"))
+    bare = FlsSensor(cfg, mount, np.deg2rad([0.0, cfg.tilt_deg, 0.0]), component_rng(scenario.seed, "fls"))
 
     # survey pose: west of the targets' centre, heading east along the rows, at altitude
     centroids = np.array([o.centroid_ned for o in world.objects]) if world.objects else np.zeros((1, 3))
@@ -75,6 +85,7 @@ def run(scenario: Scenario, n_frames: int = 60, range_window_m: tuple[float, flo
         return start + np.array([0.0, 0.5 / 3.0 * i, 0.0]) + R_nb @ mount
 
     sensor.render(0.0, pose(0), R_nb, caster, world.objects)  # warm-up
+    bare.render(0.0, pose(0), R_nb, caster, world.objects, truth=False)
     caster.time_s, caster.n_rays = 0.0, 0
     visible = 0
     t0, c0 = time.perf_counter(), time.process_time()
@@ -83,20 +94,42 @@ def run(scenario: Scenario, n_frames: int = 60, range_window_m: tuple[float, flo
         visible += sum(o.visible for o in out.truth.objects)
     total = time.perf_counter() - t0
     cpu = time.process_time() - c0
+    ray_time_s, n_rays = caster.time_s, caster.n_rays
+    t1, c1 = time.perf_counter(), time.process_time()
+    for i in range(n_frames):
+        bare.render(i / 3.0, pose(i), R_nb, caster, world.objects, truth=False)
+    bare_total = time.perf_counter() - t1
+    bare_cpu = time.process_time() - c1
+    # untimed: the first frames again from fresh noise states, with and without the truth
+    # (frames are not kept in the timed loops: holding them makes every frame's arrays fresh pages)
+    check = [FlsSensor(cfg, mount, np.deg2rad([0.0, cfg.tilt_deg, 0.0]), component_rng(scenario.seed, "fls"))
+             for _ in range(2)]
+    same = True
+    for i in range(min(n_frames, IDENTITY_FRAMES) + 1):
+        a = check[0].render(i / 3.0, pose(i), R_nb, caster, world.objects).frame
+        b = check[1].render(i / 3.0, pose(i), R_nb, caster, world.objects, truth=False).frame
+        same &= np.array_equal(a.fan, b.fan) and np.array_equal(a.polar, b.polar)
     g = sensor.geometry
     return {
         "frames_per_s": round(n_frames / total, 2),
         "ms_per_frame": round(1e3 * total / n_frames, 3),
         "cpu_ms_per_frame": round(1e3 * cpu / n_frames, 3),
         "cpu_frames_per_s": round(n_frames / cpu, 2),
-        "rays_per_s": round(caster.n_rays / total),
-        "raw_raycast_fraction": round(caster.time_s / total, 4),
+        "rays_per_s": round(n_rays / total),
+        "raw_raycast_fraction": round(ray_time_s / total, 4),
         "n_rays": sensor.n_rays,
-        "rays_cast_per_frame": round(caster.n_rays / n_frames),
+        "rays_cast_per_frame": round(n_rays / n_frames),
         "n_beams": g.n_beams,
         "n_bins": g.n_bins,
         "range_window_m": [g.window_near_m, g.window_far_m],
         "preset": cfg.preset,
         "visible_objects": round(visible / n_frames, 2),
         "n_frames": n_frames,
+        "no_truth": {
+            "frames_per_s": round(n_frames / bare_total, 2),
+            "ms_per_frame": round(1e3 * bare_total / n_frames, 3),
+            "cpu_ms_per_frame": round(1e3 * bare_cpu / n_frames, 3),
+            "cpu_frames_per_s": round(n_frames / bare_cpu, 2),
+            "identical_frames": bool(same),
+        },
     }
