@@ -35,6 +35,7 @@ import json
 import os
 import pty
 import re
+import signal
 import subprocess
 import sys
 import threading
@@ -123,9 +124,16 @@ class _SimClock:
                     self.sim_s = float(hits[-1])
 
 
+#: Below this many simulated seconds of samples after the warm-up the slope mostly measures
+#: allocator steps and start-up, and its 24 h extrapolation is flagged as not meaningful.
+MIN_FIT_WINDOW_S = 1800.0
+
+
 def fit_growth(sim_s: np.ndarray, rss_mb: np.ndarray, warmup_s: float) -> dict[str, float]:
     """Least-squares line through the samples at ``sim_s >= warmup_s``: ``slope_mb_per_h``,
-    the RSS it gives at 24 h (``rss_24h_mb``), and the samples' min / max / last (MB).
+    the RSS it gives at 24 h (``rss_24h_mb``), the samples' min / max / last (MB), the
+    simulated time they span (``fit_window_s``) and ``short_window`` (below
+    :data:`MIN_FIT_WINDOW_S`).
 
     Raises:
         ValueError: fewer than 3 samples after the warm-up.
@@ -134,7 +142,9 @@ def fit_growth(sim_s: np.ndarray, rss_mb: np.ndarray, warmup_s: float) -> dict[s
     if int(keep.sum()) < 3:
         raise ValueError(f"only {int(keep.sum())} samples after the {warmup_s:g} s warm-up; run longer")
     slope, icpt = np.polyfit(sim_s[keep], rss_mb[keep], 1)
-    return {"warmup_s": warmup_s, "n_samples": int(keep.sum()), "slope_mb_per_h": float(slope * 3600.0),
+    window_s = float(sim_s[keep].max() - sim_s[keep].min())
+    return {"warmup_s": warmup_s, "n_samples": int(keep.sum()), "fit_window_s": window_s,
+            "short_window": window_s < MIN_FIT_WINDOW_S, "slope_mb_per_h": float(slope * 3600.0),
             "rss_24h_mb": float(icpt + slope * DAY_S), "rss_min_mb": float(rss_mb[keep].min()),
             "rss_max_mb": float(rss_mb[keep].max()), "rss_last_mb": float(rss_mb[-1]),
             "sim_s_last": float(sim_s[-1])}
@@ -201,19 +211,30 @@ def measure(args: argparse.Namespace) -> int:
     rows: list[tuple[float, float, float]] = []
     t0 = time.perf_counter()
     next_print = 0.0
+    interrupted = False
     with open(args.out / "rss.csv", "w", encoding="ascii") as csv:
         csv.write("wall_s,sim_s,rss_mb\n")
-        while child.poll() is None:
-            rss = _tree_rss_mb(child.pid)
-            if rss is not None and clock.sim_s > 0.0:
-                wall = time.perf_counter() - t0
-                rows.append((wall, clock.sim_s, rss))
-                csv.write(f"{wall:.3f},{clock.sim_s:.3f},{rss:.3f}\n")
-                csv.flush()
-                if wall >= next_print:
-                    print(f"wall {wall:7.0f} s  sim {clock.sim_s:7.0f} s  RSS {rss:6.1f} MB", flush=True)
-                    next_print = wall + 60.0
-            time.sleep(args.sample_s)
+        try:
+            while child.poll() is None:
+                rss = _tree_rss_mb(child.pid)
+                if rss is not None and clock.sim_s > 0.0:
+                    wall = time.perf_counter() - t0
+                    rows.append((wall, clock.sim_s, rss))
+                    csv.write(f"{wall:.3f},{clock.sim_s:.3f},{rss:.3f}\n")
+                    csv.flush()
+                    if wall >= next_print:
+                        print(f"wall {wall:7.0f} s  sim {clock.sim_s:7.0f} s  RSS {rss:6.1f} MB", flush=True)
+                        next_print = wall + 60.0
+                time.sleep(args.sample_s)
+        except KeyboardInterrupt:  # stop the run, keep its outputs, fit what was sampled
+            interrupted = True
+            print("mission_memory.py: interrupted; stopping the run and fitting the samples so far", file=sys.stderr)
+            if child.poll() is None:
+                child.send_signal(signal.SIGINT)
+            try:
+                child.wait(timeout=60)
+            except subprocess.TimeoutExpired:
+                child.kill()
     rc = child.wait()
     os.close(master)
     data = np.array(rows or [(0.0, 0.0, 0.0)], dtype=float)
@@ -238,9 +259,13 @@ def measure(args: argparse.Namespace) -> int:
         print(f"RSS {f['rss_min_mb']:.1f}..{f['rss_max_mb']:.1f} MB over {f['warmup_s']:.0f}..{f['sim_s_last']:.0f} "
               f"sim s, slope {f['slope_mb_per_h']:+.2f} MB/h, 24 h extrapolated {f['rss_24h_mb']:.0f} MB; "
               f"{args.out / 'rss.png'}")
+        if f["short_window"]:
+            print(f"note: the fit spans only {f['fit_window_s']:.0f} simulated s after the warm-up (under "
+                  f"{MIN_FIT_WINDOW_S:.0f} s): the slope and its 24 h extrapolation are not meaningful; "
+                  "run longer (--duration-s)", file=sys.stderr)
     else:
         print(result["fit_error"], file=sys.stderr)
-    return rc
+    return 130 if interrupted else rc
 
 
 def main(argv: list[str] | None = None) -> int:

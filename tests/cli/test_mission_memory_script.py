@@ -18,6 +18,9 @@ def test_fit_growth_recovers_a_known_line():
     assert fit["slope_mb_per_h"] == pytest.approx(5.0, abs=0.1)
     assert fit["rss_24h_mb"] == pytest.approx(300.0 + 5.0 * 24.0, abs=1.5)
     assert fit["n_samples"] == int(np.sum(t >= 600.0))
+    assert fit["fit_window_s"] == pytest.approx(t[-1] - t[t >= 600.0][0]) and not fit["short_window"]
+    short = mod.fit_growth(t[t < 2000.0], rss[t < 2000.0], 600.0)  # 1400 s of samples after the warm-up
+    assert short["short_window"] and short["fit_window_s"] < mod.MIN_FIT_WINDOW_S
     with pytest.raises(ValueError, match="samples after"):
         mod.fit_growth(t[:10], rss[:10], 600.0)
 
