@@ -236,14 +236,9 @@ class SonarPipeline:
         """
         self._perceive(wait)
         while self._perceived:
-            k = self._perceived[0][1]
-            if self.frames and k not in self._frames:
-                self._receive(block=False)
-                while wait and k not in self._frames:
-                    self._receive(block=True)
-                if k not in self._frames:
-                    return
-            name, _, result = self._perceived.popleft()
+            if self.frames and not self._arrived(self._perceived[0][1], self._frames, wait):
+                return
+            name, k, result = self._perceived.popleft()
             yield name, self._frames.pop(k, None), result
 
     @property
@@ -312,16 +307,20 @@ class SonarPipeline:
         """Perception (this process's part) of the delivered frames whose detections came back,
         in delivery order (``wait``: of all of them)."""
         while self._pending:
-            k = self._pending[0][1]
-            if k not in self._detections:
-                self._receive(block=False)
-                while wait and k not in self._detections:
-                    self._receive(block=True)
-                if k not in self._detections:
-                    return
-            name, _, nav = self._pending.popleft()
+            if not self._arrived(self._pending[0][1], self._detections, wait):
+                return
+            name, k, nav = self._pending.popleft()
             detections, view = self._detections.pop(k)
             self._perceived.append((name, k, self.perception.process(view, nav, detections=detections)))
+
+    def _arrived(self, k: int, store: dict, wait: bool) -> bool:
+        """Whether frame ``k``'s entry is in ``store`` (frames or detections, by frame index)
+        after reading what the workers sent (``wait``: reading until it is)."""
+        if k not in store:
+            self._receive(block=False)
+            while wait and k not in store:
+                self._receive(block=True)
+        return k in store
 
     def _receive(self, block: bool, want_state: bool = False) -> list[tuple[Any, Any]]:
         """Read what the workers sent (``block``: wait for at least one message); results and

@@ -13,6 +13,8 @@ duration=t_s)`` would give.
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
+
 import numpy as np
 
 
@@ -21,8 +23,9 @@ def duration_ns(t_s: float) -> int:
     return round(1e9 * float(t_s))
 
 
-class _Column:
-    """Rows (time, ``width`` values) of one entity buffered until ``capacity`` are held."""
+class _Column(ABC):
+    """Rows (time, ``width`` values) of one entity buffered until ``capacity`` are held; a
+    subclass says which rerun archetype's columns they are (:meth:`_columns`)."""
 
     width = 1
 
@@ -56,8 +59,9 @@ class _Column:
         self._n = 0
         self.n_sent_chunks += 1
 
+    @abstractmethod
     def _columns(self, rr, v: np.ndarray):
-        raise NotImplementedError
+        """The archetype's component columns of the rows ``v`` ((n, width))."""
 
 
 class ScalarColumn(_Column):
