@@ -5,10 +5,9 @@ from __future__ import annotations
 import argparse
 import sys
 
-from scenarios.load import load_scenario
 from sim.cli.args import non_negative_int, positive_int
 from sim.cli.errors import EXIT_MISSION_ABORTED, EXIT_OK, CliError
-from sim.cli.scenario_cmds import add_scenario_args, refuse_sweep_only
+from sim.cli.scenario_cmds import add_scenario_args, load_scenario_noting, refuse_sweep_only
 
 
 def _fmt(value: float | None, spec: str, unit: str = "") -> str:
@@ -81,7 +80,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if args.detector is not None:
         overrides.append(f"autonomy.atr.detector={args.detector}")
     refuse_sweep_only(args.scenario, "run")
-    scenario = load_scenario(args.scenario, overrides)
+    scenario = load_scenario_noting(args.scenario, overrides, "run")
     rosbag = args.rosbag or scenario.outputs.rosbag
     if rosbag:
         try:
