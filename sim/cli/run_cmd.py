@@ -24,6 +24,10 @@ def print_summary(metrics: dict, out: str) -> None:
     print(f"sim {metrics['sim_time_s']:.0f} s in {metrics['wall_time_s']:.1f} s wall "
           f"({_fmt(rtf, '.1f', 'x')} real time), {metrics['distance_travelled_m']:.0f} m travelled, "
           f"final nav error {_fmt(nav.get('final_position_error_m'), '.2f', ' m')}")
+    if "note" in metrics.get("perception", {}):  # several sonars: say which one perception read
+        per = metrics["perception"]
+        counts = ", ".join(f"{k} {v}" for k, v in per["fls_frames_by_sensor"].items())
+        print(f"sonar frames: {counts}; {per['note']}")
     if "world_model" in metrics:
         wm = metrics["world_model"]
         n_other = wm.get('objects_not_target', 0)
