@@ -6,7 +6,9 @@ Errors name the file, the dotted key path and what is allowed, as a single
 
 from __future__ import annotations
 
+import copy
 import difflib
+import functools
 import json
 import re
 from importlib import resources
@@ -262,8 +264,58 @@ def _read_text(path: Path) -> str:
         raise ScenarioError(f"{path}: is not UTF-8 text (byte {exc.start}); a scenario is a YAML text file") from None
 
 
-def load_scenario(name_or_path: str | Path, overrides: list[str] | tuple[str, ...] = ()) -> Scenario:
+def _override_paths(overrides: list[str] | tuple[str, ...]) -> list[list[str]]:
+    return [item.split("=", 1)[0].strip().split(".") for item in overrides if "=" in item]
+
+
+def reset_preset_keys(file_data: dict[str, Any], data: dict[str, Any],
+                      overrides: list[str] | tuple[str, ...]) -> list[str]:
+    """A preset brings its own defaults: where ``overrides`` change a forward-looking sonar
+    entry's ``preset``, drop from ``data`` (the scenario after the overrides, edited in place)
+    the :data:`scenarios.config.fls.PRESET_KEYS` the scenario file (``file_data``, before
+    them) set for its own preset, so they take the new preset's values. A key the command
+    line sets itself (or its whole entry) is kept: an explicitly set key wins.
+
+    Returns:
+        one note per entry reset, naming the ``--set``, the keys and both presets.
+    """
+    from typing import get_args
+
+    from scenarios.config.fls import PRESET_KEYS, FlsConfig, FlsPresetName
+
+    file_sensors, sensors = file_data.get("sensors"), data.get("sensors")
+    if not isinstance(file_sensors, dict) or not isinstance(sensors, dict):
+        return []
+    paths = _override_paths(overrides)
+    default = FlsConfig.model_fields["preset"].default
+    notes = []
+    for name, before in file_sensors.items():
+        after = sensors.get(name)
+        if not (isinstance(before, dict) and isinstance(after, dict)
+                and before.get("kind", name) == "fls" and after.get("kind", name) == "fls"):
+            continue
+        old, new = before.get("preset", default), after.get("preset", default)
+        if new == old or new not in get_args(FlsPresetName):
+            continue
+        reset = [k for k in PRESET_KEYS if k in before and k in after
+                 and not any(["sensors", name, k][:len(p)] == p for p in paths)]
+        for k in reset:
+            del after[k]
+        if reset:
+            item = _override_for(f"sensors.{name}.preset", overrides)
+            them = "them" if len(reset) > 1 else "it"
+            notes.append(f"--set {item}: sensors.{name} takes the {new} preset's {', '.join(reset)} (the scenario "
+                         f"set {them} for {old}; set {them} on the command line too to keep another value)")
+    return notes
+
+
+def load_scenario(name_or_path: str | Path, overrides: list[str] | tuple[str, ...] = (), *,
+                  notes: list[str] | None = None) -> Scenario:
     """Read a scenario once into a frozen, validated :class:`Scenario`.
+
+    An override that changes a forward-looking sonar's ``preset`` resets the file's
+    preset-tuned keys of that entry to the new preset's values (:func:`reset_preset_keys`);
+    ``notes``, when given, receives a line saying so.
 
     Raises:
         ScenarioError: the file is missing, a folder, binary, empty or not YAML; an
@@ -288,7 +340,11 @@ def load_scenario(name_or_path: str | Path, overrides: list[str] | tuple[str, ..
     if not isinstance(data, dict):
         raise ScenarioError(f"{source}: top level must be a mapping of keys, got {type(data).__name__}")
     _resolve_seabed_file(data, path.parent)
+    file_data = copy.deepcopy(data)
     data = apply_overrides(data, list(overrides))
+    preset_notes = reset_preset_keys(file_data, data, overrides)
+    if notes is not None:
+        notes.extend(preset_notes)
     data.setdefault("name", path.stem)
     scenario = _validate(data, source, overrides)
     check_scenario(scenario, source, overrides)
@@ -324,6 +380,64 @@ def _sensor_problems(scenario: Scenario) -> list[str]:
     return problems
 
 
+@functools.lru_cache(maxsize=16)
+def _model_fan_hw(path: str, mtime_ns: int, size: int) -> tuple[int, int] | str:
+    """The (height, width) fan a CNN model file was trained on, or why it cannot be used
+    (cached by the file's identity: loading a scenario should not rebuild the session)."""
+    from autonomy.atr.cnn_detector import CnnDetector
+    from autonomy.atr.model_file import ModelFileError
+
+    try:
+        return CnnDetector(path).fan_hw
+    except ModelFileError as exc:
+        return str(exc)
+
+
+def _atr_model_problems(scenario: Scenario) -> list[str]:
+    """With the cnn detector: its model file loads, and the ATR's sonar makes fans of the size
+    the model was trained on (unless ``autonomy.atr.accept_any_fan_size``)."""
+    atr = scenario.autonomy.atr
+    if atr.detector != "cnn":
+        return []
+    from autonomy.atr.build import SHIPPED_MODEL_PATH, model_path
+
+    model = model_path(atr)
+    if not model.is_file():
+        return [f"autonomy.atr.model_path: {model}: no such file"]
+    st = model.stat()
+    fan_hw = _model_fan_hw(str(model), st.st_mtime_ns, st.st_size)
+    if isinstance(fan_hw, str):
+        return [f"autonomy.atr.model_path: {fan_hw}"]
+    from scenarios.sensor_links import atr_sonar_name
+    from sim.sensors.fls_presets import PRESETS, resolve_geometry
+
+    name = atr_sonar_name(scenario)
+    if scenario.autonomy.tracking.enabled or name is None or atr.accept_any_fan_size:
+        return []  # the tracker runs its own (contour) detector
+    cfg = scenario.sensors[name]
+    try:
+        w, h = resolve_geometry(cfg).fan_size_px
+    except ValueError:
+        return []  # reported by the sensor checks
+    if (h, w) == fan_hw:
+        return []
+    mh, mw = fan_hw
+    which = "the shipped CNN model" if model == SHIPPED_MODEL_PATH else f"the CNN model {model}"
+    makers = [p for p, v in PRESETS.items() if tuple(v.fan_size_px) == (mw, mh)]
+    if cfg.fan_size_px is not None:
+        key, what = f"sensors.{name}.fan_size_px", f"{w} x {h} px fans"
+        fix = f"set fan_size_px: [{mw}, {mh}]" + (
+            " (or leave it out)" if tuple(PRESETS[cfg.preset].fan_size_px) == (mw, mh) else "") + ", "
+    else:
+        key, what, fix = f"sensors.{name}.preset", f"{w} x {h} px fans (preset {cfg.preset})", ""
+        if makers:
+            fix = f"set preset: {' or '.join(makers)} for a fan the model knows, "
+    return [f"{key}: the ATR's sonar makes {what} but {which} was trained on {mw} x {mh} px fans (width x "
+            f"height); {fix}use a model trained on this sonar (autonomy.atr.model_path), "
+            "autonomy.atr.detector: classical or none, or autonomy.atr.accept_any_fan_size: true to run "
+            "this model on the fans resized (its detections there are not validated)"]
+
+
 def check_scenario(scenario: Scenario, source: str, overrides: list[str] | tuple[str, ...] = ()) -> None:
     """Checks across keys that field validation cannot make: placements and files.
 
@@ -333,20 +447,8 @@ def check_scenario(scenario: Scenario, source: str, overrides: list[str] | tuple
     from scenarios.placement import placement_problems
     from scenarios.sensor_links import sensor_link_problems
 
-    problems = placement_problems(scenario) + _sensor_problems(scenario) + sensor_link_problems(scenario)
-    atr = scenario.autonomy.atr
-    if atr.detector == "cnn" and atr.model_path is not None:
-        model = Path(atr.model_path).expanduser()
-        if not model.is_file():
-            problems.append(f"autonomy.atr.model_path: {model}: no such file")
-        else:
-            from autonomy.atr.cnn_detector import CnnDetector
-            from autonomy.atr.model_file import ModelFileError
-
-            try:
-                CnnDetector(model)
-            except ModelFileError as exc:
-                problems.append(f"autonomy.atr.model_path: {exc}")
+    problems = (placement_problems(scenario) + _sensor_problems(scenario) + sensor_link_problems(scenario)
+                + _atr_model_problems(scenario))
     for k, problem in enumerate(problems):
         for item in overrides:
             parts = item.split("=", 1)[0].strip().split(".")

@@ -1,6 +1,6 @@
 """Checks that the names a scenario's sensors and trackers refer to resolve: hull sites of
-sensor mounts, the USBL's transponder, the sensors and mover the target tracker uses, and the
-scanning sonar and basin the pool / tank localisation needs.
+sensor mounts, the USBL's transponder, the sensors and mover the target tracker uses, the sonar
+the survey's ATR reads, and the scanning sonar and basin the pool / tank localisation needs.
 
 Run at load (:func:`scenarios.load.check_scenario`), so ``auvsim validate`` and ``auvsim run``
 report a dangling name as one line naming the key and what is allowed, instead of failing
@@ -93,6 +93,39 @@ def tracking_problems(scenario: Scenario) -> list[str]:
     return problems
 
 
+#: The kind of sonar the survey's ATR reads.
+ATR_SONAR_KIND = "fls"
+
+
+def atr_sonar_name(scenario: Scenario) -> str | None:
+    """The sensor entry whose frames the survey's perception (ATR -> geolocalisation -> world
+    model) processes: ``autonomy.atr.sonar_sensor``, or by default the first enabled entry of
+    kind fls; None when there is none (or the named one is not an enabled fls entry, which
+    :func:`atr_sonar_problems` reports)."""
+    enabled = scenario.sensors.enabled()
+    name = scenario.autonomy.atr.sonar_sensor
+    if name is not None:
+        cfg = enabled.get(name)
+        return name if cfg is not None and cfg.kind == ATR_SONAR_KIND else None
+    return next((n for n, c in enabled.items() if c.kind == ATR_SONAR_KIND), None)
+
+
+def atr_sonar_problems(scenario: Scenario) -> list[str]:
+    """``autonomy.atr.sonar_sensor``, when set, names an enabled sensor of kind fls."""
+    name = scenario.autonomy.atr.sonar_sensor
+    if name is None:
+        return []
+    enabled = scenario.sensors.enabled()
+    cfg = enabled.get(name)
+    if cfg is not None and cfg.kind == ATR_SONAR_KIND:
+        return []
+    names = [n for n, c in enabled.items() if c.kind == ATR_SONAR_KIND]
+    what = "is not an enabled sensor" if cfg is None else f"is a {cfg.kind} sensor"
+    return [f"autonomy.atr.sonar_sensor: {name!r} {what}; the ATR reads an {ATR_SONAR_KIND} sensor (allowed: "
+            + (", ".join(names) + ", or null for the first" if names else "none enabled: add one under sensors")
+            + ")"]
+
+
 #: The basin wall shape each scanning-sonar localisation method fits (paper 002).
 MSIS_METHOD_BASIN = {"circle": "circular", "walls": "rectangular"}
 
@@ -118,6 +151,7 @@ def msis_localization_problems(scenario: Scenario) -> list[str]:
 
 def sensor_link_problems(scenario: Scenario) -> list[str]:
     """Every problem of :func:`mount_problems`, :func:`transponder_problems`,
-    :func:`tracking_problems` and :func:`msis_localization_problems`, one line each."""
+    :func:`tracking_problems`, :func:`atr_sonar_problems` and
+    :func:`msis_localization_problems`, one line each."""
     return (mount_problems(scenario) + transponder_problems(scenario) + tracking_problems(scenario)
-            + msis_localization_problems(scenario))
+            + atr_sonar_problems(scenario) + msis_localization_problems(scenario))

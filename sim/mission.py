@@ -163,8 +163,15 @@ class Mission:
 
     @property
     def n_fls_frames(self) -> int:
-        """Frames delivered from the sensors of kind ``fls``."""
-        return sum(n for name, n in self._delivered.items() if self.parts.sensors[name].kind == "fls")
+        """Frames delivered from the sensors of kind ``fls`` (all of them: see
+        :attr:`fls_frames_by_sensor` for each, :attr:`fls` for the one perception reads)."""
+        return sum(self.fls_frames_by_sensor.values())
+
+    @property
+    def fls_frames_by_sensor(self) -> dict[str, int]:
+        """Sensor name -> frames delivered, for every forward-looking sonar of the mission
+        (0 for one that has delivered none yet), in the scenario's order."""
+        return {name: int(self._delivered.get(name, 0)) for name, s in self.parts.sensors.items() if s.kind == "fls"}
 
     def info(self) -> MissionInfo:
         """What observers may know of the built mission."""
@@ -178,6 +185,7 @@ class Mission:
             sensor_mounts=MappingProxyType({n: s.mount for n, s in self.parts.sensors.items()}),
             vehicle_envelopes_m=MappingProxyType({n: tuple(float(x) for x in e.params.envelope_m)
                                                   for n, e in self.physics.extras.items()}),
+            perception_sonar=self.parts.sonar.name if self.parts.sonar is not None else None,
         )
 
     # -- stepping API ----------------------------------------------------------------

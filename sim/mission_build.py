@@ -4,7 +4,8 @@
 for one root seed: the sensors named in the scenario's sensor table (each from the registry,
 mounted from its config, with its own ``component_rng(seed, name)``), their scheduler, and
 the onboard stack (navigation filter factory, guidance, mission state machine, autopilots,
-thrust allocation and, for the first forward-looking sonar, perception).
+thrust allocation and perception on the frames of one forward-looking sonar:
+``autonomy.atr.sonar_sensor``, by default the first enabled one).
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ from autonomy.guidance.survey import SurveyGuidance
 from autonomy.msis.localization import MsisLocalizer
 from autonomy.navigation import NavigationFilter, NavNoiseModel
 from scenarios.schema import Scenario
+from scenarios.sensor_links import atr_sonar_name
 from sim.perception import Perception
 from sim.physics import Physics
 from sim.rng import component_rng
@@ -53,7 +55,9 @@ class MissionParts:
         nav_mounts: sensor kind -> (3,) FRD mount of the first sensor of that kind, m.
         guidance, fsm, autopilot, allocator: the onboard guidance and control.
         waypoints_ne: (k, 2) survey plan, m.
-        sonar: the sonar perception runs on (None: no forward-looking sonar).
+        sonar: the sonar perception runs on (``autonomy.atr.sonar_sensor``, default the first
+            enabled fls entry; the tracker's ``autonomy.tracking.sonar_sensor`` when tracking;
+            None: no forward-looking sonar). Other fls entries are rendered, not processed.
         perception: ATR -> geolocalisation -> world model on ``sonar``'s frames (or None).
         processors: sensor name -> onboard processing of its messages ``(msg, nav) -> result``;
             a result the navigation filter handles (a position fix) is fused.
@@ -110,7 +114,7 @@ def build_mission_parts(scenario: Scenario, physics: Physics, seed: int, *, nav_
         physics: the world the sensors are mounted in (hull sites, seabed).
         seed: root seed.
         nav_source: pose used for geolocalisation, one of :data:`NAV_SOURCES`.
-        perception: build perception for the first forward-looking sonar.
+        perception: build perception for the ATR's sonar (:func:`scenarios.sensor_links.atr_sonar_name`).
 
     Raises:
         ValueError: unknown ``nav_source``; a sensor's mount site is not on the hull.
@@ -132,7 +136,8 @@ def build_mission_parts(scenario: Scenario, physics: Physics, seed: int, *, nav_
 
     auto = scenario.autonomy
     survey = auto.guidance.survey
-    sonar = first.get(PERCEPTION_SONAR_KIND)
+    atr_sonar = atr_sonar_name(scenario)
+    sonar = sensors.get(atr_sonar) if atr_sonar is not None else None
     swath = sonar.swath_width_m(survey.altitude_m) if sonar is not None else None
     guidance = SurveyGuidance.from_config(survey, auto.guidance.los, swath_width_m=swath)
     waypoints_ne = np.asarray(guidance.plan.waypoints_ne_m)

@@ -80,6 +80,8 @@ class MissionInfo:
             (``pos_body_m`` (3,) FRD offset from the body origin, m; ``rpy_rad`` (3,) sensor
             axes -> body, rad).
         vehicle_envelopes_m: extra vehicle name -> (3,) its hull bounding box, m.
+        perception_sonar: the sensor whose frames perception (or the tracker) reads; None:
+            none. Other forward-looking sonars' frames are delivered to observers too.
     """
 
     scenario: Any
@@ -92,6 +94,7 @@ class MissionInfo:
     sensors: Mapping[str, str] = field(default_factory=dict)
     sensor_mounts: Mapping[str, Any] = field(default_factory=dict)
     vehicle_envelopes_m: Mapping[str, tuple[float, ...]] = field(default_factory=dict)
+    perception_sonar: str | None = None
 
 
 @dataclass(frozen=True)

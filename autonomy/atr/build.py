@@ -22,7 +22,7 @@ def build_detector(cfg: AtrConfig) -> Detector:
     if cfg.detector == "cnn":
         return CnnDetector(model_path(cfg), score_threshold=cfg.score_threshold, nms_iou=cfg.nms_iou,
                            max_detections=cfg.max_detections, intra_op_threads=cfg.intra_op_threads,
-                           classes=cfg.classes)
+                           classes=cfg.classes, accept_any_fan_size=cfg.accept_any_fan_size)
     if cfg.detector == "classical":
         return ClassicalDetector(cfg.classical, score_threshold=cfg.score_threshold,
                                  max_detections=cfg.max_detections)

@@ -45,11 +45,17 @@ class CnnDetector:
         max_detections: cap on detections per frame.
         intra_op_threads: onnxruntime CPU threads (1 = one core).
         classes: keep only these class names (None = all).
+        accept_any_fan_size: take fans of any size (resized to the model input like the
+            trained one; detections on such fans are not validated). False: :meth:`detect`
+            raises on a fan of another size than :attr:`fan_hw`.
+
+    Raises:
+        ModelFileError: the file is missing, not ONNX, or breaks the model contract.
     """
 
     def __init__(self, model_path: str | Path, score_threshold: float = 0.5, nms_iou: float = 0.3,
                  max_detections: int = 50, intra_op_threads: int = 1,
-                 classes: tuple[str, ...] | None = None) -> None:
+                 classes: tuple[str, ...] | None = None, accept_any_fan_size: bool = False) -> None:
         import onnxruntime as ort
 
         self.model_path = Path(model_path)
@@ -92,6 +98,7 @@ class CnnDetector:
         self.nms_iou = float(nms_iou)
         self.max_detections = int(max_detections)
         self._keep = None if classes is None else set(classes)
+        self.accept_any_fan_size = bool(accept_any_fan_size)
         self._check_source = f"CNN detector ({self.model_path})"
         self._bind_buffers()
 
@@ -165,11 +172,12 @@ class CnnDetector:
         """Detections on one frame, by decreasing score.
 
         Raises:
-            ValueError: ``frame.fan`` is not a 2-D uint8 image of the model's fan size.
+            ValueError: ``frame.fan`` is not a 2-D uint8 image of the model's fan size (of any
+                size with ``accept_any_fan_size``).
         """
         fan = getattr(frame, "fan", None)
         if not (isinstance(fan, np.ndarray) and fan.shape == self.fan_hw and fan.dtype == np.uint8):
-            check_frame(frame, self.fan_hw, source=self._check_source)
+            check_frame(frame, None if self.accept_any_fan_size else self.fan_hw, source=self._check_source)
         boxes, scores, cls = self.detect_boxes(fan, score_threshold)
         names = [self.class_names[i] for i in cls]
         if self._keep is not None:

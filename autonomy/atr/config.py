@@ -33,9 +33,12 @@ class ClassicalAtrConfig(StrictModel):
 
 
 class AtrConfig(StrictModel):
-    """Detector selection and operating point.
+    """Detector selection, operating point and the sonar it reads.
 
-    ``model_path`` ``None`` means the ONNX model shipped in ``autonomy/atr/models``.
+    ``model_path`` ``None`` means the ONNX model shipped in ``autonomy/atr/models``. A CNN
+    model knows the fan size it was trained on (its metadata); a scenario whose ATR sonar
+    (``sonar_sensor``) makes fans of another size is refused at load unless
+    ``accept_any_fan_size`` says to resize them.
     """
 
     detector: Literal["cnn", "classical", "none"] = "cnn"
@@ -48,4 +51,10 @@ class AtrConfig(StrictModel):
     classes: tuple[str, ...] | None = Field(
         None, description="keep only these class names (None = all the model knows)"
     )
+    sonar_sensor: str | None = Field(
+        None, min_length=1, description="sensor entry (kind fls) whose frames the survey's ATR and world model "
+        "process; None = the first enabled fls entry. Other fls entries are rendered and recorded, not processed")
+    accept_any_fan_size: bool = Field(
+        False, description="cnn: run the model on a fan of another size than it was trained on, resized to its "
+        "input (its detections there are not validated); False: such a scenario is refused at load")
     classical: ClassicalAtrConfig = ClassicalAtrConfig()

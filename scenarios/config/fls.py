@@ -1,8 +1,11 @@
 """Forward-looking sonar config.
 
 ``preset`` picks the hardware (docs/references.md [BlueViewM900], [ARIS3000]); every geometry field left at ``None``
-takes the preset's value, so a scenario overrides only what it changes. Levels are in dB;
-intensities are linear power. Acoustic constants marked "estimate" are ours, not datasheet.
+takes the preset's value, so a scenario overrides only what it changes. The fields tuned to a
+preset are :data:`PRESET_KEYS`: a ``--set`` that changes an entry's ``preset`` resets the ones
+the scenario file set to the new preset's values, unless the same command line sets them too
+(:func:`scenarios.load.load_scenario`). Levels are in dB; intensities are linear power.
+Acoustic constants marked "estimate" are ours, not datasheet.
 """
 
 from __future__ import annotations
@@ -14,6 +17,14 @@ from pydantic import Field, model_validator
 from scenarios.config.sensor import SensorConfig, sensor_config
 
 FlsPresetName = Literal["m900_130", "aris3000", "aris3000_lf"]
+
+#: Geometry fields whose ``None`` means the preset's value (the hardware's own figures).
+PRESET_GEOMETRY_KEYS = ("fov_deg", "n_beams", "vertical_beamwidth_deg", "range_min_m", "range_max_m",
+                        "range_resolution_m", "beamwidth_az_deg", "absorption_db_per_m", "fan_size_px",
+                        "range_window_m")
+#: Fields a scenario tunes to its preset: the geometry and the ray columns across the beams
+#: (``azimuth_columns`` may not exceed the preset's ``n_beams``).
+PRESET_KEYS = PRESET_GEOMETRY_KEYS + ("azimuth_columns",)
 
 
 @sensor_config

@@ -8,11 +8,10 @@ import inspect
 import json
 import sys
 
-from scenarios.load import load_scenario
 from sim.bench import BENCHES
 from sim.cli.args import non_negative_int, positive_int
 from sim.cli.errors import CliError
-from sim.cli.scenario_cmds import DEFAULT_SCENARIO, add_scenario_args, refuse_sweep_only
+from sim.cli.scenario_cmds import DEFAULT_SCENARIO, add_scenario_args, load_scenario_noting, refuse_sweep_only
 
 OPTION_BENCHES = {"workers": ("mission", "gym", "dataset"), "sonar": ("mission",)}  # benches taking each option
 
@@ -23,7 +22,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     if args.seed is not None:
         overrides.append(f"seed={args.seed}")
     refuse_sweep_only(args.scenario, "bench")
-    scenario = load_scenario(args.scenario, overrides)
+    scenario = load_scenario_noting(args.scenario, overrides, "bench")
     bench = getattr(importlib.import_module(module_name), func_name)
     params = inspect.signature(bench).parameters
     options = {}

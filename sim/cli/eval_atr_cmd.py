@@ -16,6 +16,10 @@ def _fmt(v) -> str:
     return "-" if v is None else (f"{v:.3f}" if isinstance(v, float) else str(v))
 
 
+#: How the console shows a precision that is undefined (no detection at the threshold).
+NO_DETECTIONS = "n/a (no detections)"
+
+
 def _detector_config(args: argparse.Namespace):
     from autonomy.atr.build import model_path
     from autonomy.atr.model_file import ModelFileError
@@ -35,24 +39,37 @@ def _detector_config(args: argparse.Namespace):
 def _cmd_eval(args: argparse.Namespace) -> int:
     from autonomy.atr import build_detector
     from sim.evaluation.atr_metrics import choose_threshold, ensure_heldout, evaluate_detector, threshold_sweep
-    from sim.dataset.errors import require_dataset
+    from sim.dataset.errors import DatasetError, fls_fan_hw, require_dataset
 
     cfg = _detector_config(args)
     data = require_dataset(args.data, "--data") if args.data is not None else None
     detector = build_detector(cfg)
     data = data if data is not None else ensure_heldout()
+    fan_h, fan_w = fls_fan_hw(data, "--data")
+    model_hw = getattr(detector, "fan_hw", None)
+    if model_hw is not None and (fan_h, fan_w) != tuple(model_hw):
+        raise DatasetError(f"--data {data}: its fans are {fan_w} x {fan_h} px but the model "
+                           f"{getattr(detector, 'model_path', '')} was trained on {model_hw[1]} x {model_hw[0]} px "
+                           "(width x height); evaluate on fans of the sonar it was trained on, or give a model "
+                           "trained on these (--model)")
     if args.sweep:
         sweep = threshold_sweep(detector, data, np.round(np.arange(0.10, 0.91, 0.025), 3),
                                 max_images=args.max_images)
         best = choose_threshold(sweep)
+        none_chosen = ("no threshold chosen: the detector makes no true detection at any threshold swept "
+                       f"({sweep[0]['score_threshold']:.2f}-{sweep[-1]['score_threshold']:.2f})")
         if args.json:
-            print(json.dumps({"data": str(data), "sweep": sweep, "chosen": best}, indent=1))
+            print(json.dumps({"data": str(data), "sweep": sweep, "chosen": best,
+                              **({"note": none_chosen} if best is None else {})}, indent=1))
             return 0
         print(f"eval-atr sweep {args.detector} on {data}")
         for r in sweep:
             mark = " <- chosen" if r is best else ""
-            print(f"  thr {r['score_threshold']:.3f}  precision {r['precision']:.3f}  recall {r['recall']:.3f}  "
+            prec = NO_DETECTIONS if r["precision"] is None else f"{r['precision']:.3f}"
+            print(f"  thr {r['score_threshold']:.3f}  precision {prec}  recall {r['recall']:.3f}  "
                   f"FA/frame {r['false_alarms_per_frame']:.3f}{mark}")
+        if best is None:
+            print(none_chosen)
         return 0
     res = evaluate_detector(detector, Path(data), cfg.score_threshold, max_images=args.max_images)
     res.update(detector=args.detector, data=str(data))
@@ -61,7 +78,7 @@ def _cmd_eval(args: argparse.Namespace) -> int:
         return 0
     print(f"eval-atr {res['detector']} on {res['data']} ({res['frames']} frames, classes {res['classes']})")
     for k in ("score_threshold", "precision", "recall", "false_alarms_per_frame", "ap50", "ap50_95", "frames_per_s"):
-        print(f"  {k:24s} {_fmt(res[k])}")
+        print(f"  {k:24s} {NO_DETECTIONS if k == 'precision' and res[k] is None else _fmt(res[k])}")
     print("  range band       gt   recall   det  precision")
     for b in res["by_range_band"]:
         lo, hi = b["range_m"]
@@ -81,5 +98,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
     p.add_argument("--sweep", action="store_true",
                    help="print precision/recall over thresholds 0.10-0.90 and the chosen operating point "
-                        "(highest recall at precision >= 0.95, else best F1); use on a validation set")
+                        "(highest recall at precision >= 0.95, else best F1, among thresholds with a true "
+                        "detection); use on a validation set")
     p.set_defaults(func=_cmd_eval)

@@ -5,10 +5,9 @@ from __future__ import annotations
 import argparse
 import sys
 
-from scenarios.load import load_scenario
 from sim.cli.args import non_negative_int, positive_int
 from sim.cli.errors import EXIT_MISSION_ABORTED, EXIT_OK, CliError
-from sim.cli.scenario_cmds import add_scenario_args, refuse_sweep_only
+from sim.cli.scenario_cmds import add_scenario_args, load_scenario_noting, refuse_sweep_only
 
 
 def _fmt(value: float | None, spec: str, unit: str = "") -> str:
@@ -25,6 +24,10 @@ def print_summary(metrics: dict, out: str) -> None:
     print(f"sim {metrics['sim_time_s']:.0f} s in {metrics['wall_time_s']:.1f} s wall "
           f"({_fmt(rtf, '.1f', 'x')} real time), {metrics['distance_travelled_m']:.0f} m travelled, "
           f"final nav error {_fmt(nav.get('final_position_error_m'), '.2f', ' m')}")
+    if "note" in metrics.get("perception", {}):  # several sonars: say which one perception read
+        per = metrics["perception"]
+        counts = ", ".join(f"{k} {v}" for k, v in per["fls_frames_by_sensor"].items())
+        print(f"sonar frames: {counts}; {per['note']}")
     if "world_model" in metrics:
         wm = metrics["world_model"]
         n_other = wm.get('objects_not_target', 0)
@@ -81,7 +84,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if args.detector is not None:
         overrides.append(f"autonomy.atr.detector={args.detector}")
     refuse_sweep_only(args.scenario, "run")
-    scenario = load_scenario(args.scenario, overrides)
+    scenario = load_scenario_noting(args.scenario, overrides, "run")
     rosbag = args.rosbag or scenario.outputs.rosbag
     if rosbag:
         try:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 from scenarios.load import list_scenarios, load_scenario
 from sim.cli.errors import CliError
@@ -17,6 +18,16 @@ def add_scenario_args(p: argparse.ArgumentParser, *, positional: bool = True) ->
                        help=f"shipped scenario name or YAML path (default: {DEFAULT_SCENARIO})")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                    help="dotted override, e.g. --set vehicle.mass_kg=36 (repeatable; values parsed as YAML)")
+
+
+def load_scenario_noting(name: str, overrides: list[str], command: str):
+    """:func:`scenarios.load.load_scenario`, its notes (a preset's defaults replacing the
+    file's values) printed to stderr as ``auvsim COMMAND: note: ...``."""
+    notes: list[str] = []
+    scenario = load_scenario(name, overrides, notes=notes)
+    for line in notes:
+        print(f"auvsim {command}: note: {line}", file=sys.stderr, flush=True)
+    return scenario
 
 
 def refuse_sweep_only(name: str, command: str) -> None:
@@ -45,7 +56,7 @@ def _cmd_validate(args: argparse.Namespace) -> int:
     import yaml
 
     refuse_sweep_only(args.scenario, "validate")
-    scenario = load_scenario(args.scenario, args.overrides)
+    scenario = load_scenario_noting(args.scenario, args.overrides, "validate")
     print(yaml.safe_dump(scenario.model_dump(mode="json"), sort_keys=False), end="")
     return 0
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
 from pathlib import Path
 
 from sim.cli.args import non_negative_int, positive_float, positive_int, size_hw, size_hw_or_none
@@ -43,13 +44,24 @@ def _cmd_train(args: argparse.Namespace) -> int:
     if not dirs:
         raise CliError("--data: name at least one dataset folder")
     data = [require_dataset(d, "--data") for d in dirs]
+    val_dirs = [d.strip() for d in str(args.val_data).split(",") if d.strip()] if args.val_data is not None else None
+    if val_dirs is not None and not val_dirs:
+        raise CliError("--val-data: name at least one dataset folder")
+    val = [require_dataset(d, "--val-data") for d in val_dirs] if val_dirs is not None else None
     out = _check_model_out(args.out, args.overwrite)
     params = TrainParams(input_hw=args.input, crop_hw=args.crop, width=args.width, epochs=args.epochs,
                          batch_size=args.batch_size, lr=args.lr, max_minutes=args.max_minutes,
                          threads=args.threads, seed=args.seed, size_loss_weight=args.size_loss_weight,
                          light_heads=args.light_heads,
                          classes=tuple(c.strip() for c in args.classes.split(",")) if args.classes else None)
-    train_atr(data if len(data) > 1 else data[0], out, params)
+    summary = train_atr(data if len(data) > 1 else data[0], out, params, val_data=val)
+    check = summary["check"]
+    if check["detections"] == 0:
+        frames = "validation" if check["held_out"] else "training (no --val-data)"
+        print(f"auvsim train-atr: warning: the model in {out} detects nothing at score threshold "
+              f"{check['score_threshold']:.2f} on {check['frames']} {frames} frames holding "
+              f"{check['labelled_objects']} labelled objects: it would find no target in a mission; train longer "
+              "(--epochs, --max-minutes) or on more data", file=sys.stderr, flush=True)
     return 0
 
 
@@ -74,5 +86,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=non_negative_int, default=0)
     p.add_argument("--size-loss-weight", type=positive_float, default=TrainParams.size_loss_weight)
     p.add_argument("--light-heads", action="store_true", help="depthwise-separable heads (faster inference)")
-    p.add_argument("--classes", default=None, help="comma-separated class names (default: all in data)")
+    p.add_argument("--classes", default=None,
+                   help="comma-separated class names, each with labelled objects in the data (default: all in data)")
+    p.add_argument("--val-data", default=None, metavar="DIR",
+                   help="dataset folder(s) held out of training (comma-separated) on which the model is checked "
+                        "at the end (default: the first frames of the training data)")
     p.set_defaults(func=_cmd_train)

@@ -42,3 +42,27 @@ def require_dataset(path: str | Path, arg: str = "--data") -> Path:
         raise DatasetError(f"{arg} {ann}: not a COCO detection file (missing {', '.join(missing)}); regenerate "
                            "the dataset")
     return p.resolve()
+
+
+def fls_fan_hw(path: str | Path, arg: str = "--data") -> tuple[int, int]:
+    """The (height, width) px of the forward-looking-sonar fans of a dataset folder (one
+    :func:`require_dataset` accepted).
+
+    Raises:
+        DatasetError: the folder holds no image, images that are not FLS fans (side-scan
+            tiles: no ``fan_geometry``), or fans of several sizes.
+    """
+    from sim.dataset.coco_io import ANNOTATIONS_FILE
+
+    p = Path(path)
+    images = json.loads((p / ANNOTATIONS_FILE).read_text())["images"]
+    if not images:
+        raise DatasetError(f"{arg} {p}: the dataset holds no images")
+    if any("fan_geometry" not in im for im in images):
+        kind = "side-scan tiles" if any("sss_geometry" in im for im in images) else "images without a fan_geometry"
+        raise DatasetError(f"{arg} {p}: holds {kind}, not forward-looking sonar fans (auvsim dataset --sensor fls)")
+    sizes = sorted({(int(im["height"]), int(im["width"])) for im in images})
+    if len(sizes) > 1:
+        raise DatasetError(f"{arg} {p}: fans of {len(sizes)} sizes ({', '.join(f'{w} x {h}' for h, w in sizes)} px); "
+                           "a dataset holds one sonar's fans")
+    return sizes[0]

@@ -3,6 +3,7 @@
 Figures, for the target classes (``opi`` by default):
 - precision, recall, false alarms per frame at the operating threshold (greedy matching by
   score at IoU >= ``DETECTION_MATCH_IOU`` (0.5); detections on ``iscrowd`` (barely visible) objects are ignored);
+  precision is None (JSON null) where there is no detection: undefined, not 1;
 - AP50 and AP50:95 from ``pycocotools`` COCOeval (the COCO reference implementation);
 - the same precision/recall split by range band (ground truth by its true range,
   detections by their reference-point range);
@@ -40,9 +41,11 @@ def frame_from_record(image_rec: dict, fan: np.ndarray) -> FlsFrame:
                     mount_pos_body_m=np.zeros(3), mount_rpy_rad=np.zeros(3))
 
 
-def _pr(tp: int, fp: int, n_gt: int) -> tuple[float, float]:
-    precision = tp / (tp + fp) if tp + fp else 1.0
-    recall = tp / n_gt if n_gt else 1.0
+def _pr(tp: int, fp: int, n_gt: int) -> tuple[float | None, float | None]:
+    """Precision and recall; None where undefined (precision without any detection, recall
+    without any ground truth), not 1."""
+    precision = tp / (tp + fp) if tp + fp else None
+    recall = tp / n_gt if n_gt else None
     return precision, recall
 
 
@@ -53,7 +56,14 @@ def evaluate_detector(detector, data_dir: str | Path, score_threshold: float,
     """Evaluate ``detector`` (``.detect(frame, score_threshold=...)``) on ``data_dir``.
 
     Detections down to ``min_score`` feed COCOeval; the operating point uses
-    ``score_threshold``. Returns a JSON-serialisable dict (AP figures NaN if not ``coco_ap``).
+    ``score_threshold``. Returns a JSON-serialisable dict (AP figures NaN if not ``coco_ap``);
+    ``precision`` is None when the detector made no detection at ``score_threshold``
+    (undefined: no detection is neither right nor wrong), as a band's precision without
+    detections.
+
+    Raises:
+        DatasetError: the folder is not a dataset, lacks a target class, holds no image or
+            no labelled target in the frames evaluated, or an image cannot be read.
     """
     from pycocotools.coco import COCO
     from pycocotools.cocoeval import COCOeval
@@ -166,16 +176,19 @@ class _MemoDetector:
         return self._cache[key]
 
 
-def choose_threshold(sweep: Sequence[dict], min_precision: float = 0.95, min_recall: float = 0.90) -> dict:
+def choose_threshold(sweep: Sequence[dict], min_precision: float = 0.95, min_recall: float = 0.90) -> dict | None:
     """Operating point from a :func:`threshold_sweep`: the best F1 among the thresholds that
-    reach both ``min_precision`` and ``min_recall``, else the best F1 overall."""
+    reach both ``min_precision`` and ``min_recall``, else the best F1 overall. Only thresholds
+    with at least one true detection (precision defined, recall above 0) are candidates; None
+    when no threshold has one (nothing to choose: the detector finds no target there)."""
 
     def f1(r: dict) -> float:
         p, q = r["precision"], r["recall"]
-        return 2 * p * q / (p + q) if p + q else 0.0
+        return 2 * p * q / (p + q)
 
-    ok = [r for r in sweep if r["precision"] >= min_precision and r["recall"] >= min_recall]
-    return max(ok or sweep, key=f1)
+    found = [r for r in sweep if r["precision"] is not None and r["recall"] is not None and r["recall"] > 0]
+    ok = [r for r in found if r["precision"] >= min_precision and r["recall"] >= min_recall]
+    return max(ok or found, key=f1) if found else None
 
 
 def threshold_sweep(detector, data_dir: str | Path, thresholds: Sequence[float], **kwargs) -> list[dict]:

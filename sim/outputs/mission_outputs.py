@@ -95,6 +95,24 @@ def planned_length_s(mission: Mission) -> float:
     return float(min(planned, scn.duration_s))
 
 
+def perception_counts(mission: Mission) -> dict[str, Any]:
+    """Which sonar perception read and the frames of each forward-looking sonar:
+    ``fls_frames`` (all sonars together), ``fls_frames_by_sensor`` (name -> frames),
+    ``sonar`` (the entry perception or the tracker read, None without one; chosen by
+    ``autonomy.atr.sonar_sensor``, or ``autonomy.tracking.sonar_sensor`` when tracking) and
+    ``sonar_frames`` (its frames); with other sonars, a ``note`` that they were not processed."""
+    by_sensor = mission.fls_frames_by_sensor
+    sonar = mission.fls.name if mission.fls is not None else None
+    out: dict[str, Any] = {"fls_frames": sum(by_sensor.values()), "fls_frames_by_sensor": by_sensor,
+                           "sonar": sonar, "sonar_frames": by_sensor.get(sonar, 0) if sonar is not None else 0}
+    others = [n for n in by_sensor if n != sonar]
+    if others:
+        used = f"perception read sensors.{sonar}" if sonar is not None else "no perception ran"
+        out["note"] = (f"{used}; {', '.join(f'sensors.{n}' for n in others)} rendered and recorded, not processed "
+                       "(choose the sonar with autonomy.atr.sonar_sensor)")
+    return out
+
+
 def collect_metrics(mission: Mission, log: TrajectoryLog, scorer: DetectionScorer | None = None) -> dict[str, Any]:
     """The figures of a finished mission (navigation, detections as ``scorer`` counted them,
     world model)."""
@@ -110,7 +128,7 @@ def collect_metrics(mission: Mission, log: TrajectoryLog, scorer: DetectionScore
         "mission": {"finished": s.finished, "aborted": s.aborted, "abort_reason": s.abort_reason,
                     "final_mode": mission.fsm.mode},
         "navigation": log.navigation_metrics(),
-        "perception": {"fls_frames": mission.n_fls_frames},
+        "perception": perception_counts(mission),
     }
     if mission.perception is not None:
         if scorer is not None:

@@ -165,10 +165,13 @@ class RerunRecorder:
         self._n_msis: dict[str, int] = {}
         self._msis_depth: dict[str, float] = {}
         self._fan_geometry: FanGeometry | None = None
+        self._perception_sonar: str | None = None
+        self._n_other_fls: dict[str, int] = {}
 
     # -- observer protocol -----------------------------------------------------------
     def on_start(self, info: MissionInfo) -> None:
         rr, rec = self._rr, self._rec
+        self._perception_sonar = info.perception_sonar
         rec.save(self.path)
         rec.log("world", rr.ViewCoordinates.FRD, static=True)  # NED: x north, y east, z down
         scenario = info.scenario
@@ -240,7 +243,9 @@ class RerunRecorder:
             path.log(rec, rr)
 
     def on_message(self, name: str, msg: Any) -> None:
-        if isinstance(msg, FlsRender):
+        if isinstance(msg, FlsRender) and self._perception_sonar not in (None, name):
+            self._on_other_sonar_frame(name, msg)
+        elif isinstance(msg, FlsRender):
             self._on_sonar_frame(msg)
         elif isinstance(msg, PerceptionResult):
             self._on_perception(msg)
@@ -333,6 +338,21 @@ class RerunRecorder:
                 labels=[o.name for o in gt], colors=[[40, 220, 40]]))
         else:
             rec.log("sonar/fan/ground_truth", rr.Clear(recursive=False))
+
+    def _on_other_sonar_frame(self, name: str, render: FlsRender) -> None:
+        """A forward-looking sonar perception does not read: its fan under ``sonar/<name>/fan``
+        (every ``fls_every``-th frame of its own), not over the perception sonar's."""
+        k = self._n_other_fls[name] = self._n_other_fls.get(name, 0) + 1
+        if (k - 1) % self.fls_every:
+            return
+        rr, rec = self._rr, self._rec
+        rec.set_time("sim_time", duration=render.frame.t_s)
+        s = self.fls_scale
+        fan = render.frame.fan
+        img = cv2.resize(fan, None, fx=s, fy=s, interpolation=cv2.INTER_AREA) if s != 1.0 else fan
+        ok, jpg = cv2.imencode(".jpg", img, [cv2.IMWRITE_JPEG_QUALITY, 80])
+        if ok:
+            rec.log(f"sonar/{name}/fan", rr.EncodedImage(contents=jpg.tobytes(), media_type="image/jpeg"))
 
     def _on_perception(self, res: PerceptionResult) -> None:
         rr, rec = self._rr, self._rec

@@ -11,7 +11,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from scenarios.config.fls import FlsConfig
+from scenarios.config.fls import PRESET_GEOMETRY_KEYS, FlsConfig
 
 
 @dataclass(frozen=True, slots=True)
@@ -105,10 +105,7 @@ class FlsGeometry:
 def resolve_geometry(cfg: FlsConfig) -> FlsGeometry:
     """Preset values overridden by every non-``None`` field of ``cfg``; checked for sense."""
     p = PRESETS[cfg.preset]
-    over = {k: getattr(cfg, k) for k in ("fov_deg", "n_beams", "vertical_beamwidth_deg", "range_min_m",
-                                           "range_max_m", "range_resolution_m", "beamwidth_az_deg",
-                                           "absorption_db_per_m", "fan_size_px", "range_window_m")
-            if getattr(cfg, k) is not None}
+    over = {k: getattr(cfg, k) for k in PRESET_GEOMETRY_KEYS if getattr(cfg, k) is not None}
     p = replace(p, **over)
     near, far = p.range_window_m if p.range_window_m is not None else (p.range_min_m, p.range_max_m)
     if not (p.range_min_m <= near < far <= p.range_max_m):

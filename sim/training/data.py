@@ -72,3 +72,51 @@ def load_detection_arrays(data_dir: str | Path, input_hw: tuple[int, int],
     if not images:
         raise ValueError(f"dataset {data_dir} has no images")
     return DetectionArrays(np.stack(images), boxes, cls, ign, list(names), tuple(fan_hw))
+
+
+def labelled_class_counts(data_dir: str | Path) -> dict[str, int]:
+    """Class name -> labelled (not ``iscrowd``) objects in ``data_dir``'s COCO file, for every
+    category it lists (0 for a category without one), in category id order."""
+    coco = json.loads((Path(data_dir) / ANNOTATIONS_FILE).read_text())
+    cats = {c["id"]: c["name"] for c in coco["categories"]}
+    counts = {cats[k]: 0 for k in sorted(cats)}
+    for a in coco["annotations"]:
+        if not a.get("iscrowd", 0) and a["category_id"] in cats:
+            counts[cats[a["category_id"]]] += 1
+    return counts
+
+
+def check_training_classes(data_dirs: list[Path], classes: tuple[str, ...] | list[str] | None,
+                           arg: str = "--classes") -> None:
+    """Refuse classes a training run could not learn, before any image is loaded.
+
+    Raises:
+        DatasetError: ``classes`` holds an empty or repeated name, or a class with no labelled
+            object in the datasets (the message lists the classes present, with their counts);
+            or the datasets list different classes.
+    """
+    from sim.dataset.errors import DatasetError
+
+    counts = [labelled_class_counts(d) for d in data_dirs]
+    for d, c in zip(data_dirs[1:], counts[1:]):
+        if list(c) != list(counts[0]):
+            raise DatasetError(f"--data {d}: has classes {', '.join(c)}, {data_dirs[0]} has "
+                               f"{', '.join(counts[0])}; train on datasets of the same classes")
+    total = {k: sum(c.get(k, 0) for c in counts) for k in counts[0]}
+    present = ", ".join(f"{k} ({n} labelled)" for k, n in total.items() if n) or "none labelled"
+    where = data_dirs[0] if len(data_dirs) == 1 else f"the {len(data_dirs)} datasets"
+    if classes is None:
+        if not any(total.values()):
+            raise DatasetError(f"--data {where}: holds no labelled object (classes listed: {', '.join(total)})")
+        return
+    names = list(classes)
+    if not names or any(not n for n in names):
+        raise DatasetError(f"{arg} {','.join(names)}: has an empty class name; give names from the data: {present}")
+    repeated = sorted({n for n in names if names.count(n) > 1})
+    if repeated:
+        raise DatasetError(f"{arg} {','.join(names)}: names {', '.join(repeated)} more than once")
+    missing = [n for n in names if not total.get(n)]
+    if missing:
+        raise DatasetError(f"{arg} {','.join(names)}: no labelled object of class {', '.join(missing)} in {where}; "
+                           f"classes present: {present}")
+

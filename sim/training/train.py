@@ -119,7 +119,9 @@ def _load_all(data_dirs: list[Path], input_hw: tuple[int, int], classes):
     first = parts[0]
     for d, a in zip(data_dirs[1:], parts[1:]):
         if a.class_names != first.class_names or a.fan_hw != first.fan_hw:
-            raise ValueError(f"train-atr: dataset {d} has classes {a.class_names} / fan {a.fan_hw}, "
+            from sim.dataset.errors import DatasetError
+
+            raise DatasetError(f"train-atr: dataset {d} has classes {a.class_names} / fan {a.fan_hw}, "
                              f"{data_dirs[0]} has {first.class_names} / {first.fan_hw}")
     if len(parts) == 1:
         return first
@@ -128,15 +130,73 @@ def _load_all(data_dirs: list[Path], input_hw: tuple[int, int], classes):
                            first.class_names, first.fan_hw)
 
 
+#: Frames the end-of-training check runs the exported model on.
+CHECK_FRAMES = 32
+
+
+def detection_check(model_path: str | Path, data_dirs: list[Path], classes: list[str],
+                    score_threshold: float, n_frames: int = CHECK_FRAMES) -> dict:
+    """Run the exported model on the first ``n_frames`` frames (by image id, over
+    ``data_dirs`` in turn) that hold a labelled (not ``iscrowd``) object of ``classes``.
+
+    Returns:
+        ``frames``, ``labelled_objects`` (of ``classes`` in them), ``detections`` (of
+        ``classes`` at ``score_threshold``), ``score_threshold``, ``data`` (the folders).
+    """
+    import cv2
+
+    from autonomy.atr.cnn_detector import CnnDetector
+    from sim.dataset.coco_io import ANNOTATIONS_FILE
+    from sim.evaluation.atr_metrics import frame_from_record
+
+    det = CnnDetector(model_path, score_threshold=score_threshold, classes=tuple(classes))
+    frames = objects = detections = 0
+    for d in data_dirs:
+        coco = json.loads((d / ANNOTATIONS_FILE).read_text())
+        cats = {c["id"] for c in coco["categories"] if c["name"] in classes}
+        by_image: dict[int, int] = {}
+        for a in coco["annotations"]:
+            if a["category_id"] in cats and not a.get("iscrowd", 0):
+                by_image[a["image_id"]] = by_image.get(a["image_id"], 0) + 1
+        for rec in sorted(coco["images"], key=lambda r: r["id"]):
+            if frames >= n_frames:
+                break
+            if rec["id"] not in by_image:
+                continue
+            fan = cv2.imread(str(d / rec["file_name"]), cv2.IMREAD_GRAYSCALE)
+            if fan is None:
+                continue
+            frames += 1
+            objects += by_image[rec["id"]]
+            detections += len(det.detect(frame_from_record(rec, fan)))
+    return {"frames": frames, "labelled_objects": objects, "detections": detections,
+            "score_threshold": float(score_threshold), "data": [str(d) for d in data_dirs]}
+
+
 def train_atr(data_dir: str | Path | list, out_path: str | Path, params: TrainParams = TrainParams(),
-              log=_log) -> dict:
+              log=_log, val_data: str | Path | list | None = None) -> dict:
     """Train on ``data_dir`` (an ``auvsim dataset`` output, or a list of them, concatenated)
     and export ONNX to ``out_path``.
 
     Stops after ``params.epochs`` epochs or ``params.max_minutes``, whichever comes first.
-    Returns a summary dict (epochs run, final losses, seconds, parameter count).
+    Then runs the model at the default operating threshold (``AtrConfig.score_threshold``) on
+    up to :data:`CHECK_FRAMES` frames holding labelled objects of ``val_data`` (folders
+    held out of training; None: of the training data), :func:`detection_check`.
+
+    Returns:
+        a summary dict (epochs run, final losses, seconds, parameter count, ``check``: the
+        detection check; ``check["detections"] == 0``: the model detects nothing there).
+
+    Raises:
+        sim.dataset.errors.DatasetError: ``params.classes`` names a class without a labelled
+            object in the data, or the datasets disagree on classes or fan size (before any
+            training).
+        FileNotFoundError: a folder has no annotations file.
     """
     torch = require_torch()
+    from autonomy.atr.config import AtrConfig
+    from sim.dataset.errors import DatasetError, fls_fan_hw
+    from sim.training.data import check_training_classes
     from sim.training.export import export_onnx
     from sim.training.model import STRIDE, CenterNetSmall
     from sim.training.targets import encode_targets
@@ -146,6 +206,25 @@ def train_atr(data_dir: str | Path | list, out_path: str | Path, params: TrainPa
     rng = np.random.default_rng(params.seed)
     t0 = time.perf_counter()
     data_dirs = [Path(d) for d in (data_dir if isinstance(data_dir, (list, tuple)) else [data_dir])]
+    val_dirs = None if val_data is None else [Path(d) for d in (val_data if isinstance(val_data, (list, tuple))
+                                                                else [val_data])]
+    for d in data_dirs + (val_dirs or []):
+        from sim.dataset.coco_io import ANNOTATIONS_FILE
+
+        if not (d / ANNOTATIONS_FILE).is_file():
+            raise FileNotFoundError(f"no {ANNOTATIONS_FILE} in dataset directory {d}")
+    check_training_classes(data_dirs, params.classes)
+    fans = {d: fls_fan_hw(d, "--data") for d in data_dirs}
+    if val_dirs is not None:
+        try:
+            check_training_classes(val_dirs, params.classes or None)
+        except DatasetError as exc:
+            raise DatasetError(f"--val-data: {exc}") from None
+        fans.update({d: fls_fan_hw(d, "--val-data") for d in val_dirs})
+    if len(set(fans.values())) > 1:
+        raise DatasetError("--data / --val-data: the datasets hold fans of different sizes ("
+                           + ", ".join(f"{d}: {w} x {h} px" for d, (h, w) in fans.items())
+                           + "); a model is trained and checked on one sonar's fans")
     arrays = _load_all(data_dirs, params.input_hw, list(params.classes) if params.classes else None)
     n_img = arrays.images.shape[0]
     h, w = params.input_hw
@@ -230,4 +309,11 @@ def train_atr(data_dir: str | Path | list, out_path: str | Path, params: TrainPa
                "images": n_img, "classes": arrays.class_names, "history": history,
                "out": str(out_path), "stopped_on_time": stopped_early}
     log(f"train-atr: wrote {out_path} after {summary['seconds']:.0f} s")
+    check = summary["check"] = detection_check(out_path, val_dirs or data_dirs, arrays.class_names,
+                                               AtrConfig().score_threshold)
+    check["held_out"] = val_dirs is not None
+    log(f"train-atr: at score threshold {check['score_threshold']:.2f} the model makes {check['detections']} "
+        f"detection{'' if check['detections'] == 1 else 's'} on {check['frames']} "
+        f"{'validation' if val_dirs is not None else 'training'} frames holding {check['labelled_objects']} "
+        "labelled objects")
     return summary

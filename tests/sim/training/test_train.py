@@ -40,8 +40,14 @@ def test_train_export_detect_and_evaluate(tiny_dataset, tmp_path):
     assert meta["seed"] == 11 and meta["n_images"] == 6
     res = evaluate_detector(det, tiny_dataset, score_threshold=0.3)
     assert res["frames"] == 6 and res["ground_truth"] > 0
-    for k in ("precision", "recall", "ap50", "ap50_95", "false_alarms_per_frame", "frames_per_s"):
+    for k in ("recall", "ap50", "ap50_95", "false_alarms_per_frame", "frames_per_s"):
         assert np.isfinite(res[k]), k
+    # precision is undefined (None) exactly when the model made no detection at the threshold
+    n_det = res["true_positives"] + res["false_positives"]
+    assert (res["precision"] is None) == (n_det == 0) and (n_det == 0 or np.isfinite(res["precision"]))
+    coco = json.loads((tiny_dataset / "annotations.json").read_text())
+    with_objects = {a["image_id"] for a in coco["annotations"] if not a["iscrowd"]}
+    assert summary["check"]["frames"] == len(with_objects) and not summary["check"]["held_out"]
 
 
 def test_training_reduces_the_loss(tiny_dataset, tmp_path):

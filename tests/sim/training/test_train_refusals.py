@@ -1,0 +1,71 @@
+"""``train-atr`` refuses classes it could not learn before any training (exit 2, naming the
+classes present) and warns when the model it wrote detects nothing on its check frames."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+pytest.importorskip("torch", reason="torch not installed: training needs the `train` extra")
+
+from sim.cli import main  # noqa: E402
+from tests.sim.hand_made_dataset import write_fan_dataset  # noqa: E402
+
+TINY = ["--input", "96x176", "--crop", "none", "--width", "4", "--epochs", "1", "--batch-size", "4",
+        "--threads", "1"]
+
+
+@pytest.fixture
+def data(tmp_path):
+    return write_fan_dataset(tmp_path / "d", n_images=4, fan_hw=(160, 300))  # opi and rock labelled, no debris
+
+
+@pytest.mark.parametrize("classes,named", [
+    ("mine", "no labelled object of class mine"),
+    ("opi,debris", "no labelled object of class debris"),
+    ("opi,opi", "names opi more than once"),
+    ("opi,", "empty class name"),
+])
+def test_classes_not_in_the_data_are_refused_before_training(data, tmp_path, capsys, monkeypatch, classes, named):
+    import sim.training.train as train
+
+    monkeypatch.setattr(train, "_load_all", lambda *a, **k: pytest.fail("images loaded for training"))
+    out = tmp_path / "m.onnx"
+    code = main(["train-atr", "--data", str(data), "--out", str(out), "--classes", classes, *TINY])
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert named in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+    if "no labelled" in named:
+        assert "classes present: opi (4 labelled), rock (4 labelled)" in err
+    assert not out.exists()
+
+
+def test_datasets_of_different_fans_are_refused_before_training(data, tmp_path, capsys):
+    other = write_fan_dataset(tmp_path / "o", n_images=2, fan_hw=(120, 300))
+    code = main(["train-atr", "--data", f"{data},{other}", "--out", str(tmp_path / "m.onnx"), *TINY])
+    err = capsys.readouterr().err
+    assert code == 2 and "fans of different sizes" in err and "300 x 120 px" in err, err
+
+
+def test_a_model_that_detects_nothing_is_written_with_a_warning(data, tmp_path, capsys):
+    from autonomy.atr.cnn_detector import CnnDetector
+    from autonomy.atr.config import AtrConfig
+    from sim.evaluation.atr_metrics import frame_from_record
+
+    out = tmp_path / "m.onnx"
+    val = write_fan_dataset(tmp_path / "val", n_images=3, fan_hw=(160, 300))
+    code = main(["train-atr", "--data", str(data), "--val-data", str(val), "--out", str(out), *TINY])
+    captured = capsys.readouterr()
+    assert code == 0 and out.is_file()
+    # the warning's figure, counted independently: the written model on the validation frames
+    import cv2
+
+    det = CnnDetector(out, score_threshold=AtrConfig().score_threshold)
+    recs = json.loads((val / "annotations.json").read_text())["images"]
+    n = sum(len(det.detect(frame_from_record(r, cv2.imread(str(val / r["file_name"]), cv2.IMREAD_GRAYSCALE))))
+            for r in recs)
+    assert n == 0  # one epoch of a 4-channel model stays near its prior (score 0.1 < 0.4)
+    assert ("warning: the model in" in captured.err and "detects nothing at score threshold 0.40 on 3 validation "
+            "frames holding 6 labelled objects" in captured.err), captured.err
+    assert "makes 0 detections on 3 validation frames" in captured.out
