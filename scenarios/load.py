@@ -330,10 +330,12 @@ def check_scenario(scenario: Scenario, source: str, overrides: list[str] | tuple
     Raises:
         ScenarioError: listing every problem found, one per line.
     """
+    from scenarios.comms_checks import comms_problems
     from scenarios.placement import placement_problems
     from scenarios.sensor_links import sensor_link_problems
 
-    problems = placement_problems(scenario) + _sensor_problems(scenario) + sensor_link_problems(scenario)
+    problems = (placement_problems(scenario) + _sensor_problems(scenario) + sensor_link_problems(scenario)
+                + comms_problems(scenario))
     atr = scenario.autonomy.atr
     if atr.detector == "cnn" and atr.model_path is not None:
         model = Path(atr.model_path).expanduser()

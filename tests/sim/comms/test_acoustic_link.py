@@ -292,8 +292,8 @@ def test_config_limits_and_scenario_default():
     sc = load_scenario("cssn_lawnmower")
     assert sc.comms.acoustic.enabled is False
     # the link needs its surface vehicle (comms.surface.vehicle): the sea trial has it
-    on = load_scenario("cssn_sea_trial", ["comms.acoustic.bit_rate_bps=500"])
-    assert on.comms.acoustic.bit_rate_bps == 500.0
+    on = load_scenario("cssn_sea_trial", ["comms.acoustic.bit_rate_bps=4000"])
+    assert on.comms.acoustic.bit_rate_bps == 4000.0
 
 
 def test_bad_link_setting_is_one_error_naming_the_key():
