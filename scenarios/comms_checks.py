@@ -20,8 +20,10 @@ Message fields (:mod:`autonomy.comms.wire`) and what bounds them:
   (to one day) ends before 2106 for every scenario the schema allows.
 - latitude / longitude (i32, 1e-7 deg): every position maps into [-90, 90] and
   [-180, 180] deg (:mod:`autonomy.geodesy` wraps the longitude).
-- ids wrap at 65536; covariance sigmas saturate at 65.535 m; class ids index the
-  detector's table (checked when the link is built).
+- ids wrap at 65536. Covariance sigmas (u16 mm) beyond 65.535 m (a USBL fix from about
+  570 m off with the default head) would saturate and understate the error: such a message
+  is not sent and is counted (``link.unencodable``). Class ids (u8) index the detector's
+  table, known once the detector is built.
 
 Slots (:mod:`autonomy.comms.tdma`): each slot in use must carry its packet (a USBL fix in
 the surface vehicle's, a detection in the AUV's) at least at zero range: duration plus

@@ -89,11 +89,11 @@ def message_size_bytes(msg_type: int, version: int = wire.PROTOCOL_VERSION) -> i
 
 
 def _fix_body(msg_id: int, t_unix_s: float, lat_deg: float, lon_deg: float, depth_m: float,
-              cov_ned: FloatArray, version: int) -> bytes:
+              cov_ned: FloatArray, version: int, saturate: bool) -> bytes:
     if not 0 <= msg_id <= 0xFFFF:
         raise ValueError(f"message id must be in [0, 65535], got {msg_id}")
     return (_ID.pack(msg_id) + wire.pack_time(t_unix_s) + wire.pack_lat_lon(lat_deg, lon_deg)
-            + wire.pack_depth(depth_m, version) + CovSummary.from_cov_ned(cov_ned).pack())
+            + wire.pack_depth(depth_m, version) + CovSummary.from_cov_ned(cov_ned).pack(saturate))
 
 
 def _read_fix(body: bytes, version: int) -> tuple[int, float, float, float, float, FloatArray, int]:
@@ -133,8 +133,10 @@ class DetectionReport:
     class_prob: float
     reliability: float
 
-    def encode(self, version: int = wire.PROTOCOL_VERSION) -> bytes:
-        """The packet in protocol ``version`` (33 bytes in version 2, 32 in version 1).
+    def encode(self, version: int = wire.PROTOCOL_VERSION, saturate: bool = True) -> bytes:
+        """The packet in protocol ``version`` (33 bytes in version 2, 32 in version 1);
+        ``saturate``: sigmas beyond the covariance field are sent as its largest value
+        (else they raise).
 
         Raises:
             ValueError: a field out of its range in that version (named), or an unknown version.
@@ -142,7 +144,7 @@ class DetectionReport:
         if not 0 <= self.class_id <= 255:
             raise ValueError(f"class_id must be in [0, 255], got {self.class_id}")
         body = _fix_body(self.detection_id, self.t_unix_s, self.lat_deg, self.lon_deg, self.depth_m, self.cov_ned,
-                         wire.check_version(version))
+                         wire.check_version(version), saturate)
         tail = _TAIL.pack(self.class_id, wire.pack_prob(self.class_prob, "class_prob"),
                           wire.pack_prob(self.reliability, "reliability"))
         return wire.frame(DETECTION_TYPE, body + tail, version)
@@ -200,14 +202,15 @@ class UsblFixReport:
     buoy_lat_deg: float
     buoy_lon_deg: float
 
-    def encode(self, version: int = wire.PROTOCOL_VERSION) -> bytes:
-        """The packet in protocol ``version`` (38 bytes in version 2, 37 in version 1).
+    def encode(self, version: int = wire.PROTOCOL_VERSION, saturate: bool = True) -> bytes:
+        """The packet in protocol ``version`` (38 bytes in version 2, 37 in version 1);
+        ``saturate`` as :meth:`DetectionReport.encode`.
 
         Raises:
             ValueError: a field out of its range in that version (named), or an unknown version.
         """
         body = _fix_body(self.fix_id, self.t_unix_s, self.lat_deg, self.lon_deg, self.depth_m, self.cov_ned,
-                         wire.check_version(version))
+                         wire.check_version(version), saturate)
         return wire.frame(USBL_FIX_TYPE, body + wire.pack_lat_lon(self.buoy_lat_deg, self.buoy_lon_deg), version)
 
     def pos_ned(self, origin: GeodeticOrigin) -> FloatArray:

@@ -2,10 +2,10 @@
 
 Framing: every message is ``version (u8) | type (u8) | body | CRC-16 (u16)``, big-endian
 (network order). Encoders write :data:`PROTOCOL_VERSION` (2) unless told to write version 1
-(for receivers that read only it); decoders read both. The CRC is CRC-16/CCITT-FALSE (polynomial 0x1021, initial value 0xFFFF,
-``binascii.crc_hqx``) over every byte before it; it detects every error of 1 to 3 bits and
-every burst up to 16 bits in these short packets, so a corrupt or truncated packet is
-rejected instead of decoded into wrong numbers.
+(for receivers that read only it); decoders read both. The CRC is CRC-16/CCITT-FALSE
+(polynomial 0x1021, initial value 0xFFFF, ``binascii.crc_hqx``) over every byte before it;
+it detects every error of 1 to 3 bits and every burst up to 16 bits in these short
+packets, so a corrupt or truncated packet is rejected instead of decoded into wrong numbers.
 
 Fields and their quantisation (the largest round-trip error):
 
@@ -19,7 +19,9 @@ Fields and their quantisation (the largest round-trip error):
 - covariance summary (7 bytes): the horizontal error ellipse (1-sigma semi-axes, u16 mm each,
   and the major axis's azimuth from north in [0, 180) deg, u8 in 180/256 deg steps) and the
   vertical sigma (u16 mm): 0.5 mm on each sigma, 0.35 deg on the azimuth. Sigmas above
-  65.535 m are sent as 65.535 m (saturated, never wrapped). The north/east-down
+  65.535 m are sent as 65.535 m (saturated, never wrapped), or refused with
+  ``saturate=False`` (what the mission sends: a saturated sigma would make the receiver
+  overconfident; such a message is not sent and is counted). The north/east-down
   correlations are not sent: the decoded covariance is block-diagonal.
 - probabilities: u8 in 1/255 steps: 1/510.
 """
@@ -53,6 +55,8 @@ SIGMA_SCALE = 1000.0
 AZIMUTH_STEP_RAD = math.pi / 256.0
 PROB_SCALE = 255.0
 _U16_MAX = 65535
+#: Largest sigma the covariance summary holds, m.
+SIGMA_MAX_M = _U16_MAX / SIGMA_SCALE
 
 
 def crc16(data: bytes) -> int:
@@ -200,7 +204,15 @@ class CovSummary:
         out[2, 2] = self.sigma_down_m**2
         return out
 
-    def pack(self) -> bytes:
+    def pack(self, saturate: bool = True) -> bytes:
+        """The 7 bytes. Sigmas above :data:`SIGMA_MAX_M` are sent as it (``saturate``) or
+        raise ``ValueError`` naming the sigma."""
+        if not saturate:
+            for name in ("sigma_major_m", "sigma_minor_m", "sigma_down_m"):
+                if round(getattr(self, name) * SIGMA_SCALE) > _U16_MAX:
+                    raise ValueError(f"{name} = {getattr(self, name)} is outside the encodable range "
+                                     f"[0, {SIGMA_MAX_M}] (saturating it would understate the error)")
+
         def mm(sigma: float) -> int:
             return min(round(sigma * SIGMA_SCALE), _U16_MAX)
 

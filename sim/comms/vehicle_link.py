@@ -73,7 +73,8 @@ class VehicleLink:
         n_detections_queued, n_fixes_queued, n_fixes_received: counters.
         n_unencodable: messages not sent because a value lies outside its field in
             ``comms.surface.message_version`` (a USBL outlier beyond the depth range the
-            scenario was checked for at load, :mod:`scenarios.comms_checks`).
+            scenario was checked for at load, :mod:`scenarios.comms_checks`, or a sigma
+            beyond 65.535 m: a USBL fix from far off).
     """
 
     def __init__(self, scenario: Scenario, surface: SurfaceVehicleRunner, onboard_pmha: PMHA | None,
@@ -103,9 +104,10 @@ class VehicleLink:
 
     def _encode(self, msg: DetectionReport | UsblFixReport) -> bytes | None:
         """The packet of ``msg`` in the configured version, or None (counted) when a value
-        does not fit its field."""
+        does not fit its field (a sigma beyond the covariance field included: saturated, it
+        would make the receiver overconfident)."""
         try:
-            return msg.encode(self.version)
+            return msg.encode(self.version, saturate=False)
         except ValueError:
             self.n_unencodable += 1
             return None
@@ -148,7 +150,8 @@ class VehicleLink:
                     self._down.replace(t_s, packet)
                     self.n_fixes_queued += 1
         duration = self.acoustic.packet_duration_s
-        travel_s = self.travel_s(float(np.linalg.norm(np.asarray(auv.pos_ned, float) - np.asarray(surface.pos_ned, float))))
+        range_m = float(np.linalg.norm(np.asarray(auv.pos_ned, float) - np.asarray(surface.pos_ned, float)))
+        travel_s = self.travel_s(range_m)
         for payload in self._up.release(t_s, duration, travel_s):
             self.link.send(t_s, AUV_NODE, self.node, payload)
         for payload in self._down.release(t_s, duration, travel_s):

@@ -40,7 +40,8 @@ def test_tracking_consistency_is_printed_with_what_a_consistent_filter_gives(tmp
 
 
 DEEP_ARGS = ["run", "cssn_sea_trial", "--no-rerun", "--no-scoring", "--detector", "none", "--set", "duration_s=6",
-             "--set", "world.seabed.depth_m=400", "--set", "world.basin.shape=none", "--set", "world.seabed.extent_m=200",
+             "--set", "world.seabed.depth_m=400", "--set", "world.basin.shape=none",
+             "--set", "world.seabed.extent_m=200",
              "--set", "world.targets=[]", "--set", "vehicle.initial_pos_ned=[8,0,380]",
              "--set", "autonomy.guidance.mission.safe_depth_max_m=399"]
 

@@ -105,6 +105,14 @@ def test_ellipse_summary_against_a_written_out_case():
     assert s.major_azimuth_rad == pytest.approx(az)
     big = wire.CovSummary.unpack(wire.CovSummary(1e3, 0.1, 0.0, 1.0).pack(), 0)
     assert big.sigma_major_m == 65.535  # saturated, not wrapped
+    # or refused, as the mission sends: a saturated sigma understates the error
+    with pytest.raises(ValueError, match="sigma_major_m = 1000.0 is outside the encodable range"):
+        wire.CovSummary(1e3, 0.1, 0.0, 1.0).pack(saturate=False)
+    assert wire.CovSummary(65.535, 0.1, 0.0, 1.0).pack(saturate=False) == wire.CovSummary(65.535, 0.1, 0.0, 1.0).pack()
+    far_fix = UsblFixReport(1, 1.6e9, 44.0, 9.8, 900.0, np.diag([150.0**2, 20.0**2, 9.0]), 44.0, 9.8)
+    assert decode(far_fix.encode()).cov_ned[0, 0] == pytest.approx(65.535**2)
+    with pytest.raises(ValueError, match="sigma_major_m = 150.0"):
+        far_fix.encode(saturate=False)
 
 
 def test_truncated_and_corrupt_packets_raise_value_error():
