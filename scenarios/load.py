@@ -444,11 +444,12 @@ def check_scenario(scenario: Scenario, source: str, overrides: list[str] | tuple
     Raises:
         ScenarioError: listing every problem found, one per line.
     """
+    from scenarios.comms_checks import comms_problems
     from scenarios.placement import placement_problems
     from scenarios.sensor_links import sensor_link_problems
 
     problems = (placement_problems(scenario) + _sensor_problems(scenario) + sensor_link_problems(scenario)
-                + _atr_model_problems(scenario))
+                + _atr_model_problems(scenario) + comms_problems(scenario))
     for k, problem in enumerate(problems):
         for item in overrides:
             parts = item.split("=", 1)[0].strip().split(".")

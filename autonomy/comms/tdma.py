@@ -2,11 +2,14 @@
 
 Each cycle of ``cycle_s`` starts with the surface vehicle's slot of ``surface_slot_s`` (its
 USBL fix of the AUV goes down); the AUV talks in the rest of the cycle (its detections go
-up). A node hands a packet to its modem only if the packet's duration, its travel time and
-a guard end inside the node's own slot, so the two modems never transmit into each other's
-reception (a half-duplex modem loses what arrives while it talks). Both vehicles keep the
-schedule from the shared mission clock (GNSS time on the surface, the AUV's clock set at
-the surface before the dive).
+up). A node hands a packet to its modem only if the packet's duration, its travel time to
+the receiver (range / sound speed, plus the longest multipath delay) and a guard end inside
+the node's own slot, so the packet has arrived before the receiver's own slot opens and the
+two modems never transmit into each other's reception (a half-duplex modem loses what
+arrives while it talks). A slot of ``L`` s therefore carries a packet of ``d`` s only to
+ranges up to ``c * (L - d - guard_s - multipath delay)`` (:meth:`TdmaSchedule.reach_m`);
+beyond it the packet waits. Both vehicles keep the schedule from the shared mission clock
+(GNSS time on the surface, the AUV's clock set at the surface before the dive).
 
 :class:`SlotSender` is one node's application queue in front of its modem: it releases one
 packet at a time, when it fits in the node's slot and the previous one has left.
@@ -29,8 +32,9 @@ class TdmaSchedule:
     Attributes:
         cycle_s: cycle length, s.
         surface_slot_s: the surface vehicle's slot at the start of each cycle, s.
-        guard_s: margin after a packet's arrival before the slot ends, s (cover the longest
-            travel time, range / sound speed: 0.1 s is 150 m).
+        guard_s: margin after a packet's arrival before the slot ends, s (covers the error
+            of the sender's range estimate and the motion while the packet travels: 0.05 s
+            is 75 m at 1500 m/s).
     """
 
     cycle_s: float
@@ -53,10 +57,28 @@ class TdmaSchedule:
             return start + self.cycle_s if phase >= self.surface_slot_s else -math.inf
         raise ValueError(f"TdmaSchedule: node must be {SURFACE!r} or {AUV!r}, got {node!r}")
 
-    def fits(self, node: str, t_s: float, duration_s: float) -> bool:
-        """A packet of ``duration_s`` started at ``t_s`` by ``node`` arrives, guard included,
-        inside that node's slot."""
-        return t_s + duration_s + self.guard_s <= self.slot_end_s(node, t_s)
+    def slot_length_s(self, node: str) -> float:
+        """Length of ``node``'s slot, s."""
+        self.slot_end_s(node, 0.0)  # checks the node name
+        return self.surface_slot_s if node == SURFACE else self.cycle_s - self.surface_slot_s
+
+    def fits(self, node: str, t_s: float, duration_s: float, travel_s: float) -> bool:
+        """A packet of ``duration_s`` started at ``t_s`` by ``node`` has arrived, ``travel_s``
+        later (range / sound speed plus the longest multipath delay, s), with ``guard_s`` to
+        spare, before that node's slot ends.
+
+        Raises:
+            ValueError: ``travel_s`` negative or not finite, or an unknown node.
+        """
+        if not (math.isfinite(travel_s) and travel_s >= 0.0):
+            raise ValueError(f"TdmaSchedule.fits: travel_s must be finite and >= 0, got {travel_s}")
+        return t_s + duration_s + travel_s + self.guard_s <= self.slot_end_s(node, t_s)
+
+    def reach_m(self, node: str, duration_s: float, sound_speed_mps: float, multipath_max_delay_s: float) -> float:
+        """Farthest range (m) to which ``node``'s slot carries a packet of ``duration_s`` sent
+        at the slot's start: ``c * (slot - duration - guard - multipath delay)``; negative when
+        the slot cannot hold it at any range."""
+        return sound_speed_mps * (self.slot_length_s(node) - duration_s - self.guard_s - multipath_max_delay_s)
 
 
 class SlotSender:
@@ -69,6 +91,7 @@ class SlotSender:
 
     Attributes:
         n_dropped_stale: packets dropped for age.
+        n_superseded: packets :meth:`replace` dropped unsent (they had not fitted yet).
     """
 
     def __init__(self, schedule: TdmaSchedule, node: str, max_age_s: float = math.inf) -> None:
@@ -77,6 +100,7 @@ class SlotSender:
         self._queue: deque[tuple[float, bytes]] = deque()
         self._busy_until_s = -math.inf
         self.n_dropped_stale = 0
+        self.n_superseded = 0
 
     def __len__(self) -> int:
         return len(self._queue)
@@ -87,12 +111,14 @@ class SlotSender:
 
     def replace(self, t_s: float, payload: bytes) -> None:
         """Keep only ``payload`` queued (the newest fix supersedes an unsent one)."""
+        self.n_superseded += len(self._queue)
         self._queue.clear()
         self.put(t_s, payload)
 
-    def release(self, t_s: float, duration_s) -> list[bytes]:
+    def release(self, t_s: float, duration_s, travel_s: float) -> list[bytes]:
         """Packets to hand to the modem at ``t_s``: while the next one (lasting
-        ``duration_s(len(payload))`` s) fits in the slot after the ones already released."""
+        ``duration_s(len(payload))`` s, then ``travel_s`` s to the receiver, multipath
+        included) fits in the slot after the ones already released."""
         while self._queue and t_s - self._queue[0][0] > self.max_age_s:
             self._queue.popleft()
             self.n_dropped_stale += 1
@@ -100,7 +126,7 @@ class SlotSender:
         start = max(t_s, self._busy_until_s)
         while self._queue:
             d = duration_s(len(self._queue[0][1]))
-            if not self.schedule.fits(self.node, start, d) or self.schedule.slot_end_s(self.node, start) != \
+            if not self.schedule.fits(self.node, start, d, travel_s) or self.schedule.slot_end_s(self.node, start) != \
                     self.schedule.slot_end_s(self.node, t_s):
                 break
             out.append(self._queue.popleft()[1])

@@ -1,20 +1,27 @@
 """Fixed-point fields and framing shared by the acoustic messages.
 
 Framing: every message is ``version (u8) | type (u8) | body | CRC-16 (u16)``, big-endian
-(network order). The CRC is CRC-16/CCITT-FALSE (polynomial 0x1021, initial value 0xFFFF,
-``binascii.crc_hqx``) over every byte before it; it detects every error of 1 to 3 bits and
-every burst up to 16 bits in these short packets, so a corrupt or truncated packet is
-rejected instead of decoded into wrong numbers.
+(network order). Encoders write :data:`PROTOCOL_VERSION` (2) unless told to write version 1
+(for receivers that read only it); decoders read both. The CRC is CRC-16/CCITT-FALSE
+(polynomial 0x1021, initial value 0xFFFF, ``binascii.crc_hqx``) over every byte before it;
+it detects every error of 1 to 3 bits and every burst up to 16 bits in these short
+packets, so a corrupt or truncated packet is rejected instead of decoded into wrong numbers.
 
 Fields and their quantisation (the largest round-trip error):
 
 - time: UNIX seconds (u32) + milliseconds (u16): 0.5 ms; 1970 to 2106.
 - latitude, longitude: i32 in 1e-7 deg: 5e-8 deg (5.6 mm north, 5.6 mm x cos(lat) east).
-- depth: i16 in cm, -327.68 to 327.67 m below the origin's height: 5 mm.
+- depth below the origin's height: version 2: i24 (three bytes) in cm, -83886.08 to
+  83886.07 m, full-ocean depth (11 km) with room for any seabed the scenarios allow; version
+  1: i16 in cm, -327.68 to 327.67 m. Both 5 mm. (Compact AUV formats such as WHOI's CCL and
+  its successor DCCL size each field to its bounds and resolution in the same way; cm over
+  +-84 km takes 3 bytes, the next byte boundary above the 22 bits that 11 km needs.)
 - covariance summary (7 bytes): the horizontal error ellipse (1-sigma semi-axes, u16 mm each,
   and the major axis's azimuth from north in [0, 180) deg, u8 in 180/256 deg steps) and the
   vertical sigma (u16 mm): 0.5 mm on each sigma, 0.35 deg on the azimuth. Sigmas above
-  65.535 m are sent as 65.535 m (saturated, never wrapped). The north/east-down
+  65.535 m are sent as 65.535 m (saturated, never wrapped), or refused with
+  ``saturate=False`` (what the mission sends: a saturated sigma would make the receiver
+  overconfident; such a message is not sent and is counted). The north/east-down
   correlations are not sent: the decoded covariance is block-diagonal.
 - probabilities: u8 in 1/255 steps: 1/510.
 """
@@ -31,12 +38,15 @@ from numpy.typing import ArrayLike, NDArray
 
 FloatArray = NDArray[np.float64]
 
-PROTOCOL_VERSION = 1
+#: The version encoders write; :data:`VERSIONS` are those decoders read.
+PROTOCOL_VERSION = 2
+VERSIONS = (1, 2)
 HEADER = struct.Struct(">BB")
 CRC = struct.Struct(">H")
 TIME = ">IH"  # UNIX seconds, milliseconds
 LAT_LON = ">ii"  # 1e-7 deg
-DEPTH = ">h"  # cm
+#: Depth field per version: (bytes, signed two's-complement big-endian), in cm.
+DEPTH_BYTES = {1: 2, 2: 3}
 COV = ">HHHB"  # sigma major, minor, down (mm); major-axis azimuth (180/256 deg)
 
 DEG_SCALE = 1e7
@@ -45,6 +55,8 @@ SIGMA_SCALE = 1000.0
 AZIMUTH_STEP_RAD = math.pi / 256.0
 PROB_SCALE = 255.0
 _U16_MAX = 65535
+#: Largest sigma the covariance summary holds, m.
+SIGMA_MAX_M = _U16_MAX / SIGMA_SCALE
 
 
 def crc16(data: bytes) -> int:
@@ -52,18 +64,25 @@ def crc16(data: bytes) -> int:
     return binascii.crc_hqx(data, 0xFFFF)
 
 
-def frame(msg_type: int, body: bytes) -> bytes:
+def check_version(version: int) -> int:
+    """``version`` if it is one of :data:`VERSIONS`; else ``ValueError``."""
+    if version not in VERSIONS:
+        raise ValueError(f"acoustic message: protocol version {version}, this codec reads {list(VERSIONS)}")
+    return version
+
+
+def frame(msg_type: int, body: bytes, version: int = PROTOCOL_VERSION) -> bytes:
     """``version | type | body | CRC``."""
-    head = HEADER.pack(PROTOCOL_VERSION, msg_type) + body
+    head = HEADER.pack(check_version(version), msg_type) + body
     return head + CRC.pack(crc16(head))
 
 
-def unframe(data: bytes, sizes: dict[int, int]) -> tuple[int, bytes]:
-    """(type, body) of a framed packet after checking CRC, version, type and length.
+def unframe(data: bytes, sizes: dict[tuple[int, int], int]) -> tuple[int, int, bytes]:
+    """(version, type, body) of a framed packet after checking CRC, version, type and length.
 
     Args:
         data: the packet.
-        sizes: message type -> its total size in bytes.
+        sizes: (version, message type) -> its total size in bytes.
 
     Raises:
         ValueError: too short, CRC mismatch (corrupt or truncated), unknown version or type,
@@ -77,13 +96,14 @@ def unframe(data: bytes, sizes: dict[int, int]) -> tuple[int, bytes]:
     if crc != crc16(data[:-CRC.size]):
         raise ValueError(f"acoustic message: CRC-16 mismatch, corrupt or truncated packet ({n} bytes)")
     version, msg_type = HEADER.unpack_from(data)
-    if version != PROTOCOL_VERSION:
-        raise ValueError(f"acoustic message: protocol version {version}, this decoder reads {PROTOCOL_VERSION}")
-    if msg_type not in sizes:
-        raise ValueError(f"acoustic message: unknown type {msg_type} (known: {sorted(sizes)})")
-    if n != sizes[msg_type]:
-        raise ValueError(f"acoustic message of type {msg_type}: {n} bytes, expected {sizes[msg_type]}")
-    return msg_type, data[HEADER.size:-CRC.size]
+    check_version(version)
+    known = sorted(t for v, t in sizes if v == version)
+    if msg_type not in known:
+        raise ValueError(f"acoustic message: unknown type {msg_type} (known: {known})")
+    size = sizes[(version, msg_type)]
+    if n != size:
+        raise ValueError(f"acoustic message of type {msg_type} (version {version}): {n} bytes, expected {size}")
+    return version, msg_type, data[HEADER.size:-CRC.size]
 
 
 def _checked_int(value: float, scale: float, lo: int, hi: int, name: str) -> int:
@@ -120,12 +140,22 @@ def unpack_lat_lon(body: bytes, offset: int) -> tuple[float, float]:
     return lat / DEG_SCALE, lon / DEG_SCALE
 
 
-def pack_depth(depth_m: float) -> bytes:
-    return struct.pack(DEPTH, _checked_int(depth_m, DEPTH_SCALE, -32768, 32767, "depth_m"))
+def depth_range_m(version: int = PROTOCOL_VERSION) -> tuple[float, float]:
+    """(shallowest, deepest) depth (m below the origin's height) the version's field holds."""
+    half = 1 << (8 * DEPTH_BYTES[check_version(version)] - 1)
+    return -half / DEPTH_SCALE, (half - 1) / DEPTH_SCALE
 
 
-def unpack_depth(body: bytes, offset: int) -> float:
-    return struct.unpack_from(DEPTH, body, offset)[0] / DEPTH_SCALE
+def pack_depth(depth_m: float, version: int = PROTOCOL_VERSION) -> bytes:
+    """Depth (m) as the version's signed cm field. Raises ``ValueError`` outside :func:`depth_range_m`."""
+    n = DEPTH_BYTES[check_version(version)]
+    half = 1 << (8 * n - 1)
+    return _checked_int(depth_m, DEPTH_SCALE, -half, half - 1, "depth_m").to_bytes(n, "big", signed=True)
+
+
+def unpack_depth(body: bytes, offset: int, version: int = PROTOCOL_VERSION) -> float:
+    n = DEPTH_BYTES[check_version(version)]
+    return int.from_bytes(body[offset:offset + n], "big", signed=True) / DEPTH_SCALE
 
 
 @dataclass(frozen=True, slots=True)
@@ -174,7 +204,15 @@ class CovSummary:
         out[2, 2] = self.sigma_down_m**2
         return out
 
-    def pack(self) -> bytes:
+    def pack(self, saturate: bool = True) -> bytes:
+        """The 7 bytes. Sigmas above :data:`SIGMA_MAX_M` are sent as it (``saturate``) or
+        raise ``ValueError`` naming the sigma."""
+        if not saturate:
+            for name in ("sigma_major_m", "sigma_minor_m", "sigma_down_m"):
+                if round(getattr(self, name) * SIGMA_SCALE) > _U16_MAX:
+                    raise ValueError(f"{name} = {getattr(self, name)} is outside the encodable range "
+                                     f"[0, {SIGMA_MAX_M}] (saturating it would understate the error)")
+
         def mm(sigma: float) -> int:
             return min(round(sigma * SIGMA_SCALE), _U16_MAX)
 

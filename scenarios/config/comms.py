@@ -8,6 +8,7 @@ between several nodes, one event at a time. It gets its own ``comms:`` section
 from __future__ import annotations
 
 import math
+from typing import Literal
 
 from pydantic import Field, model_validator
 
@@ -89,8 +90,15 @@ class SurfaceLinkConfig(StrictModel):
     Medium access is a fixed time-division cycle of ``cycle_s``: the surface vehicle talks
     in the first ``surface_slot_s`` of each cycle (its latest USBL fix), the AUV in the rest
     (its queued detections, one packet at a time, only when the packet, its travel time and
-    ``guard_s`` end before the next surface slot). Half-duplex modems then never talk over
-    each other; losses are the channel's.
+    ``guard_s`` end before the next surface slot). The travel time is the range over the
+    sound speed plus ``comms.acoustic.multipath_max_delay_s``, so a slot of ``L`` s carries a
+    packet of ``d`` s to ``sound_speed * (L - d - guard_s - multipath_max_delay_s)`` (the
+    slot's reach, in ``metrics.json``); farther, the packet waits. Half-duplex modems then
+    never talk over each other; losses are the channel's.
+
+    Messages are written in ``message_version`` (:mod:`autonomy.comms.messages`): 2 carries
+    depths to 83.9 km, 1 (for receivers that read only it) to 327.67 m; a scenario that could
+    produce a value its version cannot hold is refused at load (:mod:`scenarios.comms_checks`).
     """
 
     vehicle: str = Field("buoy", min_length=1, description="the surface vehicle (a key of vehicles:)")
@@ -102,7 +110,12 @@ class SurfaceLinkConfig(StrictModel):
     fuse_usbl_fixes: bool = Field(True, description="the AUV's navigation filter fuses the fixes it receives")
     cycle_s: float = Field(2.0, gt=0.2, le=600.0, description="time-division cycle, s")
     surface_slot_s: float = Field(0.6, gt=0.0, le=600.0, description="surface vehicle's slot at each cycle's start, s")
-    guard_s: float = Field(0.05, ge=0.0, le=10.0, description="margin after a packet's arrival before the other slot, s")
+    guard_s: float = Field(0.05, ge=0.0, le=10.0,
+                           description="margin after a packet's arrival (travel and multipath delay included) "
+                           "before the other slot, s")
+    message_version: Literal[1, 2] = Field(
+        2, description="protocol version of the messages sent (2: depth to 83.9 km; 1: to 327.67 m, for "
+        "receivers that read only version 1); both are decoded")
     max_detection_age_s: float = Field(30.0, gt=0.0, le=3600.0,
                                        description="queued detections older than this are dropped unsent, s")
     epoch_unix_s: float = Field(1_688_169_600.0, ge=0.0, le=4_102_444_800.0,

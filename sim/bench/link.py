@@ -2,8 +2,8 @@
 
 A synthetic two-vehicle survey at the autonomy rate (10 Hz): the AUV runs a 200 m x 100 m
 lawnmower at 0.5 m/s, the buoy follows 20 m behind it at the surface; the AUV sends a
-detection report (32 bytes) on average every ``detection_period_s`` and the buoy a USBL fix
-report (37 bytes) every ``fix_period_s``, on the default S2CR 18/34-class link. Timed on one
+detection report (33 bytes) on average every ``detection_period_s`` and the buoy a USBL fix
+report (38 bytes) every ``fix_period_s``, on the default S2CR 18/34-class link. Timed on one
 core: the link calls of every tick (``advance``, ``delivered``, ``send``, payloads encoded
 beforehand) with and without the traffic, giving the cost per tick and per message, and the
 messages' encoding and decoding on their own; each the fastest of ``repeats`` runs (as

@@ -44,6 +44,16 @@ def print_summary(metrics: dict, out: str) -> None:
             pending = f", {st['pending']} still queued or in flight at the end" if st.get("pending") else ""
             print(f"link, {name}: {st['sent']} sent, {st['delivered']} delivered, {st['lost']} lost{pending}, latency mean "
                   f"{_fmt(st.get('mean_latency_s'), '.2f', ' s')}, p95 {_fmt(st.get('p95_latency_s'), '.2f', ' s')}")
+        link = metrics["link"]
+        held = link.get("usbl_fixes_superseded", 0) + link.get("usbl_fixes_unsent_at_end", 0)
+        if held:
+            reach = link.get("tdma", {}).get("surface_reach_m")
+            print(f"link: {held} of {link.get('usbl_fixes_made', 0)} USBL fixes not sent: each waited for a surface "
+                  f"slot it fitted, packet and travel time, until a newer fix replaced it (the slot carries a fix to "
+                  f"{_fmt(reach, '.0f', ' m')}; a longer comms.surface.surface_slot_s reaches farther)")
+        if link.get("unencodable"):
+            print(f"link: {link['unencodable']} messages not sent: a value outside its field in message_version "
+                  f"{link.get('message_version')}")
     if "tracking" in metrics and not any(v.get("n") for v in metrics["tracking"]["errors"].values()):
         tr = metrics["tracking"]
         print(f"tracking ({tr['mode']}): nothing scored (errors count from {tr.get('scored_from_s', 0):g} s into the "

@@ -263,16 +263,21 @@ class AcousticLink:
         t_prev, self._t_prev = self._t_prev, float(t_s)
         self._interp_from = t_prev
 
+        # Events run in time order from the settled time: a start is never earlier than the
+        # latest event (the signals that ended before it are forgotten, so a start computed
+        # from before it would miss them and fall into what is still arriving).
+        t_event = self._t
         while True:
             best, best_t = None, _INF
             for node in self._nodes.values():
                 if node.queue:
-                    ts = self._earliest_start(node)
+                    ts = self._earliest_start(node, t_event)
                     if ts < best_t:
                         best, best_t = node, ts
             if best is None or best_t > t_s:
                 break
             self._transmit(best, best_t)
+            t_event = best_t
 
         self._t = float(t_s)
         self._settle(t_s)
@@ -331,15 +336,19 @@ class AcousticLink:
         except KeyError:
             raise ValueError(f"acoustic link: unknown node {name!r} (known: {list(self._nodes)})") from None
 
-    def _earliest_start(self, node: _Node) -> float:
-        """When ``node`` can start its head packet: sent, its last transmission over, and no
-        signal arriving at it (carrier sense)."""
-        ts = max(node.queue[0].t_send, node.tx_end)
+    def _earliest_start(self, node: _Node, t_event: float) -> float:
+        """When ``node`` can start its head packet: sent, its last transmission over, not before
+        ``t_event`` (the latest channel event: what ended before it is forgotten), and no
+        signal arriving at it (carrier sense: it waits for the end of every arrival it hears,
+        back-to-back ones included)."""
+        ts = max(node.queue[0].t_send, node.tx_end, t_event)
         moved = True
         while moved:
             moved = False
             for a0, a1, _ in node.arrivals:
-                if a0 <= ts < a1 - _EPS_S:
+                # an arrival starting within rounding of ts (the next of back-to-back packets,
+                # its start summed along another path) is already arriving
+                if a0 - _EPS_S <= ts < a1 - _EPS_S:
                     ts, moved = a1, True
         return ts
 

@@ -12,7 +12,12 @@ newest USBL fix of the AUV (:class:`sim.surface_runner.SurfaceVehicleRunner`) is
 a USBL-fix report and sent in its slot; what arrives becomes a
 :class:`autonomy.messages.PositionFixMsg` stamped with the measurement time, for the AUV's
 navigation filter to fuse at that time (:class:`autonomy.navigation.delayed.DelayedFixFilter`).
-Medium access is the time-division cycle of :mod:`autonomy.comms.tdma`.
+Medium access is the time-division cycle of :mod:`autonomy.comms.tdma`: a packet is released
+only when it, its travel time to the other vehicle (the range at the release tick over the
+sound speed, plus the channel's longest multipath delay) and ``comms.surface.guard_s`` end in
+its sender's slot. The range is the vehicles' true one; on the water the buoy measures it
+with each USBL fix and the AUV reads it from the two positions in each fix report, and the
+guard covers the difference (0.05 s is 75 m).
 """
 
 from __future__ import annotations
@@ -22,7 +27,14 @@ from typing import Any
 
 import numpy as np
 
-from autonomy.comms.messages import DetectionReport, UsblFixReport, decode
+from autonomy.comms.messages import (
+    DETECTION_TYPE,
+    USBL_FIX_TYPE,
+    DetectionReport,
+    UsblFixReport,
+    decode,
+    message_size_bytes,
+)
 from autonomy.comms.tdma import AUV, SURFACE, SlotSender, TdmaSchedule
 from autonomy.geodesy import ned_to_lat_lon_depth
 from autonomy.localization.geolocate import LocalizedDetection
@@ -59,6 +71,10 @@ class VehicleLink:
         link: the channel.
         surface_world_model: the world model on the surface (None when detections are not sent).
         n_detections_queued, n_fixes_queued, n_fixes_received: counters.
+        n_unencodable: messages not sent because a value lies outside its field in
+            ``comms.surface.message_version`` (a USBL outlier beyond the depth range the
+            scenario was checked for at load, :mod:`scenarios.comms_checks`, or a sigma
+            beyond 65.535 m: a USBL fix from far off).
     """
 
     def __init__(self, scenario: Scenario, surface: SurfaceVehicleRunner, onboard_pmha: PMHA | None,
@@ -70,9 +86,10 @@ class VehicleLink:
         self.surface = surface
         self.node = surface.name
         self.link = AcousticLink.from_config(self.acoustic, [AUV_NODE, self.node], seed)
-        schedule = TdmaSchedule(self.cfg.cycle_s, self.cfg.surface_slot_s, self.cfg.guard_s)
-        self._up = SlotSender(schedule, AUV, self.cfg.max_detection_age_s)
-        self._down = SlotSender(schedule, SURFACE)
+        self.schedule = TdmaSchedule(self.cfg.cycle_s, self.cfg.surface_slot_s, self.cfg.guard_s)
+        self._up = SlotSender(self.schedule, AUV, self.cfg.max_detection_age_s)
+        self._down = SlotSender(self.schedule, SURFACE)
+        self.version = self.cfg.message_version
         self._onboard_pmha = onboard_pmha
         self.class_names = tuple(class_names)
         self.surface_world_model = None
@@ -83,7 +100,17 @@ class VehicleLink:
                                                          self.cfg.epoch_unix_s, self.class_names,
                                                          footprint=footprint, track=self.auv_track)
         self._det_id = self._fix_id = 0
-        self.n_detections_queued = self.n_fixes_queued = self.n_fixes_received = 0
+        self.n_detections_queued = self.n_fixes_queued = self.n_fixes_received = self.n_unencodable = 0
+
+    def _encode(self, msg: DetectionReport | UsblFixReport) -> bytes | None:
+        """The packet of ``msg`` in the configured version, or None (counted) when a value
+        does not fit its field (a sigma beyond the covariance field included: saturated, it
+        would make the receiver overconfident)."""
+        try:
+            return msg.encode(self.version, saturate=False)
+        except ValueError:
+            self.n_unencodable += 1
+            return None
 
     # ------------------------------------------------------------------ AUV side
     def send_detections(self, t_s: float, localized: Sequence[LocalizedDetection]) -> None:
@@ -96,8 +123,10 @@ class VehicleLink:
             report = DetectionReport.from_localized(det, self._det_id, self.origin, self.cfg.epoch_unix_s,
                                                     self.class_names)
             self._det_id = (self._det_id + 1) % 65536
-            self._up.put(t_s, report.encode())
-            self.n_detections_queued += 1
+            packet = self._encode(report)
+            if packet is not None:
+                self._up.put(t_s, packet)
+                self.n_detections_queued += 1
 
     # ------------------------------------------------------------------ the tick
     def tick(self, t_s: float, auv: VehicleTruth, surface: VehicleTruth, timer: StageTimer | None = None) -> list[PositionFixMsg]:
@@ -116,12 +145,16 @@ class VehicleLink:
                 report = UsblFixReport(self._fix_id, self.cfg.epoch_unix_s + f.t_s, lat, lon, depth, f.cov_ned,
                                        float(blat), float(blon))
                 self._fix_id = (self._fix_id + 1) % 65536
-                self._down.replace(t_s, report.encode())
-                self.n_fixes_queued += 1
+                packet = self._encode(report)
+                if packet is not None:
+                    self._down.replace(t_s, packet)
+                    self.n_fixes_queued += 1
         duration = self.acoustic.packet_duration_s
-        for payload in self._up.release(t_s, duration):
+        range_m = float(np.linalg.norm(np.asarray(auv.pos_ned, float) - np.asarray(surface.pos_ned, float)))
+        travel_s = self.travel_s(range_m)
+        for payload in self._up.release(t_s, duration, travel_s):
             self.link.send(t_s, AUV_NODE, self.node, payload)
-        for payload in self._down.release(t_s, duration):
+        for payload in self._down.release(t_s, duration, travel_s):
             self.link.send(t_s, self.node, AUV_NODE, payload)
         self.link.advance(t_s, {AUV_NODE: auv.pos_ned, self.node: surface.pos_ned},
                           {AUV_NODE: float(np.linalg.norm(auv.nu[:3])), self.node: float(np.linalg.norm(surface.nu[:3]))})
@@ -144,6 +177,22 @@ class VehicleLink:
                                           np.asarray(msg.cov_ned, dtype=float)[:2, :2], source=FIX_SOURCE))
         return out
 
+    def travel_s(self, range_m: float) -> float:
+        """Longest time a packet takes to reach the other vehicle at ``range_m`` (m): range /
+        sound speed plus the longest multipath delay, s (what the slots must leave room for)."""
+        return range_m / self.acoustic.sound_speed_mps + self.acoustic.multipath_max_delay_s
+
+    def reach_m(self) -> dict[str, float]:
+        """Farthest range (m) to which each slot carries its packet
+        (:meth:`autonomy.comms.tdma.TdmaSchedule.reach_m`): ``surface_reach_m`` for a USBL
+        fix, ``auv_reach_m`` for a detection report."""
+        a = self.acoustic
+        out = {}
+        for key, node, msg_type in (("surface_reach_m", SURFACE, USBL_FIX_TYPE), ("auv_reach_m", AUV, DETECTION_TYPE)):
+            d = a.packet_duration_s(message_size_bytes(msg_type, self.version))
+            out[key] = self.schedule.reach_m(node, d, a.sound_speed_mps, a.multipath_max_delay_s)
+        return out
+
     def finish(self, t_s: float) -> None:
         """End of the mission: the surface world model processes every scan it holds."""
         if self.surface_world_model is not None:
@@ -159,9 +208,13 @@ class VehicleLink:
             "detections_queued": self.n_detections_queued,
             "detections_dropped_stale": self._up.n_dropped_stale,
             "detections_unsent_at_end": len(self._up),  # queued = sent + dropped stale + these
+            "unencodable": self.n_unencodable,  # values outside their field: not queued
+            "message_version": self.version,
             "usbl_fixes_made": self.n_fixes_queued, "usbl_fixes_received": self.n_fixes_received,
+            # made = sent + superseded (a newer fix came before it fitted its slot) + unsent at the end
+            "usbl_fixes_superseded": self._down.n_superseded, "usbl_fixes_unsent_at_end": len(self._down),
             "tdma": {"cycle_s": self.cfg.cycle_s, "surface_slot_s": self.cfg.surface_slot_s,
-                     "guard_s": self.cfg.guard_s},
+                     "guard_s": self.cfg.guard_s, **self.reach_m()},
         }
         wm = self.surface_world_model
         if wm is not None:

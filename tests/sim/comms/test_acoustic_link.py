@@ -88,6 +88,46 @@ def test_half_duplex_receiver_waits_until_the_arrival_ends():
     assert got["b"].t_arrival_s == pytest.approx(tau + d + _dur(8) + tau, abs=1e-12)
 
 
+def _back_to_back_case(dt, third_node):
+    """a sends two 32-byte packets to b at 1.3 s, 300 m away; b wants to send at 1.6 s,
+    during the first arrival. Ticks of ``dt``, sends before each tick's advance (as the
+    mission does). With ``third_node``, c (1500 m from b, 1530 m from a) sends to a at 1.9 s,
+    after the first arrival at b ended and during the second: an event between b's wish and
+    its start."""
+    nodes = ("a", "b", "c") if third_node else ("a", "b")
+    pos = {"a": A, "b": np.array([300.0, 0.0, 0.0]), "c": np.array([300.0, 1500.0, 0.0])}
+    pos = {n: pos[n] for n in nodes}
+    link = _link(nodes=nodes)
+    sends = {1.3: [("a", "b", 32), ("a", "b", 32)], 1.6: [("b", "a", 8)]}
+    if third_node:
+        sends[1.9] = [("c", "a", 8)]
+    for k in range(int(round(6.0 / dt)) + 1):
+        t = round(k * dt, 9)
+        for src, dst, n in sends.get(t, []):
+            link.send(t, src, dst, bytes(n))
+        link.advance(t, pos)
+    return link, pos
+
+
+@pytest.mark.parametrize("third_node", [False, True])
+@pytest.mark.parametrize("dt", [0.1, 0.05])
+def test_receiver_waits_for_back_to_back_arrivals_and_hears_both(dt, third_node):
+    """A start is never in the settled past: b waits for the end of both of a's packets."""
+    link, pos = _back_to_back_case(dt, third_node)
+    tau_ab = math.dist(pos["a"], pos["b"]) / C  # 0.2 s
+    arrival_ends = [1.3 + tau_ab + _dur(32), 1.3 + tau_ab + 2 * _dur(32)]  # 1.884, 2.268 s
+    got = {(p.src, p.t_arrival_s): p for p in link.finished()}
+    from_a = sorted((p for p in link.finished() if p.src == "a"), key=lambda p: p.t_arrival_s)
+    assert [p.outcome for p in from_a] == ["delivered", "delivered"]
+    assert [p.t_arrival_s for p in from_a] == pytest.approx(arrival_ends, abs=1e-12)
+    (b_pkt,) = [p for p in got.values() if p.src == "b"]
+    assert b_pkt.t_tx_start_s == pytest.approx(arrival_ends[-1], abs=1e-12)  # 2.268 s, not 1.6 s
+    assert b_pkt.outcome == "delivered"
+    assert b_pkt.t_arrival_s == pytest.approx(arrival_ends[-1] + _dur(8) + tau_ab, abs=1e-12)
+    s = link.stats()
+    assert (s.lost_half_duplex, s.lost_collision, s.pending) == (0, 0, 0)
+
+
 def test_half_duplex_transmitting_node_is_deaf():
     """b starts first; a starts before b's signal reaches it, so each transmits while the
     other's packet arrives: both lost, cause half_duplex."""
@@ -252,8 +292,8 @@ def test_config_limits_and_scenario_default():
     sc = load_scenario("cssn_lawnmower")
     assert sc.comms.acoustic.enabled is False
     # the link needs its surface vehicle (comms.surface.vehicle): the sea trial has it
-    on = load_scenario("cssn_sea_trial", ["comms.acoustic.bit_rate_bps=500"])
-    assert on.comms.acoustic.bit_rate_bps == 500.0
+    on = load_scenario("cssn_sea_trial", ["comms.acoustic.bit_rate_bps=4000"])
+    assert on.comms.acoustic.bit_rate_bps == 4000.0
 
 
 def test_bad_link_setting_is_one_error_naming_the_key():
