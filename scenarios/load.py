@@ -16,7 +16,7 @@ from typing import Any
 import yaml
 from pydantic import ValidationError
 
-from scenarios.schema import Scenario
+from scenarios.schema import Scenario, without_default_gps_indoors
 
 
 class ScenarioError(ValueError):
@@ -53,8 +53,10 @@ def _yaml_load(text: str) -> Any:
 def _validate(data: dict[str, Any], source: str, overrides: list[str] | tuple[str, ...] = ()) -> Scenario:
     """Validate strictly: no coercion of booleans to numbers or strings to numbers/booleans.
 
-    Runs through pydantic's JSON mode so YAML lists fill tuple fields.
+    Runs through pydantic's JSON mode so YAML lists fill tuple fields. An indoor scenario
+    gets no default GPS (:func:`scenarios.schema.without_default_gps_indoors`).
     """
+    data = without_default_gps_indoors(data)
     try:
         text = json.dumps(data, allow_nan=True)
     except (TypeError, ValueError) as exc:
