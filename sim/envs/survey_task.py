@@ -161,6 +161,23 @@ def _options(options: SurveyEnvOptions | dict | None) -> SurveyEnvOptions:
     return options
 
 
+def require_fls(scn: Scenario) -> None:
+    """The Survey task's layout (area larger than the sonar's reach, lawnmower spacing) and
+    its coverage grid are built on the FLS entry ``sensors.fls``, also with ``sonar=False``
+    (then its nominal fan, not rendered).
+
+    Raises:
+        ValueError: the scenario has no ``sensors.fls`` entry of kind ``fls``, naming the
+            scenario and what to use instead.
+    """
+    cfg = scn.sensors.get("fls")
+    if cfg is None or cfg.kind != "fls":
+        what = "no sensors.fls entry" if cfg is None else f"a sensors.fls entry of kind {cfg.kind!r}"
+        raise ValueError(f"scenario {scn.name!r} has {what}: the Survey task's area, lawnmower plan and coverage "
+                         "(also with sonar=False) follow a forward-looking sonar's fan; use a scenario with one "
+                         "(cssn_lawnmower) or add sensors.fls (kind fls)")
+
+
 class _LatestFls:
     """Mission observer keeping the latest fan image of the sonar named ``name``."""
 
@@ -228,7 +245,8 @@ class SurveyTask:
 
     Raises:
         ValueError: inconsistent options (decision interval not a multiple of the autonomy
-            period, area not larger than the sonar's reach).
+            period, area not larger than the sonar's reach), or a scenario without an FLS
+            entry ``sensors.fls`` (:func:`require_fls`).
         scenarios.load.ScenarioError: a bad scenario or override.
     """
 
@@ -236,11 +254,13 @@ class SurveyTask:
                  options: SurveyEnvOptions | dict | None = None, overrides: tuple[str, ...] = ()) -> None:
         self.options = opts = _options(options)
         over = list(overrides)
-        if not opts.sonar:
-            over.append("sensors.fls.enabled=false")
         if opts.physics_rate_hz is not None:
             over.append(f"physics.rate_hz={opts.physics_rate_hz}")
-        self.base_scenario = base = resolve_scenario(scenario, over)
+        base = resolve_scenario(scenario, over)
+        require_fls(base)
+        if not opts.sonar:
+            base = resolve_scenario(base, ["sensors.fls.enabled=false"])
+        self.base_scenario = base
         self.layout: SurveyLayout = make_layout(base, opts.area_size_ne_m, opts.area_margin_m,
                                                 start_clearance_m=opts.start_clearance_m,
                                                 min_spacing_m=opts.min_target_spacing_m)

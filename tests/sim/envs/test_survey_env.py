@@ -190,3 +190,13 @@ def test_vector_envs_sync_and_async():
         outs.append(obs)
     for k in outs[0]:
         np.testing.assert_array_equal(outs[0][k], outs[1][k])
+
+
+@pytest.mark.parametrize("sonar", [False, True])
+def test_a_scenario_without_an_fls_is_named_not_blamed_on_sonar_reach(sonar):
+    """The pool has a scanning sonar and no FLS: the Survey task says so (its layout and coverage
+    follow an FLS fan), whether or not the sonar is simulated, instead of inventing a default
+    FLS and blaming its 100 m reach on the area."""
+    with pytest.raises(ValueError, match="'pool_circular' has no sensors.fls entry") as err:
+        SurveyEnv("pool_circular", options=SurveyEnvOptions(sonar=sonar))
+    assert "reach" not in str(err.value)
