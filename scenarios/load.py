@@ -327,15 +327,18 @@ def _sensor_problems(scenario: Scenario) -> list[str]:
 
 
 def check_scenario(scenario: Scenario, source: str, overrides: list[str] | tuple[str, ...] = ()) -> None:
-    """Checks across keys that field validation cannot make: placements and files.
+    """Checks across keys that field validation cannot make: placements, files, and surveys
+    that would break the mission's own abort limits (:mod:`scenarios.mission_limits`).
 
     Raises:
         ScenarioError: listing every problem found, one per line.
     """
+    from scenarios.mission_limits import mission_limit_problems
     from scenarios.placement import placement_problems
     from scenarios.sensor_links import sensor_link_problems
 
-    problems = placement_problems(scenario) + _sensor_problems(scenario) + sensor_link_problems(scenario)
+    problems = (placement_problems(scenario) + _sensor_problems(scenario) + sensor_link_problems(scenario)
+                + mission_limit_problems(scenario))
     atr = scenario.autonomy.atr
     if atr.detector == "cnn" and atr.model_path is not None:
         model = Path(atr.model_path).expanduser()
@@ -353,8 +356,8 @@ def check_scenario(scenario: Scenario, source: str, overrides: list[str] | tuple
         for item in overrides:
             parts = item.split("=", 1)[0].strip().split(".")
             prefixes = [".".join(parts[:n]) for n in range(len(parts), 0, -1)]
-            if any(problem.startswith((p + ":", p + " (")) or f" and {p} (" in problem for p in prefixes[:-1]
-                   or prefixes):
+            if any(problem.startswith((p + ":", p + " (")) or f" and {p} (" in problem or f" {p} (" in problem
+                   for p in prefixes[:-1] or prefixes):
                 problems[k] = f"{problem} (from --set {item})"
                 break
     if problems:
