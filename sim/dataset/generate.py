@@ -200,12 +200,16 @@ def generate_dataset(out_dir: str | Path, n_frames: int, seed: int = 0, workers:
             ``if __name__ == "__main__":`` guard (:mod:`sim.spawn_guard`).
         OutputDirError: ``out_dir`` is protected, a file, not creatable, or holds files
             that are not an auvsim dataset.
+        ImportError: ``use_ray`` without Ray installed (message :data:`RAY_HINT`), before
+            anything is created.
     """
     exit_if_spawn_reimport()  # a spawned worker re-running an unguarded script: nothing written
     if n_frames < 1:
         raise DatasetError(f"--n: must be >= 1, got {n_frames}")
     if isinstance(settings, SssSettings):
         settings.check()
+    if use_ray:
+        _import_ray()  # before the output folder or a progress bar exists
     out_dir = check_output_dir(out_dir, kind="dataset", resume=True)
     (out_dir / IMAGES_DIR).mkdir(parents=True, exist_ok=True)
     (out_dir / PARTS_DIR).mkdir(exist_ok=True)
@@ -357,11 +361,17 @@ def _run_local(jobs: list[tuple], n_workers: int, bar) -> None:
             gc.unfreeze()
 
 
-def _run_ray(jobs: list[tuple], address: str | None, bar) -> None:
+def _import_ray():
+    """The ``ray`` module. Raises ImportError(:data:`RAY_HINT`) where it is not installed."""
     try:
         import ray
     except ImportError as exc:
         raise ImportError(RAY_HINT) from exc
+    return ray
+
+
+def _run_ray(jobs: list[tuple], address: str | None, bar) -> None:
+    ray = _import_ray()
     started = False
     if not ray.is_initialized():
         ray.init(address=address, include_dashboard=False, log_to_driver=False)

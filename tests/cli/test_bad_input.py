@@ -388,3 +388,48 @@ def test_the_entry_point_loads_nothing_heavy_before_its_interrupt_guard():
 def test_a_run_stopped_by_its_duration_says_so(sandbox, capsys):
     assert main(["run", "--out", "runs/d", *SHORT_RUN]) == 0
     assert "NOT FINISHED: the run reached duration_s = 4 s" in capsys.readouterr().err
+
+
+def test_dataset_ray_without_ray_fails_first_and_creates_nothing(sandbox):
+    """Without Ray, ``--ray`` is one line naming it and how to install it, exit 2, before any
+    progress bar or output folder."""
+    code = ("import sys, importlib.abc\n"
+            "class NoRay(importlib.abc.MetaPathFinder):\n"
+            "    def find_spec(self, name, path, target=None):\n"
+            "        if name.split('.')[0] == 'ray':\n"
+            "            raise ImportError('No module named ray')\n"
+            "sys.meta_path.insert(0, NoRay())\n"
+            "from sim.cli import main\n"
+            "sys.exit(main(['dataset', '--n', '2', '--out', 'runs/ds', '--ray']))\n")
+    before = _snapshot(sandbox)
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=sandbox / "work")
+    assert proc.returncode == 2, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1, proc.stderr  # no progress bar drawn first
+    assert lines[0].startswith("auvsim dataset: error: --ray") and "pip install" in lines[0]
+    assert _snapshot(sandbox) == before
+    assert not (sandbox / "work/runs").exists()
+
+
+def test_version_prints_the_package_version(capsys):
+    from importlib.metadata import version
+
+    assert main(["--version"]) == 0
+    out = capsys.readouterr().out
+    assert out.strip() == f"auvsim {version('auvsim')}"
+
+
+def test_render_fls_example_needs_out_and_leaves_the_docs_figure_alone(capsys):
+    import importlib.util
+
+    root = Path(__file__).resolve().parents[2]
+    figure = root / "docs" / "fls_frame.png"
+    before = hashlib.sha256(figure.read_bytes()).hexdigest(), figure.stat().st_mtime_ns
+    spec = importlib.util.spec_from_file_location("render_fls_example", root / "scripts" / "render_fls_example.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    capsys.readouterr()
+    assert mod.main([]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "render_fls_example.py: error:" in err[0] and "--out" in err[0], err
+    assert (hashlib.sha256(figure.read_bytes()).hexdigest(), figure.stat().st_mtime_ns) == before
