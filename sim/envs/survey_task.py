@@ -370,8 +370,9 @@ class SurveyTask:
         Returns:
             ``(observation, reward, terminated, truncated, info)``: terminated when the
             mission completes (coverage reaches ``complete_coverage_fraction``, or every
-            target is found with sonar), on a collision, or on leaving the area or the
-            water; truncated at ``max_episode_s``. info: ``t_s``, ``coverage_fraction``,
+            target is found with sonar), on a collision, or on leaving the area
+            (``area_margin_m`` past it); truncated at ``max_episode_s``. The hull cannot
+            leave the water (:class:`sim.envs.waypoint_task.WaypointTask`). info: ``t_s``, ``coverage_fraction``,
             ``targets_found``, ``new_targets``, ``collision``, ``left_area``,
             ``nav_pos_ned`` (3,) NED m, ``energy`` (integral of the mean squared normalised
             thruster command, s), ``complete``.
