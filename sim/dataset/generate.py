@@ -126,7 +126,7 @@ def _scene_job(job: tuple) -> int:
     seed, index, rz_json, settings, frame_ids, out_dir = job
     out_dir = Path(out_dir)
     if isinstance(settings, SssSettings):
-        from sim.dataset.sss_generate import SssRandomization, render_sss_scene, sss_scene_spec
+        from sim.dataset.sss_generate import render_sss_scene, sss_scene_spec
 
         rz_sss = SssRandomization.model_validate_json(rz_json)
         part = render_sss_scene(sss_scene_spec(seed, index, rz_sss, settings), seed, settings, frame_ids, out_dir)
