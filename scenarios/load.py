@@ -18,7 +18,7 @@ from typing import Any
 import yaml
 from pydantic import ValidationError
 
-from scenarios.schema import Scenario
+from scenarios.schema import Scenario, without_default_gps_indoors
 
 
 class ScenarioError(ValueError):
@@ -55,8 +55,10 @@ def _yaml_load(text: str) -> Any:
 def _validate(data: dict[str, Any], source: str, overrides: list[str] | tuple[str, ...] = ()) -> Scenario:
     """Validate strictly: no coercion of booleans to numbers or strings to numbers/booleans.
 
-    Runs through pydantic's JSON mode so YAML lists fill tuple fields.
+    Runs through pydantic's JSON mode so YAML lists fill tuple fields. An indoor scenario
+    gets no default GPS (:func:`scenarios.schema.without_default_gps_indoors`).
     """
+    data = without_default_gps_indoors(data)
     try:
         text = json.dumps(data, allow_nan=True)
     except (TypeError, ValueError) as exc:
@@ -439,23 +441,25 @@ def _atr_model_problems(scenario: Scenario) -> list[str]:
 
 
 def check_scenario(scenario: Scenario, source: str, overrides: list[str] | tuple[str, ...] = ()) -> None:
-    """Checks across keys that field validation cannot make: placements and files.
+    """Checks across keys that field validation cannot make: placements, files, and surveys
+    that would break the mission's own abort limits (:mod:`scenarios.mission_limits`).
 
     Raises:
         ScenarioError: listing every problem found, one per line.
     """
     from scenarios.comms_checks import comms_problems
+    from scenarios.mission_limits import mission_limit_problems
     from scenarios.placement import placement_problems
     from scenarios.sensor_links import sensor_link_problems
 
     problems = (placement_problems(scenario) + _sensor_problems(scenario) + sensor_link_problems(scenario)
-                + _atr_model_problems(scenario) + comms_problems(scenario))
+                + _atr_model_problems(scenario) + comms_problems(scenario) + mission_limit_problems(scenario))
     for k, problem in enumerate(problems):
         for item in overrides:
             parts = item.split("=", 1)[0].strip().split(".")
             prefixes = [".".join(parts[:n]) for n in range(len(parts), 0, -1)]
-            if any(problem.startswith((p + ":", p + " (")) or f" and {p} (" in problem for p in prefixes[:-1]
-                   or prefixes):
+            if any(problem.startswith((p + ":", p + " (")) or f" and {p} (" in problem or f" {p} (" in problem
+                   for p in prefixes[:-1] or prefixes):
                 problems[k] = f"{problem} (from --set {item})"
                 break
     if problems:

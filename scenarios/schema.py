@@ -135,6 +135,25 @@ class AutonomyConfig(StrictModel):
     tracking: TrackingConfig = TrackingConfig()
 
 
+def without_default_gps_indoors(data: Any) -> Any:
+    """A raw scenario mapping with ``sensors.gps: null`` added when ``world.indoor`` is true
+    and the scenario names no ``gps`` entry: indoors the default suite has no GPS. (An entry
+    the scenario names itself stays, and :class:`Scenario` refuses it if enabled.) The
+    loaders (:mod:`scenarios.load`) apply it before validation; other input is returned as is.
+    """
+    if not isinstance(data, dict):
+        return data
+    world = data.get("world")
+    if not (isinstance(world, dict) and world.get("indoor") is True):
+        return data
+    sensors = data.get("sensors")
+    if sensors is None:
+        sensors = {}
+    if isinstance(sensors, dict) and "gps" not in sensors:
+        data = {**data, "sensors": {**sensors, "gps": None}}
+    return data
+
+
 class Scenario(StrictModel):
     """A whole simulation scenario, loaded once from YAML."""
 
@@ -152,6 +171,15 @@ class Scenario(StrictModel):
     comms: CommsConfig = Field(CommsConfig(), description="channels between vehicles (acoustic modem link)")
     outputs: OutputsConfig = OutputsConfig()
     mcm: McmConfig = Field(McmConfig(), description="mine-countermeasures mapping on side-scan tiles (mode: full)")
+
+    @model_validator(mode="after")
+    def _no_gps_indoors(self) -> "Scenario":
+        if self.world.indoor:
+            names = [n for n, c in self.sensors.enabled().items() if c.kind == "gps"]
+            if names:
+                raise ValueError(f"sensors.{names[0]}: a GPS has no fix indoors (world.indoor is true: no sky "
+                                 f"view); remove it (sensors.{names[0]}: null) or set world.indoor: false")
+        return self
 
     @field_validator("vehicles")
     @classmethod

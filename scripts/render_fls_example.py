@@ -1,11 +1,13 @@
-"""Render one FLS frame of a scenario with its ground-truth boxes: docs/fls_frame.png.
+"""Render one FLS frame of a scenario with its ground-truth boxes into a PNG.
 
-Usage: python scripts/render_fls_example.py [SCENARIO] [--out PATH] [--window NEAR FAR]
+Usage: python scripts/render_fls_example.py [SCENARIO] --out PATH [--window NEAR FAR] [--altitude M]
+
+``--out`` is required (no default that could overwrite a file); the README's figure is
+regenerated with ``--out docs/fls_frame.png``.
 """
 
 from __future__ import annotations
 
-import argparse
 from pathlib import Path
 
 import cv2
@@ -14,20 +16,14 @@ import numpy as np
 from autonomy.frames import rot_from_euler
 from scenarios import load_scenario
 from scenarios.config.fls import FlsConfig
+from sim.cli.app import run_script, script_parser
 from sim.rng import component_rng
 from sim.sensors.fls import FlsSensor
 from sim.sensors.raycast import MujocoRayCaster
 from sim.world import build_world
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("scenario", nargs="?", default="cssn_lawnmower")
-    ap.add_argument("--out", type=Path, default=Path(__file__).resolve().parents[1] / "docs" / "fls_frame.png")
-    ap.add_argument("--window", type=float, nargs=2, default=(1.0, 30.0), metavar=("NEAR", "FAR"))
-    ap.add_argument("--altitude", type=float, default=2.0)
-    args = ap.parse_args()
-
+def render(args) -> int:
     scenario = load_scenario(args.scenario)
     cfg = FlsConfig(**{**scenario.sensors.fls.model_dump(), "range_window_m": tuple(args.window)})
     world = build_world(scenario)
@@ -51,7 +47,18 @@ def main() -> None:
     args.out.parent.mkdir(parents=True, exist_ok=True)
     cv2.imwrite(str(args.out), img, [cv2.IMWRITE_PNG_COMPRESSION, 9])
     print(f"wrote {args.out} ({sum(o.visible for o in out.truth.objects)} visible objects)")
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = script_parser("render_fls_example.py", __doc__.splitlines()[0])
+    ap.add_argument("scenario", nargs="?", default="cssn_lawnmower")
+    ap.add_argument("--out", type=Path, required=True,
+                    help="PNG to write (required; docs/fls_frame.png regenerates the README's figure)")
+    ap.add_argument("--window", type=float, nargs=2, default=(1.0, 30.0), metavar=("NEAR", "FAR"))
+    ap.add_argument("--altitude", type=float, default=2.0)
+    return run_script(ap, render, argv)
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())

@@ -113,11 +113,18 @@ class CurrentConfig(StrictModel):
 class WorldConfig(StrictModel):
     """The scene: seabed, walls, targets, movers, current, and where on Earth the mission NED
     frame sits (``origin``: latitude, longitude, ellipsoidal height; default the CSSN basin,
-    La Spezia; :mod:`autonomy.geodesy`)."""
+    La Spezia; :mod:`autonomy.geodesy`).
+
+    ``indoor: true`` is a roofed pool or tank: no sky view, so no satellite fix. Such a
+    scenario has no GPS: the default suite leaves it out and an enabled ``gps`` entry is
+    refused at load (:class:`scenarios.schema.Scenario`).
+    """
 
     origin: GeodeticOrigin = Field(GeodeticOrigin(), description="WGS-84 origin of the mission NED frame")
     seabed: SeabedConfig = SeabedConfig()
     basin: BasinConfig = BasinConfig()
+    indoor: bool = Field(False, description="a roofed pool or tank: no sky view, so no GPS (the default suite "
+                         "leaves it out; an enabled gps entry is refused)")
     targets: tuple[TargetConfig, ...] = ()
     movers: tuple[MoverConfig, ...] = Field((), description="moving targets on mocap bodies (diver, vehicle)")
     current: CurrentConfig = CurrentConfig()

@@ -48,8 +48,31 @@ class _Parser(argparse.ArgumentParser):
         return ns
 
 
+def package_version() -> str:
+    """The installed ``auvsim`` distribution's version (``pyproject.toml``), or a note that
+    it is not installed (the source tree run by path)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("auvsim")
+    except PackageNotFoundError:
+        return "unknown (not installed: pip install -e .)"
+
+
+class _VersionAction(argparse.Action):
+    """``--version``: print ``auvsim <version>`` and exit 0 (the version looked up only then)."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS, help=None):  # noqa: A002
+        super().__init__(option_strings, dest=dest, default=default, nargs=0, help=help)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(f"auvsim {package_version()}")
+        parser.exit(EXIT_OK)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="auvsim", description=(__doc__ or "").splitlines()[0])
+    parser.add_argument("--version", action=_VersionAction, help="print the version and exit")
     parser.add_argument("--debug", action="store_true",
                         help=f"print full tracebacks of internal errors (also {DEBUG_ENV}=1)")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)

@@ -35,7 +35,7 @@ from scenarios.config.fls import FlsConfig
 from sim.dataset.coco_io import (ANNOTATIONS_FILE, IMAGES_DIR, LABELS_DIR, write_atomic, write_coco, write_png_atomic,
                                  yolo_lines)
 from sim.dataset.errors import DatasetError
-from sim.dataset.sss_generate import SssSettings
+from sim.dataset.sss_generate import SssRandomization, SssSettings
 from sim.dataset.randomization import (HELDOUT_RANDOMIZATION, TRAIN_RANDOMIZATION, WIDE_RANDOMIZATION,
                                       Randomization, SceneSpec, draw_world_seed_and_seabed_kind, sample_scene)
 from sim.outputs.run_dir import check_output_dir, write_marker
@@ -125,18 +125,22 @@ def render_scene(spec: SceneSpec, seed: int, settings: RenderSettings, frame_ids
 def _scene_job(job: tuple) -> int:
     seed, index, rz_json, settings, frame_ids, out_dir = job
     out_dir = Path(out_dir)
-    rz = Randomization.model_validate_json(rz_json)
     if isinstance(settings, SssSettings):
         from sim.dataset.sss_generate import render_sss_scene, sss_scene_spec
 
-        part = render_sss_scene(sss_scene_spec(seed, index, rz, settings), seed, settings, frame_ids, out_dir)
+        rz_sss = SssRandomization.model_validate_json(rz_json)
+        part = render_sss_scene(sss_scene_spec(seed, index, rz_sss, settings), seed, settings, frame_ids, out_dir)
     else:
+        rz = Randomization.model_validate_json(rz_json)
         part = render_scene(scene_spec(seed, index, rz), seed, settings, frame_ids, out_dir)
     write_atomic(out_dir / PARTS_DIR / f"scene_{index:05d}.json", json.dumps(part))
     return len(frame_ids)
 
 
-def _manifest(n_frames: int, seed: int, rz: Randomization, settings: RenderSettings | SssSettings) -> dict:
+def _manifest(n_frames: int, seed: int, rz, settings: RenderSettings | SssSettings) -> dict:
+    """The manifest of a dataset: ``randomization`` holds the ranges its scenes were drawn
+    from (a side-scan dataset's :class:`~sim.dataset.sss_generate.SssRandomization`, ``rz``
+    as passed for FLS frames)."""
     rz_json = rz.model_dump(mode="json")
     if rz_json.get("basin") is None:
         rz_json.pop("basin", None)  # datasets without basin walls keep their earlier manifests
@@ -185,12 +189,14 @@ def merge_parts(out_dir: Path, manifest: dict) -> None:
 
 def generate_dataset(out_dir: str | Path, n_frames: int, seed: int = 0, workers: int | None = None,
                      ray_address: str | None = None, use_ray: bool = False,
-                     randomization: Randomization = TRAIN_RANDOMIZATION,
+                     randomization: Randomization | SssRandomization = TRAIN_RANDOMIZATION,
                      settings: RenderSettings | SssSettings = RenderSettings(), progress: bool = True) -> Path:
     """Write (or finish) a dataset of ``n_frames`` frames in ``out_dir``; returns the COCO file.
 
     ``settings``: :class:`RenderSettings` for FLS fan images, :class:`SssSettings` for
-    side-scan tiles (``n_frames`` tiles, ``settings.tiles_per_scene()`` per scene).
+    side-scan tiles (``n_frames`` tiles, ``settings.tiles_per_scene()`` per scene; their
+    ranges are :func:`sim.dataset.sss_generate.sss_randomization` of ``randomization``, which
+    may also be an ``SssRandomization``).
     ``workers``: local processes (default: all cores; 1 = in this process). ``use_ray``:
     distribute scenes with Ray (``ray_address`` None starts a local instance).
     Raises:
@@ -200,12 +206,19 @@ def generate_dataset(out_dir: str | Path, n_frames: int, seed: int = 0, workers:
             ``if __name__ == "__main__":`` guard (:mod:`sim.spawn_guard`).
         OutputDirError: ``out_dir`` is protected, a file, not creatable, or holds files
             that are not an auvsim dataset.
+        ImportError: ``use_ray`` without Ray installed (message :data:`RAY_HINT`), before
+            anything is created.
     """
     exit_if_spawn_reimport()  # a spawned worker re-running an unguarded script: nothing written
     if n_frames < 1:
         raise DatasetError(f"--n: must be >= 1, got {n_frames}")
     if isinstance(settings, SssSettings):
+        from sim.dataset.sss_generate import sss_randomization
+
         settings.check()
+        randomization = sss_randomization(randomization, settings)  # what the side-scan scenes draw from
+    if use_ray:
+        _import_ray()  # before the output folder or a progress bar exists
     out_dir = check_output_dir(out_dir, kind="dataset", resume=True)
     (out_dir / IMAGES_DIR).mkdir(parents=True, exist_ok=True)
     (out_dir / PARTS_DIR).mkdir(exist_ok=True)
@@ -357,11 +370,17 @@ def _run_local(jobs: list[tuple], n_workers: int, bar) -> None:
             gc.unfreeze()
 
 
-def _run_ray(jobs: list[tuple], address: str | None, bar) -> None:
+def _import_ray():
+    """The ``ray`` module. Raises ImportError(:data:`RAY_HINT`) where it is not installed."""
     try:
         import ray
     except ImportError as exc:
         raise ImportError(RAY_HINT) from exc
+    return ray
+
+
+def _run_ray(jobs: list[tuple], address: str | None, bar) -> None:
+    ray = _import_ray()
     started = False
     if not ray.is_initialized():
         ray.init(address=address, include_dashboard=False, log_to_driver=False)

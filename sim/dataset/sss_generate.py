@@ -22,11 +22,23 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from pydantic import Field, model_validator
+
+from scenarios.config.base import StrictModel
 from scenarios.config.world import SeabedConfig, TargetConfig
 from sim.dataset.coco_io import IMAGES_DIR, write_png_atomic
 from sim.dataset.errors import DatasetError
-from sim.dataset.randomization import Randomization, _object, _u
+from sim.dataset.randomization import Range, Randomization, _check_range, _object, _u
 from sim.rng import component_rng
+
+#: Side-scan altitude over the seabed as a fraction of the slant range per side: the usual
+#: survey practice (the ``mcm_survey_full`` scenario flies 8 m with a 75 m range, 11 %). Much
+#: lower, the far seabed is met at a grazing angle whose Lambert backscatter falls below the
+#: display's dynamic range (a black far field, where objects cast no visible shadow); much
+#: higher, the nadir gap (the water column, one altitude of slant range) eats the swath.
+ALTITUDE_FRACTION_OF_RANGE: tuple[float, float] = (0.10, 0.20)
+#: The transducer stays at least this deep (the seabed range is raised to fit), m.
+MIN_TRANSDUCER_DEPTH_M = 2.0
 
 
 @dataclass(frozen=True)
@@ -37,7 +49,11 @@ class SssSettings:
     tile, m (``line_length_m // tile_length_m`` tiles per scene); ``speed_mps``: speed over
     ground along the line; ``range_max_m``, ``n_bins``, ``elevation_rays``: the sonar's slant
     range per side, bins per side and rays per side; ``rate_hz`` None: the two-way travel-time
-    limit ``1500 / (2 range_max_m)``.
+    limit ``1500 / (2 range_max_m)``; ``gain_db``: display gain of the tiles, dB, before each
+    scene's random offset (``randomization.gain_db``): -10 dB, the ``mcm_survey_full``
+    scenario's, lifts the far-range seabed above the display floor (the side-scan's default
+    -25 dB leaves a Lambert seabed black over much of the far range, where far objects'
+    shadows cannot show).
     """
 
     line_length_m: float = 150.0
@@ -47,6 +63,7 @@ class SssSettings:
     n_bins: int = 500
     elevation_rays: int = 32
     rate_hz: float | None = None
+    gain_db: float = -10.0
 
     def check(self) -> None:
         """Raises DatasetError naming the option that is out of range."""
@@ -70,6 +87,73 @@ class SssSettings:
 
     def tiles_per_scene(self) -> int:
         return int(self.line_length_m // self.tile_length_m)
+
+
+class SssRandomization(StrictModel):
+    """Uniform ranges ``(low, high)`` a side-scan scene is drawn from: the part of
+    :class:`sim.dataset.randomization.Randomization` a side-scan line uses, with a side-scan
+    altitude. This, not the FLS ranges it may be made from, is what a side-scan dataset's
+    ``manifest.json`` records (``randomization``).
+
+    ``seabed_kinds`` without ``slope`` (the line is level); ``altitude_m`` of the transducer
+    over the seabed at the line's ends, m; ``n_targets`` / ``n_distractors`` per tile; the
+    object fields as in ``Randomization``. The defaults are the ``train`` preset's for the
+    default 40 m range (:func:`sss_randomization`).
+    """
+
+    seabed_kinds: tuple[str, ...] = ("plane", "rough", "ripple")
+    seabed_depth_m: Range = (10.0, 20.0)
+    seabed_reflectivity: Range = (0.15, 0.5)
+    roughness_m: Range = (0.02, 0.15)
+    roughness_corr_m: Range = (1.0, 4.0)
+    ripple_amplitude_m: Range = (0.02, 0.12)
+    ripple_wavelength_m: Range = (0.8, 3.5)
+    altitude_m: Range = (4.0, 8.0)
+    gain_db: Range = (-4.0, 4.0)
+    noise_scale: Range = (0.5, 2.0)
+    k_speckle_probability: float = Field(0.3, ge=0.0, le=1.0)
+    k_shape: Range = (1.5, 10.0)
+    n_targets: tuple[int, int] = (0, 4)
+    n_distractors: tuple[int, int] = (0, 4)
+    burial_fraction: Range = (0.0, 0.5)
+    burial_probability: float = Field(0.3, ge=0.0, le=1.0)
+    target_shapes: tuple[str, ...] = ("half_sphere", "truncated_cone", "cylinder", "box", "tyre")
+    target_size_m: Range = (0.4, 1.2)
+    target_reflectivity: Range = (0.6, 1.0)
+    distractor_size_m: Range = (0.2, 1.0)
+    distractor_reflectivity: Range = (0.15, 0.45)
+
+    @model_validator(mode="after")
+    def _ranges(self) -> "SssRandomization":
+        for name, value in self:
+            if isinstance(value, tuple) and len(value) == 2 and all(isinstance(v, (int, float)) for v in value):
+                _check_range(name, value)
+        bad = set(self.seabed_kinds) - {"plane", "rough", "ripple"}
+        if bad or not self.seabed_kinds:
+            raise ValueError(f"seabed_kinds: {sorted(bad) or 'none'} not allowed; a side-scan line takes plane, "
+                             "rough, ripple")
+        if not self.altitude_m[0] > 0.0:
+            raise ValueError(f"altitude_m: must be above 0 m, got {self.altitude_m}")
+        return self
+
+
+def sss_randomization(rz: Randomization | SssRandomization, settings: SssSettings) -> SssRandomization:
+    """The side-scan ranges of a dataset made with ``rz``: an :class:`SssRandomization` as is;
+    an FLS :class:`~sim.dataset.randomization.Randomization` (the CLI's presets) keeps its
+    seabed, echo and object ranges, drops ``slope`` from the seabed kinds, and takes the
+    side-scan altitude :data:`ALTITUDE_FRACTION_OF_RANGE` of ``settings.range_max_m`` in place
+    of its FLS altitudes, with the seabed depth raised to keep the transducer
+    :data:`MIN_TRANSDUCER_DEPTH_M` deep."""
+    if isinstance(rz, SssRandomization):
+        return rz
+    r = settings.range_max_m
+    altitude = (ALTITUDE_FRACTION_OF_RANGE[0] * r, ALTITUDE_FRACTION_OF_RANGE[1] * r)
+    floor = altitude[1] + MIN_TRANSDUCER_DEPTH_M
+    depth = (max(rz.seabed_depth_m[0], floor), max(rz.seabed_depth_m[1], floor))
+    kinds = tuple(k for k in rz.seabed_kinds if k != "slope") or ("plane",)
+    own = {"seabed_kinds", "seabed_depth_m", "altitude_m"}
+    shared = {k: getattr(rz, k) for k in SssRandomization.model_fields if k not in own}
+    return SssRandomization(seabed_kinds=kinds, seabed_depth_m=depth, altitude_m=altitude, **shared)
 
 
 @dataclass(frozen=True)
@@ -108,15 +192,14 @@ def track(spec: SssSceneSpec, settings: SssSettings, n_pings: int) -> NDArray[np
     return p
 
 
-def sample_sss_scene(index: int, rng: np.random.Generator, rz: Randomization, settings: SssSettings,
+def sample_sss_scene(index: int, rng: np.random.Generator, rz: SssRandomization, settings: SssSettings,
                      seabed_depth_fn) -> SssSceneSpec:
     """Draw side-scan scene ``index``: a line of ``settings.line_length_m`` centred on the
     origin at a random heading, altitude from ``rz.altitude_m`` (at the line's ends), and
     ``rz.n_targets`` + ``rz.n_distractors`` (per tile) objects at random along-track
     positions and ground ranges between twice the altitude and 90 % of the swath, either side."""
     world_seed = int(rng.integers(0, 2**31 - 1))
-    kinds = tuple(k for k in rz.seabed_kinds if k != "slope") or ("plane",)
-    kind = str(rng.choice(kinds))
+    kind = str(rng.choice(rz.seabed_kinds))
     L, R = settings.line_length_m, settings.range_max_m
     seabed = SeabedConfig(
         kind=kind, depth_m=_u(rng, rz.seabed_depth_m), roughness_m=_u(rng, rz.roughness_m),
@@ -151,12 +234,14 @@ def sample_sss_scene(index: int, rng: np.random.Generator, rz: Randomization, se
                         k_shape=_u(rng, rz.k_shape))
 
 
-def sss_scene_spec(seed: int, index: int, rz: Randomization, settings: SssSettings) -> SssSceneSpec:
-    """The scene ``index`` of a side-scan dataset with root ``seed`` (depends on nothing else)."""
+def sss_scene_spec(seed: int, index: int, rz: Randomization | SssRandomization,
+                   settings: SssSettings) -> SssSceneSpec:
+    """The scene ``index`` of a side-scan dataset with root ``seed`` and ranges
+    :func:`sss_randomization` ``(rz, settings)`` (depends on nothing else)."""
     from sim.dataset.generate import _seabed_depth_fn
 
-    return sample_sss_scene(index, component_rng(seed, f"dataset/sss_scene/{index}"), rz, settings,
-                            _seabed_depth_fn)
+    return sample_sss_scene(index, component_rng(seed, f"dataset/sss_scene/{index}"),
+                            sss_randomization(rz, settings), settings, _seabed_depth_fn)
 
 
 def sss_config(spec: SssSceneSpec, settings: SssSettings):
@@ -164,7 +249,7 @@ def sss_config(spec: SssSceneSpec, settings: SssSettings):
 
     base = SssConfig()
     kw = dict(range_max_m=settings.range_max_m, n_bins=settings.n_bins, elevation_rays=settings.elevation_rays,
-              gain_db=base.gain_db + spec.gain_db,
+              gain_db=settings.gain_db + spec.gain_db,
               noise_floor_db=base.noise_floor_db + 10.0 * math.log10(spec.noise_scale),
               speckle=spec.speckle, k_shape=spec.k_shape, mount_pos_body_m=(0.0, 0.0, 0.0))
     if settings.rate_hz is not None:

@@ -8,7 +8,8 @@ trajectory, bit for bit: ``gymnasium``'s ``reset(seed=s)`` and this env's ``seed
 ``numpy.random.Generator(PCG64(SeedSequence(s)))``, and each later episode continues it.
 
 Episode ends: a terminal step (Waypoint: every waypoint reached; Survey: the mission
-complete; both: collision, leaving the area or the water) is a ``LAST`` step with discount
+complete; both: collision, leaving the area; the hull cannot leave the water,
+:class:`sim.envs.waypoint_task.WaypointTask`) is a ``LAST`` step with discount
 0; the time limit (``max_episode_s``) is a ``LAST`` step with discount 1 (a truncation).
 ``step`` after a ``LAST`` step (or on a fresh env) starts a new episode, as dm_env
 specifies.

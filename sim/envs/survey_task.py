@@ -17,8 +17,11 @@ The agent replaces the mission's guidance: each action sets surge speed, yaw rat
 altitude for one decision interval; the autopilots track them at the autonomy rate.
 
 Coverage is computed onboard: a coarse grid over the survey area whose cells are marked
-when their centre on the (mapped) seabed falls inside the sonar fan at the navigation
-estimate's pose. Targets count as found when a confirmed world-model object (enough
+once the sonar fan, at the navigation estimate's poses, has swept most of the cell's
+(mapped) seabed (``coverage_samples_per_side`` squared points per cell, at least
+``coverage_min_seen_fraction`` of them; :class:`sim.envs.coverage.CoverageGrid`). The ground
+in the FLS's near-range blind zone (under and just ahead of the vehicle) is never seen
+there; it counts once the fan's near edge swept it on the way. Targets count as found when a confirmed world-model object (enough
 supporting detections) lies within ``match_radius_m`` of a true target.
 """
 
@@ -85,6 +88,10 @@ class SurveyEnvOptions:
         max_episode_s: time limit (None: the scenario's duration).
         top_k_anchors: rows of the world-model table.
         coverage_shape: (rows, cols) of the coverage grid over the survey area.
+        coverage_samples_per_side, coverage_min_seen_fraction: a cell is covered once at
+            least this fraction of its ``samples_per_side`` squared seabed points has been
+            inside the fan (1 and any fraction: its centre alone, which a cell entered from
+            the side into the near-range blind zone never reaches).
         sonar_shape: (height, width) of the downsampled fan image.
         speed_range_mps, altitude_range_m: what action -1 .. 1 maps to.
         complete_coverage_fraction: the mission is complete at this covered fraction
@@ -106,6 +113,8 @@ class SurveyEnvOptions:
     max_episode_s: float | None = None
     top_k_anchors: int = 16
     coverage_shape: tuple[int, int] = (16, 16)
+    coverage_samples_per_side: int = 3
+    coverage_min_seen_fraction: float = 0.5
     sonar_shape: tuple[int, int] = (64, 64)
     speed_range_mps: tuple[float, float] = (0.0, 1.0)
     altitude_range_m: tuple[float, float] = (1.0, 3.0)
@@ -130,6 +139,12 @@ class SurveyEnvOptions:
             shape = getattr(self, name)
             if len(shape) != 2 or min(shape) < 1:
                 raise ValueError(f"SurveyEnvOptions.{name} must be two positive ints, got {shape}")
+        if self.coverage_samples_per_side < 1:
+            raise ValueError(f"SurveyEnvOptions.coverage_samples_per_side must be >= 1, "
+                             f"got {self.coverage_samples_per_side}")
+        if not 0.0 < self.coverage_min_seen_fraction <= 1.0:
+            raise ValueError(f"SurveyEnvOptions.coverage_min_seen_fraction must be in (0, 1], "
+                             f"got {self.coverage_min_seen_fraction}")
         if not 0.0 <= self.speed_range_mps[0] < self.speed_range_mps[1]:
             raise ValueError(f"SurveyEnvOptions.speed_range_mps must satisfy 0 <= min < max, got {self.speed_range_mps}")
         if not 0.0 < self.altitude_range_m[0] <= self.altitude_range_m[1]:
@@ -159,6 +174,23 @@ def _options(options: SurveyEnvOptions | dict | None) -> SurveyEnvOptions:
                 opts[key] = tuple(opts[key])
         return SurveyEnvOptions(**opts)
     return options
+
+
+def require_fls(scn: Scenario) -> None:
+    """The Survey task's layout (area larger than the sonar's reach, lawnmower spacing) and
+    its coverage grid are built on the FLS entry ``sensors.fls``, also with ``sonar=False``
+    (then its nominal fan, not rendered).
+
+    Raises:
+        ValueError: the scenario has no ``sensors.fls`` entry of kind ``fls``, naming the
+            scenario and what to use instead.
+    """
+    cfg = scn.sensors.get("fls")
+    if cfg is None or cfg.kind != "fls":
+        what = "no sensors.fls entry" if cfg is None else f"a sensors.fls entry of kind {cfg.kind!r}"
+        raise ValueError(f"scenario {scn.name!r} has {what}: the Survey task's area, lawnmower plan and coverage "
+                         "(also with sonar=False) follow a forward-looking sonar's fan; use a scenario with one "
+                         "(cssn_lawnmower) or add sensors.fls (kind fls)")
 
 
 class _LatestFls:
@@ -228,7 +260,8 @@ class SurveyTask:
 
     Raises:
         ValueError: inconsistent options (decision interval not a multiple of the autonomy
-            period, area not larger than the sonar's reach).
+            period, area not larger than the sonar's reach), or a scenario without an FLS
+            entry ``sensors.fls`` (:func:`require_fls`).
         scenarios.load.ScenarioError: a bad scenario or override.
     """
 
@@ -236,11 +269,13 @@ class SurveyTask:
                  options: SurveyEnvOptions | dict | None = None, overrides: tuple[str, ...] = ()) -> None:
         self.options = opts = _options(options)
         over = list(overrides)
-        if not opts.sonar:
-            over.append("sensors.fls.enabled=false")
         if opts.physics_rate_hz is not None:
             over.append(f"physics.rate_hz={opts.physics_rate_hz}")
-        self.base_scenario = base = resolve_scenario(scenario, over)
+        base = resolve_scenario(scenario, over)
+        require_fls(base)
+        if not opts.sonar:
+            base = resolve_scenario(base, ["sensors.fls.enabled=false"])
+        self.base_scenario = base
         self.layout: SurveyLayout = make_layout(base, opts.area_size_ne_m, opts.area_margin_m,
                                                 start_clearance_m=opts.start_clearance_m,
                                                 min_spacing_m=opts.min_target_spacing_m)
@@ -306,7 +341,9 @@ class SurveyTask:
         self.coverage = CoverageGrid(self.area, opts.coverage_shape, self._seabed.depth_at, mount.pos_body_m,
                                      (mount.rpy_rad[0], math.radians(fls_cfg.tilt_deg), mount.rpy_rad[2]),
                                      range_min_m=g.window_near_m, range_max_m=g.window_far_m, fov_rad=g.fov_rad,
-                                     vertical_fov_rad=g.vertical_beamwidth_rad)
+                                     vertical_fov_rad=g.vertical_beamwidth_rad,
+                                     samples_per_side=opts.coverage_samples_per_side,
+                                     min_seen_fraction=opts.coverage_min_seen_fraction)
         self.targets_ned = np.array([t.pos_ned for t in scn.world.targets if t.is_target], dtype=float).reshape(-1, 3)
         self._found = np.zeros(len(self.targets_ned), dtype=bool)
 
@@ -333,8 +370,9 @@ class SurveyTask:
         Returns:
             ``(observation, reward, terminated, truncated, info)``: terminated when the
             mission completes (coverage reaches ``complete_coverage_fraction``, or every
-            target is found with sonar), on a collision, or on leaving the area or the
-            water; truncated at ``max_episode_s``. info: ``t_s``, ``coverage_fraction``,
+            target is found with sonar), on a collision, or on leaving the area
+            (``area_margin_m`` past it); truncated at ``max_episode_s``. The hull cannot
+            leave the water (:class:`sim.envs.waypoint_task.WaypointTask`). info: ``t_s``, ``coverage_fraction``,
             ``targets_found``, ``new_targets``, ``collision``, ``left_area``,
             ``nav_pos_ned`` (3,) NED m, ``energy`` (integral of the mean squared normalised
             thruster command, s), ``complete``.

@@ -35,6 +35,7 @@ from sim.envs.scenario_arg import resolve_scenario
 from sim.physics import Physics
 
 ACTION_MODES = ("wrench", "setpoint")
+
 _POS_LIMIT_M = 200.0
 _VEL_LIMIT = 5.0
 
@@ -136,6 +137,16 @@ class WaypointTask:
     Values are clipped to [``obs_low``, ``obs_high``].
 
     Action (shape ``(n_act,)``, in [-1, 1]): see :class:`WaypointEnvOptions.action_mode`.
+
+    No episode ends by leaving the water: the hull cannot. Near the surface its buoyancy is
+    scaled by its submerged fraction (:func:`sim.hydrodynamics.submerged_fraction`), so a
+    positively buoyant hull floats with its origin below the surface; lifting the origin out
+    needs an upward thrust above ``W - B f0`` (``f0`` the submerged fraction with the origin
+    at the surface): about 170 N for FeelHippo, 65 N for the BlueROV2 Heavy. The heave, in
+    either action mode (and in the Survey task), is the depth autopilot's
+    ``autonomy.control.depth.output_limit``, 20 N by default, so the hull floats (FeelHippo's
+    origin about 0.17 m deep at full up heave). An origin above the surface would count as
+    leaving the area (a scenario raising that limit).
 
     Args:
         scenario: shipped scenario name, YAML path or :class:`Scenario`.
@@ -266,8 +277,9 @@ class WaypointTask:
 
         Returns:
             ``(observation, reward, terminated, truncated, info)``: terminated when every
-            waypoint is reached, on a collision, or on leaving the area or the water;
-            truncated at ``max_episode_s``. info: ``t_s``, ``waypoints_reached``,
+            waypoint is reached, on a collision, or on leaving the area (``area_margin_m``
+            past it); truncated at ``max_episode_s``. The hull cannot leave the water
+            (see the class docstring). info: ``t_s``, ``waypoints_reached``,
             ``distance_m``, ``collision``, ``left_area``, ``pos_ned`` (3,) m, ``energy``
             (integral of the mean squared normalised thruster command, s).
 
@@ -306,7 +318,7 @@ class WaypointTask:
                 dist = float(np.linalg.norm(self._waypoints[self._wp_index] - self._pos))
         self._dist = dist
         finished = self._wp_index >= opts.n_waypoints
-        left = bool(not self.area.contains(self._pos) or self._pos[2] < 0.0)
+        left = bool(not self.area.contains(self._pos) or self._pos[2] < 0.0)  # z < 0: out of reach (class docstring)
         if collided:
             reward -= w.collision
         if left:

@@ -122,11 +122,16 @@ class RosbagRecorder:
                 from sim.sensors.fls_presets import resolve_geometry
 
                 geo = resolve_geometry(cfg)
-                self._handlers[name] = self._sonar_handler(name, geo.beam_azimuths_rad(), geo.bin_centres_m())
+                self._handlers[name] = self._sonar_handler(name, geo)
         self._tf_static(0.0, static)
 
-    def _sonar_handler(self, name: str, azimuths_rad: np.ndarray, bins_m: np.ndarray):
+    def _sonar_handler(self, name: str, geo: Any):
+        """Writer of one FLS's images (ping info from its resolved preset ``geo``:
+        :class:`sim.sensors.fls_presets.FlsGeometry`) and perception results."""
         c, frame = self.conv, f"{name}_link"
+        azimuths_rad, bins_m = geo.beam_azimuths_rad(), geo.bin_centres_m()
+        ping = dict(frequency_hz=geo.frequency_hz, sound_speed_mps=geo.sound_speed_mps,
+                    tx_beamwidth_rad=geo.vertical_beamwidth_rad, rx_beamwidth_rad=geo.beamwidth_az_rad)
 
         def handle(msg: Any) -> None:
             if isinstance(msg, PerceptionResult):
@@ -146,7 +151,7 @@ class RosbagRecorder:
             self._n_frames[name] = k + 1
             if k % self.fls_every == 0:
                 self._write(f"/auvsim/{name}/image", "marine_acoustic_msgs/msg/ProjectedSonarImage", fls_frame.t_s,
-                            c.projected_sonar_image(fls_frame, frame, azimuths_rad, bins_m))
+                            c.projected_sonar_image(fls_frame, frame, azimuths_rad, bins_m, **ping))
 
         return handle
 

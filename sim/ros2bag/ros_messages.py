@@ -50,6 +50,13 @@ def altimeter_frame_in_flu(R_bs: ArrayLike) -> FloatArray:
     return R_FLU_FRD @ np.asarray(R_bs, dtype=float) @ R_FLU_FRD @ R_FLU_ALTIMETER
 
 
+def _per_beam(value_rad: float | None, n_beams: int) -> NDArray[np.float32]:
+    """``float32[]`` of ``n_beams`` copies of ``value_rad``; empty when None (unknown)."""
+    if value_rad is None:
+        return np.zeros(0, dtype=np.float32)
+    return np.full(n_beams, value_rad, dtype=np.float32)
+
+
 def stamp_ns(t_s: float) -> int:
     """Simulation time (s) as integer nanoseconds (bag log time and header stamp)."""
     return int(round(float(t_s) * 1e9))
@@ -189,12 +196,18 @@ class RosConverter:
                      beam_velocity_covar=np.full(4, -1.0, dtype=np.float32))
 
     def projected_sonar_image(self, frame: Any, frame_id: str, beam_azimuths_rad: ArrayLike,
-                              bin_centres_m: ArrayLike, frequency_hz: float = 0.0) -> Any:
+                              bin_centres_m: ArrayLike, frequency_hz: float = 0.0, sound_speed_mps: float = 0.0,
+                              tx_beamwidth_rad: float | None = None, rx_beamwidth_rad: float | None = None) -> Any:
         """``marine_acoustic_msgs/ProjectedSonarImage`` of an ``FlsFrame``'s polar image.
 
         ``frame.polar`` is (n_beams, n_bins) uint8; the message stores it one range bin after
         the other with the beam index fastest (``data[bin * n_beams + beam]``), the layout of
         the marine_acoustic_msgs drivers. Beam directions are unit vectors in ``frame_id``.
+
+        ``ping_info``: ``frequency`` (Hz) and ``sound_speed`` (m/s, the speed the ranges were
+        computed with), 0 where unknown; per beam (``n_beams`` entries each, empty where not
+        given) ``tx_beamwidths`` the transmit fan's vertical -3 dB aperture and
+        ``rx_beamwidths`` the receive beam's horizontal -3 dB width, rad.
         """
         polar = np.asarray(frame.polar, dtype=np.uint8)
         az = np.asarray(beam_azimuths_rad, dtype=float)
@@ -208,7 +221,10 @@ class RosConverter:
         T = self.store.types
         return T["marine_acoustic_msgs/msg/ProjectedSonarImage"](
             header=self.header(frame.t_s, frame_id),
-            ping_info=build(self.store, "marine_acoustic_msgs/msg/PingInfo", frequency=float(frequency_hz)),
+            ping_info=build(self.store, "marine_acoustic_msgs/msg/PingInfo", frequency=float(frequency_hz),
+                            sound_speed=float(sound_speed_mps),
+                            tx_beamwidths=_per_beam(tx_beamwidth_rad, az.size),
+                            rx_beamwidths=_per_beam(rx_beamwidth_rad, az.size)),
             beam_directions=beams, ranges=ranges,
             image=T["marine_acoustic_msgs/msg/SonarImageData"](
                 is_bigendian=False, dtype=0, beam_count=int(az.size), data=data))

@@ -29,6 +29,7 @@ class FlsPreset:
     fan_size_px: tuple[int, int]  # (width, height)
     range_window_m: tuple[float, float] | None = None  # default displayed window
     pings_per_frame: int | None = None  # transmit cycles per image (None: not modelled, no rate limit)
+    frequency_hz: float = 0.0  # centre (operating) frequency; 0: unknown
 
 
 SOUND_SPEED_MPS = 1500.0  # nominal, for the two-way listening time of a ping
@@ -45,12 +46,14 @@ def max_frame_rate_hz(pings_per_frame: int, window_far_m: float, sound_speed_mps
 PRESETS: dict[str, FlsPreset] = {
     # BlueView M900-130: 130 x 20 deg, 100 m, 0.18 deg spacing (722 beams), 1 inch bins, 894x477 fan.
     # Beam width 1 deg and 0.25 dB/m absorption at 900 kHz are estimates.
-    "m900_130": FlsPreset(130.0, 722, 20.0, 1.0, 100.0, 0.0254, 1.0, 0.25, (894, 477)),
+    "m900_130": FlsPreset(130.0, 722, 20.0, 1.0, 100.0, 0.0254, 1.0, 0.25, (894, 477), frequency_hz=900e3),
     # ARIS 3000, 3 MHz mode: 30 x 14 deg, 128 beams, 5 m. Resolution / beam width / absorption estimates.
     # 128 beams are formed in 8 transmit cycles per frame (the SDK's ping mode 9).
-    "aris3000": FlsPreset(30.0, 128, 14.0, 0.7, 5.0, 0.003, 0.25, 0.9, (512, 512), pings_per_frame=8),
+    "aris3000": FlsPreset(30.0, 128, 14.0, 0.7, 5.0, 0.003, 0.25, 0.9, (512, 512), pings_per_frame=8,
+                          frequency_hz=3.0e6),
     # ARIS 3000, 1.8 MHz mode: 15 m (at most 6.25 frames/s over the full window).
-    "aris3000_lf": FlsPreset(30.0, 128, 14.0, 0.7, 15.0, 0.01, 0.4, 0.45, (512, 512), pings_per_frame=8),
+    "aris3000_lf": FlsPreset(30.0, 128, 14.0, 0.7, 15.0, 0.01, 0.4, 0.45, (512, 512), pings_per_frame=8,
+                             frequency_hz=1.8e6),
 }
 
 
@@ -75,6 +78,8 @@ class FlsGeometry:
     fan_size_px: tuple[int, int]
     elevation_rays: int
     azimuth_columns: int
+    frequency_hz: float = 0.0  # the preset's centre frequency (0: unknown)
+    sound_speed_mps: float = SOUND_SPEED_MPS  # the nominal speed that turns travel times into ranges
 
     @property
     def n_bins(self) -> int:
@@ -128,5 +133,5 @@ def resolve_geometry(cfg: FlsConfig) -> FlsGeometry:
         window_near_m=float(near), window_far_m=float(far), range_resolution_m=float(p.range_resolution_m),
         beamwidth_az_rad=float(np.deg2rad(p.beamwidth_az_deg)), absorption_db_per_m=float(p.absorption_db_per_m),
         fan_size_px=(int(p.fan_size_px[0]), int(p.fan_size_px[1])), elevation_rays=int(cfg.elevation_rays),
-        azimuth_columns=int(columns),
+        azimuth_columns=int(columns), frequency_hz=float(p.frequency_hz),
     )

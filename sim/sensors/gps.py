@@ -1,4 +1,4 @@
-"""GPS receiver: horizontal fixes only with the antenna at the surface."""
+"""GPS receiver: horizontal fixes only outdoors, with the antenna at the surface."""
 
 from __future__ import annotations
 
@@ -16,9 +16,16 @@ from sim.truth import VehicleTruth
 class GpsSensor(Sensor[GpsMsg]):
     """North/east (m) of the antenna at the mount point, in the mission NED frame.
 
-    No fix (``valid=False``, NaN position) while the antenna is deeper than
-    ``cfg.max_antenna_depth_m``; corruption: random dropouts, then white noise of
-    ``cfg.noise_m`` per horizontal axis.
+    A fix is valid (``valid=True``) only when both hold:
+
+    - outdoors: the satellites are in view. An indoor scenario (``world.indoor: true``,
+      a roofed pool or tank) has no GPS at all: scenario validation leaves it out of the
+      default suite and refuses an enabled one, so this sensor never runs indoors;
+    - surfaced: the antenna (the mount point) is no deeper than ``cfg.max_antenna_depth_m``
+      (L-band signals do not pass through water).
+
+    Otherwise no fix (``valid=False``, NaN position). Corruption: random dropouts
+    (``cfg.dropout_prob``), then white noise of ``cfg.noise_m`` per horizontal axis.
     """
 
     def ideal(self, truth: VehicleTruth, scene: SceneView) -> GpsMsg:

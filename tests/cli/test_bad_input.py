@@ -201,13 +201,49 @@ def test_train_atr_without_torch_says_how_to_install(sandbox):
 
 
 def test_aborted_mission_says_so_and_exits_3(sandbox, capsys):
+    # the mission clock runs out mid-survey (a survey shorter than 8 s would have finished)
     code = main(["run", "--out", "runs/ab", "--set", "duration_s=15", "--set", "autonomy.guidance.mission.start_delay_s=0",
-                 "--set", "autonomy.guidance.mission.safe_depth_min_m=0.05",
-                 "--set", "autonomy.guidance.mission.safe_depth_max_m=0.4", "--no-rerun", "--detector", "none", "--quiet"])
+                 "--set", "autonomy.guidance.mission.max_mission_time_s=8", "--no-rerun", "--detector", "none",
+                 "--quiet"])
     captured = capsys.readouterr()
     assert code == 3
-    assert "ABORTED: depth" in captured.err
+    assert "ABORTED: mission time" in captured.err
     assert (sandbox / "work/runs/ab/metrics.json").is_file()
+
+
+@pytest.mark.parametrize("scenario,overrides,named", [
+    # 0.2 m altitude: under min_altitude_m 0.5, and 3.8 m deep over the 4 m bed, under safe_depth_max_m 3.5
+    ("cssn_lawnmower", ["autonomy.guidance.survey.altitude_m=0.2"],
+     ["autonomy.guidance.survey.altitude_m (0.2 m)", "autonomy.guidance.mission.min_altitude_m (0.5 m)",
+      "3.80 m deep", "autonomy.guidance.mission.safe_depth_max_m (3.5 m)"]),
+    ("cssn_lawnmower", ["autonomy.guidance.mission.safe_depth_max_m=1.0"],
+     ["autonomy.guidance.survey.altitude_m (2 m)", "2.00 m deep", "autonomy.guidance.mission.safe_depth_max_m (1 m)"]),
+    ("cssn_lawnmower", ["autonomy.guidance.mission.safe_depth_min_m=2.5"],
+     ["autonomy.guidance.mission.safe_depth_min_m (2.5 m)"]),
+    ("tank_rectangular", ["autonomy.guidance.mission.safe_depth_max_m=1.0"],  # depth mode, 2 m
+     ["autonomy.guidance.survey.depth_m (2 m)", "autonomy.guidance.mission.safe_depth_max_m (1 m)"]),
+    ("pool_circular", ["autonomy.guidance.mission.min_altitude_m=1.6"],  # 1.5 m deep over a 3 m bed
+     ["autonomy.guidance.survey.depth_m (1.5 m)", "1.50 m above", "autonomy.guidance.mission.min_altitude_m (1.6 m)"]),
+    ("cssn_lawnmower", ["vehicle.initial_pos_ned=[8, 0, 3.0]", "autonomy.guidance.mission.safe_depth_max_m=2.5",
+                        "autonomy.guidance.survey.altitude_m=2.0"],
+     ["vehicle.initial_pos_ned", "start depth 3 m", "safe_depth_max_m (2.5 m)"]),
+])
+def test_a_survey_past_the_abort_limits_is_refused_at_load(sandbox, capsys, scenario, overrides, named):
+    """What would abort (exit 3) once the survey gets there is refused before anything runs or
+    is written, in one line per setting naming the survey key and the limits it breaks."""
+    sets = [a for o in overrides for a in ("--set", o)]
+    for argv in (["validate", scenario, *sets], ["run", scenario, "--out", "runs/lim", *sets, *SHORT_RUN[2:]]):
+        before = _snapshot(sandbox)
+        code, err = _run(argv, capsys)
+        _assert_clean_error(code, err, *named, "--set")
+        assert "would abort" in err
+        assert _snapshot(sandbox) == before
+
+
+def test_a_survey_at_its_limits_still_runs(capsys):
+    """Equal values are allowed: altitude_m at min_altitude_m, the survey depth at safe_depth_max_m."""
+    assert main(["validate", "cssn_lawnmower", "--set", "autonomy.guidance.survey.altitude_m=0.5",
+                 "--set", "autonomy.guidance.mission.safe_depth_max_m=3.5"]) == 0, capsys.readouterr().err
 
 
 def test_console_summary_is_rounded_and_says_n_a(sandbox, capsys):
@@ -352,3 +388,48 @@ def test_the_entry_point_loads_nothing_heavy_before_its_interrupt_guard():
 def test_a_run_stopped_by_its_duration_says_so(sandbox, capsys):
     assert main(["run", "--out", "runs/d", *SHORT_RUN]) == 0
     assert "NOT FINISHED: the run reached duration_s = 4 s" in capsys.readouterr().err
+
+
+def test_dataset_ray_without_ray_fails_first_and_creates_nothing(sandbox):
+    """Without Ray, ``--ray`` is one line naming it and how to install it, exit 2, before any
+    progress bar or output folder."""
+    code = ("import sys, importlib.abc\n"
+            "class NoRay(importlib.abc.MetaPathFinder):\n"
+            "    def find_spec(self, name, path, target=None):\n"
+            "        if name.split('.')[0] == 'ray':\n"
+            "            raise ImportError('No module named ray')\n"
+            "sys.meta_path.insert(0, NoRay())\n"
+            "from sim.cli import main\n"
+            "sys.exit(main(['dataset', '--n', '2', '--out', 'runs/ds', '--ray']))\n")
+    before = _snapshot(sandbox)
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=sandbox / "work")
+    assert proc.returncode == 2, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1, proc.stderr  # no progress bar drawn first
+    assert lines[0].startswith("auvsim dataset: error: --ray") and "pip install" in lines[0]
+    assert _snapshot(sandbox) == before
+    assert not (sandbox / "work/runs").exists()
+
+
+def test_version_prints_the_package_version(capsys):
+    from importlib.metadata import version
+
+    assert main(["--version"]) == 0
+    out = capsys.readouterr().out
+    assert out.strip() == f"auvsim {version('auvsim')}"
+
+
+def test_render_fls_example_needs_out_and_leaves_the_docs_figure_alone(capsys):
+    import importlib.util
+
+    root = Path(__file__).resolve().parents[2]
+    figure = root / "docs" / "fls_frame.png"
+    before = hashlib.sha256(figure.read_bytes()).hexdigest(), figure.stat().st_mtime_ns
+    spec = importlib.util.spec_from_file_location("render_fls_example", root / "scripts" / "render_fls_example.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    capsys.readouterr()
+    assert mod.main([]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "render_fls_example.py: error:" in err[0] and "--out" in err[0], err
+    assert (hashlib.sha256(figure.read_bytes()).hexdigest(), figure.stat().st_mtime_ns) == before

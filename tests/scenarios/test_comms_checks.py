@@ -43,7 +43,7 @@ def test_a_slope_deepening_past_the_field_is_refused():
     """300 m at the centre, 10 deg down towards north over a 200 m patch: the deepest corners
     (both northern ones) are at 300 + 100 tan 10 deg = 317.6 m."""
     base = ["world.basin.shape=none", "world.seabed.extent_m=200", "world.targets=[]",
-            "vehicle.initial_pos_ned=[8,0,280]", "autonomy.guidance.mission.safe_depth_max_m=290",
+            "vehicle.initial_pos_ned=[8,0,280]", "autonomy.guidance.mission.safe_depth_max_m=299",
             "world.seabed.center_ne_m=[0,0]", "world.seabed.kind=slope", "world.seabed.slope_azimuth_deg=0",
             "comms.surface.message_version=1", "world.seabed.depth_m=300"]
     deepest = 300.0 + 100.0 * math.tan(math.radians(10.0))

@@ -18,6 +18,8 @@ def test_shipped_files_load_unchanged_with_the_default_suite(name):
     if "msis" in scn.sensors:  # the scanning-sonar pool and tank scenarios replace the FLS
         dvl_free = scn.autonomy.navigation.velocity_source == "speed_model"  # the pool also drops the DVL
         removed = {"fls", "dvl"} if dvl_free else {"fls"}
+        if scn.world.indoor:  # indoors: no GPS
+            removed.add("gps")
         assert list(scn.sensors) == [d for d in DEFAULTS if d not in removed] + ["msis"]
         dump = scn.model_dump()
         # a dump lists the entries kept; the removed defaults need their nulls again

@@ -206,6 +206,20 @@ def test_sonar_image_layout_and_beams(bag_run):
     np.testing.assert_allclose(topics["/auvsim/fls/image"][0][1].ranges, geo.bin_centres_m(), rtol=1e-6)
 
 
+def test_sonar_ping_info_comes_from_the_preset(bag_run):
+    """BlueView M900-130 (the scenario's preset): 900 kHz, 130 x 20 deg fan of 1 deg beams; the
+    ranges assume 1500 m/s. Every image says so, per beam for the beam widths."""
+    scn, _, _, _, _, topics = bag_run
+    assert scn.sensors["fls"].preset == "m900_130"
+    n_beams = resolve_geometry(scn.sensors["fls"]).n_beams
+    for _, m in topics["/auvsim/fls/image"]:
+        info = m.ping_info
+        assert info.frequency == pytest.approx(900e3)
+        assert info.sound_speed == pytest.approx(1500.0)
+        np.testing.assert_allclose(info.tx_beamwidths, np.full(n_beams, np.deg2rad(20.0)), rtol=1e-6)
+        np.testing.assert_allclose(info.rx_beamwidths, np.full(n_beams, np.deg2rad(1.0)), rtol=1e-6)
+
+
 def test_detections_and_world_model_conversion():
     store = make_typestore()
     conv = RosConverter(store)

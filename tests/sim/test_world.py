@@ -48,6 +48,8 @@ def test_sloped_seabed_matches_analytic_plane(slope_deg, az_deg):
     scn = load_scenario("cssn_lawnmower", [f"world.seabed.kind=slope", f"world.seabed.slope_deg={slope_deg}",
                                            f"world.seabed.slope_azimuth_deg={az_deg}", "world.basin.shape=none",
                                            "autonomy.guidance.survey.altitude_m=0.5",
+                                           # the deep end of the slope: the survey's abort limit follows it
+                                           "autonomy.guidance.mission.safe_depth_max_m=10",
                                            "world.targets=[]"])
     world = build_world(scn, with_vehicle=False)
     cn, ce = scn.world.seabed.center_ne_m

@@ -165,7 +165,8 @@ def test_closed_loop_holds_altitude_along_a_slope():
     overrides = ["autonomy.atr.detector=classical", "sensors.fls.enabled=false", "world.seabed.kind=slope",
                  "world.seabed.slope_deg=20", "world.seabed.slope_azimuth_deg=90", "world.seabed.depth_m=10",
                  "vehicle.initial_pos_ned=[-25.0,17.0,6.0]", "vehicle.initial_rpy_deg=[0,0,0]",
-                 "sensors.altimeter.rate_hz=2", "sensors.dvl.rate_hz=5"]
+                 "sensors.altimeter.rate_hz=2", "sensors.dvl.rate_hz=5",
+                 "autonomy.guidance.mission.safe_depth_max_m=30"]  # the slope's deep end (the test steers itself)
     scn = load_scenario("cssn_lawnmower", overrides)
     seabed = scn.world.seabed
     normal = _seabed_normal(math.radians(seabed.slope_deg), math.radians(seabed.slope_azimuth_deg))

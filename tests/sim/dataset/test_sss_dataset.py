@@ -107,3 +107,70 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys, extra, named):
     assert code == 2 and "Traceback" not in err and len(err.splitlines()) == 1, err
     assert named in err and err.startswith("auvsim ")
     assert not (tmp_path / "ds").exists()
+
+
+# The CLI's side-scan tiles (default settings: 40 m range, 500 bins a side) over the flat seabed
+# where a low altitude blacks out most: 30 m tiles, two per scene, three or four targets each.
+RZ_FLAT = Randomization(seabed_kinds=("plane",), n_targets=(3, 4), n_distractors=(0, 0), burial_probability=0.0,
+                        altitude_m=(1.5, 6.0))  # the FLS altitudes, which a side-scan does not use
+S_CLI = SssSettings(line_length_m=60.0, tile_length_m=30.0)
+
+
+@pytest.fixture(scope="module")
+def cli_tiles(tmp_path_factory) -> Path:
+    d = tmp_path_factory.mktemp("sss_cli") / "ds"
+    generate_dataset(d, 4, seed=2, workers=1, randomization=RZ_FLAT, settings=S_CLI, progress=False)
+    return d
+
+
+def test_the_manifest_records_the_side_scan_randomisation(cli_tiles):
+    """Side-scan altitudes are 10-20 % of the 40 m range (4-8 m), not the FLS ranges' 1.5-6 m,
+    and no FLS-only range (tilt, range window, frames per scene) is recorded."""
+    rz = json.loads((cli_tiles / "manifest.json").read_text())["randomization"]
+    assert rz["altitude_m"] == pytest.approx([4.0, 8.0])
+    assert rz["seabed_depth_m"][0] >= 8.0 + 2.0  # the transducer stays 2 m deep at 8 m altitude
+    for fls_only in ("tilt_deg", "range_min_m", "range_max_m", "frames_per_scene", "vertical_beamwidth_deg",
+                     "step_m"):
+        assert fls_only not in rz
+    alts = [im["sonar"]["altitude_m"] for im in json.loads((cli_tiles / "annotations.json").read_text())["images"]]
+    assert all(4.0 <= a <= 8.0 for a in alts)
+
+
+def _shadow_behind(img: np.ndarray, bbox, n_bins: int, window_px: int) -> bool:
+    """The ``window_px`` bins just beyond a box in slant range (its pings) are shadow: their
+    median at most 0.35 of the insonified seabed just before it (itself at least 8 counts)."""
+    x, y, w, h = (int(round(v)) for v in bbox)
+    rows = img[y:y + max(h, 1)].astype(float)
+    if x + w <= n_bins:  # port: far range at column 0
+        beyond, near = rows[:, max(x - window_px, 0):x], rows[:, x + w:min(x + w + window_px, n_bins)]
+    else:  # starboard: far range at the last column
+        beyond, near = rows[:, x + w:x + w + window_px], rows[:, max(x - window_px, n_bins):x]
+    if beyond.size == 0 or near.size == 0:
+        return False
+    level = float(np.median(near))
+    return level >= 8.0 and float(np.median(beyond)) <= 0.35 * level
+
+
+def test_tiles_show_the_seabed_and_far_targets_cast_shadows(cli_tiles):
+    """Black (a 9 x 9 mean under 2 counts) is little more than the nadir gap, the water column
+    of one altitude (10-20 % of each side); most targets in the far half of the swath show a
+    shadow behind them, the side-scan's main cue."""
+    import cv2
+
+    coco = json.loads((cli_tiles / "annotations.json").read_text())
+    ims = {im["id"]: im for im in coco["images"]}
+    tiles = {i: cv2.imread(str(cli_tiles / im["file_name"]), cv2.IMREAD_GRAYSCALE) for i, im in ims.items()}
+    for i, img in tiles.items():
+        nadir = ims[i]["sonar"]["altitude_m"] / S_CLI.range_max_m
+        black = float(np.mean(cv2.blur(img.astype(np.float32), (9, 9)) < 2.0))
+        assert black <= nadir + 0.1, (i, black, nadir)
+    far = []
+    for a in coco["annotations"]:
+        if not a["attributes"]["is_target"]:
+            continue
+        g = ims[a["image_id"]]["sss_geometry"]
+        slant_m = abs(a["bbox"][0] + 0.5 * a["bbox"][2] - g["n_bins"]) * g["bin_size_m"]
+        if slant_m > 0.5 * S_CLI.range_max_m:
+            far.append(_shadow_behind(tiles[a["image_id"]], a["bbox"], g["n_bins"], int(round(1.0 / g["bin_size_m"]))))
+    assert len(far) >= 5
+    assert np.mean(far) >= 0.6, far

@@ -71,7 +71,7 @@ def test_coverage_grid_matches_fan_geometry():
     area = OperatingArea(np.array([-20.0, -20.0]), np.array([20.0, 20.0]), 0.0)
     grid = CoverageGrid(area, (40, 40), lambda n, e: np.full(np.shape(n), 4.0), (0.5, 0.0, 0.0), (0.0, 0.0, 0.0),
                         range_min_m=2.0, range_max_m=12.0, fov_rad=math.radians(90.0),
-                        vertical_fov_rad=math.radians(179.0))
+                        vertical_fov_rad=math.radians(179.0), samples_per_side=1)
     yaw = math.radians(30.0)
     new = grid.observe(np.array([1.0, -2.0, 1.0]), np.array([0.0, 0.0, yaw]))
     origin = np.array([1.0 + 0.5 * math.cos(yaw), -2.0 + 0.5 * math.sin(yaw), 1.0])
@@ -84,6 +84,66 @@ def test_coverage_grid_matches_fan_geometry():
     assert new == expected.sum() > 20
     assert grid.observe(np.array([1.0, -2.0, 1.0]), np.array([0.0, 0.0, yaw])) == 0
     assert grid.fraction == pytest.approx(expected.mean())
+
+
+def test_a_cell_is_covered_once_the_fan_swept_most_of_it():
+    """3 x 3 points per 2 m cell at (1/3, 1, 5/3) m of its sides; level vehicle over a flat bed,
+    so a point is in the fan iff its slant range is in the window and its bearing within half
+    the field of view. A cell counts from 5 of its 9 points on (min_seen_fraction 0.5), each
+    point once seen staying seen over later poses."""
+    area = OperatingArea(np.array([0.0, 0.0]), np.array([20.0, 20.0]), 0.0)
+    kw = dict(range_min_m=3.0, range_max_m=9.0, fov_rad=math.radians(60.0), vertical_fov_rad=math.radians(179.0))
+    grid = CoverageGrid(area, (10, 10), lambda n, e: np.full(np.shape(n), 5.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0),
+                        samples_per_side=3, **kw)
+    offs = np.array([1.0, 3.0, 5.0]) / 3.0
+    pts = np.array([[2 * i + a, 2 * j + b] for i in range(10) for j in range(10) for a in offs for b in offs])
+    seen = np.zeros(len(pts), dtype=bool)
+    poses = [np.array([1.0, 10.0, 1.0, 0.0]), np.array([6.0, 10.5, 1.0, 0.3]), np.array([14.0, 4.0, 1.0, 1.9])]
+    for n, e, d, yaw in poses:
+        rel = pts - [n, e]
+        slant = np.hypot(np.hypot(rel[:, 0], rel[:, 1]), 5.0 - d)
+        bearing = (np.arctan2(rel[:, 1], rel[:, 0]) - yaw + math.pi) % (2 * math.pi) - math.pi
+        seen |= (slant >= 3.0) & (slant <= 9.0) & (np.abs(bearing) <= math.radians(30.0))
+        before = grid.covered.copy()
+        new = grid.observe(np.array([n, e, d]), np.array([0.0, 0.0, yaw]))
+        expected = seen.reshape(100, 9).sum(axis=1) >= 5
+        np.testing.assert_array_equal(grid.covered, expected)
+        np.testing.assert_array_equal(grid.seen[~before], seen.reshape(100, 9)[~before])  # cells still open
+        assert new == np.count_nonzero(expected & ~before)
+    assert 0 < grid.fraction < 1
+    with pytest.raises(ValueError, match="samples_per_side"):
+        CoverageGrid(area, (2, 2), lambda n, e: np.full(np.shape(n), 5.0), (0, 0, 0), (0, 0, 0),
+                     samples_per_side=0, **kw)
+
+
+def _nearest_frontier_action(env: SurveyEnv) -> tuple[np.ndarray, int]:
+    """Greedy frontier policy: full speed, mid altitude, turn (at up to the max yaw rate)
+    towards the nearest cell not yet covered."""
+    cov, nav = env.coverage, env.nav
+    pos = np.asarray(nav.pos_ned[:2])
+    todo = np.flatnonzero(~cov.covered)
+    k = int(todo[np.argmin(np.linalg.norm(cov.centres_ned[todo, :2] - pos, axis=1))])
+    d = cov.centres_ned[k, :2] - pos
+    err = (math.atan2(d[1], d[0]) - float(nav.rpy_rad[2]) + math.pi) % (2 * math.pi) - math.pi
+    return np.array([1.0, float(np.clip(2.0 * err, -1.0, 1.0)), 0.0], dtype=np.float32), k
+
+
+def test_a_greedy_frontier_planner_makes_progress():
+    """The cell next to the start lies beside the vehicle, then in the FLS's near-range blind
+    zone (4.3 m at 2 m altitude) on every pass: counted by its centre it was never covered
+    and the planner circled it for ever (coverage stuck at 0.21). Counted by the area the fan
+    swept, the planner moves on across the area."""
+    e = SurveyEnv(options=SurveyEnvOptions(sonar=False, max_episode_s=100.0))
+    e.reset(seed=0)
+    goals = []
+    for _ in range(100):
+        action, goal = _nearest_frontier_action(e)
+        goals.append(goal)
+        _, _, term, trunc, info = e.step(action)
+        if term or trunc:
+            break
+    assert info["coverage_fraction"] > 0.35
+    assert len(set(goals)) >= 10
 
 
 def test_coverage_observe_many_is_observe_per_pose():
@@ -190,3 +250,13 @@ def test_vector_envs_sync_and_async():
         outs.append(obs)
     for k in outs[0]:
         np.testing.assert_array_equal(outs[0][k], outs[1][k])
+
+
+@pytest.mark.parametrize("sonar", [False, True])
+def test_a_scenario_without_an_fls_is_named_not_blamed_on_sonar_reach(sonar):
+    """The pool has a scanning sonar and no FLS: the Survey task says so (its layout and coverage
+    follow an FLS fan), whether or not the sonar is simulated, instead of inventing a default
+    FLS and blaming its 100 m reach on the area."""
+    with pytest.raises(ValueError, match="'pool_circular' has no sensors.fls entry") as err:
+        SurveyEnv("pool_circular", options=SurveyEnvOptions(sonar=sonar))
+    assert "reach" not in str(err.value)

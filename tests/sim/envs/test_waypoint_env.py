@@ -135,3 +135,32 @@ def test_bad_options_are_named():
         WaypointEnv(options=WaypointEnvOptions(decision_interval_s=0.015))
     with pytest.raises(ValueError, match="depth_range_m"):
         WaypointEnv(options=WaypointEnvOptions(depth_range_m=(1.0, 3.9)))
+
+
+@pytest.mark.parametrize("scenario", ["cssn_lawnmower", "tank_rectangular"])  # FeelHippo, BlueROV2 Heavy
+def test_the_hull_cannot_leave_the_water_and_no_termination_says_it_can(scenario):
+    """Lifting the origin out needs W - B f0 upward (f0: the submerged fraction of the hull
+    height with the origin at the surface); the env's heave is the depth autopilot's output
+    limit, far below. Full up heave for 40 s: the hull floats, the episode goes on. So the
+    documented terminations are waypoints, collision and the area, not the water."""
+    from sim.envs import dm
+    from sim.envs.survey_task import SurveyTask
+    from sim.envs.waypoint_task import WaypointTask
+
+    e = WaypointEnv(scenario, options=WaypointEnvOptions(action_mode="wrench", max_episode_s=40.0,
+                                                         current_speed_max_mps=0.0))
+    p = e.task.params
+    h, cz = float(p.hull.size_m[2]), float(p.hull.center_body_m[2])
+    f0 = min(max((cz + 0.5 * h) / h, 0.0), 1.0)
+    heave_n = e.scenario.autonomy.control.depth.output_limit
+    assert p.weight_n - p.buoyancy_n * f0 > 3.0 * heave_n
+    e.reset(seed=0)
+    depths = []
+    for _ in range(int(40.0 / e.decision_interval_s)):
+        _, _, term, trunc, info = e.step(np.array([0.0, 0.0, -1.0, 0.0], dtype=np.float32))
+        depths.append(float(info["pos_ned"][2]))
+        assert not term
+    assert trunc and min(depths) > 0.02 and depths[-1] < 0.5  # at the surface, floating
+    for doc in (WaypointTask.step.__doc__, SurveyTask.step.__doc__, dm.__doc__):
+        text = " ".join(doc.split())
+        assert "or the water" not in text and "cannot leave the water" in text
