@@ -324,31 +324,6 @@ def _sensor_problems(scenario: Scenario) -> list[str]:
     return problems
 
 
-def _timing_problems(scenario: Scenario) -> list[str]:
-    """Rates the loop cannot honour (:mod:`sim.mission`): the autonomy ticks every whole
-    number of physics steps, and the extra vehicles' sensors and autonomy are polled once per
-    autonomy tick. (The AUV's own sensors may run at any rate: each fires at its own time,
-    between physics steps too.)"""
-    problems = []
-    physics_hz, auto_hz = scenario.physics.rate_hz, scenario.autonomy.rate_hz
-    ratio = physics_hz / auto_hz
-    if round(ratio) < 1 or abs(ratio - round(ratio)) > 1e-9 * ratio:
-        steps = max(round(ratio), 1)
-        problems.append(f"autonomy.rate_hz: {auto_hz:g} Hz must divide physics.rate_hz = {physics_hz:g} Hz (the "
-                        f"autonomy ticks every whole number of physics steps; {physics_hz / steps:g} Hz would run); "
-                        f"allowed: {physics_hz:g} / n for n = 1, 2, ...")
-    for name, vcfg in scenario.vehicles.items():
-        for key in ("gnss", "compass", "usbl", "autonomy"):
-            cfg = getattr(vcfg, key, None)
-            if cfg is None or not getattr(cfg, "enabled", True):
-                continue
-            if cfg.rate_hz > auto_hz * (1.0 + 1e-9):
-                problems.append(f"vehicles.{name}.{key}.rate_hz: {cfg.rate_hz:g} Hz exceeds autonomy.rate_hz = "
-                                f"{auto_hz:g} Hz (an extra vehicle is ticked once per autonomy period); allowed: "
-                                f"at most {auto_hz:g}")
-    return problems
-
-
 def check_scenario(scenario: Scenario, source: str, overrides: list[str] | tuple[str, ...] = ()) -> None:
     """Checks across keys that field validation cannot make: placements and files.
 
@@ -357,9 +332,10 @@ def check_scenario(scenario: Scenario, source: str, overrides: list[str] | tuple
     """
     from scenarios.placement import placement_problems
     from scenarios.sensor_links import sensor_link_problems
+    from scenarios.timing_checks import timing_problems
 
     problems = (placement_problems(scenario) + _sensor_problems(scenario) + sensor_link_problems(scenario)
-                + _timing_problems(scenario))
+                + timing_problems(scenario))
     atr = scenario.autonomy.atr
     if atr.detector == "cnn" and atr.model_path is not None:
         model = Path(atr.model_path).expanduser()

@@ -3,7 +3,9 @@
 :class:`Mission` runs the loop; :class:`sim.physics.Physics` owns the world and
 :func:`sim.mission_build.build_mission_parts` builds the sensors and the onboard stack.
 :meth:`Mission.step` advances one autonomy period: physics substeps, the sensors due in
-that time, delivery of the messages whose latency has passed, one autonomy tick. Gym
+that time (each at its own time, the true state interpolated between the steps for a firing
+between them; every sensor first fires at t = 0, in :meth:`Mission.reset`), delivery of the
+messages whose latency has passed, one autonomy tick. Gym
 environments reuse this stepping API and may override guidance with their own setpoints.
 
 Delivery dispatches on the message's type (the navigation filter's handlers, the state
@@ -249,17 +251,17 @@ class Mission:
         for obs in self.observers:
             obs.on_start(info)
         self._truth = self.physics.truth()
-        # t = 0: every sensor's first firing, the extra vehicles' first tick, the messages
-        # due now (no latency) and, when tracking, the first vehicle pose (the start of the
-        # pose history, so that fixes measured before the first autonomy period find a pose)
+        # t = 0: every sensor's first firing (delivered, as every message, at the first
+        # autonomy tick at or after its delivery time: the autonomy first runs one period
+        # on, so the estimate here is still the prior), the extra vehicles' first tick and,
+        # when tracking, the first vehicle pose (the prior: the start of the pose history,
+        # so that fixes measured before the first autonomy period find a pose)
         due = parts.scheduler.take_due(0.0)
         if due:
             self._fire_all(due, self._truth)
         for runner in self.surface_vehicles.values():
             runner.tick(self._truth.pos_ned, auv_truth=self._truth)
         self._others = self._other_truths()
-        for name, msg in parts.scheduler.pop_ready(0.0):
-            self._deliver(name, msg)
         nav = self.nav_filter.estimate()
         if parts.tracking is not None:
             for res in parts.tracking.on_nav(nav):
@@ -442,7 +444,7 @@ class Mission:
     def _deliver(self, name: str, msg: Any) -> None:
         self._delivered[name] += 1
         timer = self.timer
-        if isinstance(msg, FrameTicket):  # pipelined: perception with the estimate of now, on a worker
+        if isinstance(msg, FrameTicket):  # pipelined: perception with the estimate of now (moved to the capture time)
             self._pipeline.deliver(name, msg, self.nav_filter.estimate())
             return
         with timer.stage("nav_filter"):
