@@ -451,9 +451,11 @@ def check_scenario(scenario: Scenario, source: str, overrides: list[str] | tuple
     from scenarios.mission_limits import mission_limit_problems
     from scenarios.placement import placement_problems
     from scenarios.sensor_links import sensor_link_problems
+    from scenarios.timing_checks import timing_problems
 
     problems = (placement_problems(scenario) + _sensor_problems(scenario) + sensor_link_problems(scenario)
-                + _atr_model_problems(scenario) + comms_problems(scenario) + mission_limit_problems(scenario))
+                + _atr_model_problems(scenario) + comms_problems(scenario) + mission_limit_problems(scenario)
+                + timing_problems(scenario))
     for k, problem in enumerate(problems):
         for item in overrides:
             parts = item.split("=", 1)[0].strip().split(".")

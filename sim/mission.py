@@ -3,7 +3,9 @@
 :class:`Mission` runs the loop; :class:`sim.physics.Physics` owns the world and
 :func:`sim.mission_build.build_mission_parts` builds the sensors and the onboard stack.
 :meth:`Mission.step` advances one autonomy period: physics substeps, the sensors due in
-that time, delivery of the messages whose latency has passed, one autonomy tick. Gym
+that time (each at its own time, the true state interpolated between the steps for a firing
+between them; every sensor first fires at t = 0, in :meth:`Mission.reset`), delivery of the
+messages whose latency has passed, one autonomy tick. Gym
 environments reuse this stepping API and may override guidance with their own setpoints.
 
 Delivery dispatches on the message's type (the navigation filter's handlers, the state
@@ -43,7 +45,7 @@ from sim.sensors.base import SceneView, Sensor
 from sim.sonar_pipeline import FrameTicket, SonarPipeline
 from sim.stage_timer import NULL_TIMER, StageTimer
 from sim.surface_runner import SurfaceVehicleRunner
-from sim.truth import VehicleTruth
+from sim.truth import VehicleTruth, interpolate_truth
 
 __all__ = ["NAV_SOURCES", "Mission", "MissionSummary"]
 
@@ -257,8 +259,23 @@ class Mission:
         for obs in self.observers:
             obs.on_start(info)
         self._truth = self.physics.truth()
+        # t = 0: every sensor's first firing (delivered, as every message, at the first
+        # autonomy tick at or after its delivery time: the autonomy first runs one period
+        # on, so the estimate here is still the prior), the extra vehicles' first tick and,
+        # when tracking, the first vehicle pose (the prior: the start of the pose history,
+        # so that fixes measured before the first autonomy period find a pose)
+        due = parts.scheduler.take_due(0.0)
+        if due:
+            self._fire_all(due, self._truth)
+        for runner in self.surface_vehicles.values():
+            runner.tick(self._truth.pos_ned, auv_truth=self._truth)
         self._others = self._other_truths()
-        return self._record(self._truth, self.nav_filter.estimate(), "idle")
+        nav = self.nav_filter.estimate()
+        if parts.tracking is not None:
+            for res in parts.tracking.on_nav(nav):
+                for obs in self.observers:
+                    obs.on_message(parts.sonar.name, res)
+        return self._record(self._truth, nav, "idle")
 
     @property
     def done(self) -> bool:
@@ -269,17 +286,18 @@ class Mission:
         physics, scheduler, timer = self.physics, self.parts.scheduler, self.timer
         truth = self._truth
         with timer.stage("physics"):
-            physics_step, scheduler_due, cmd = physics.step, scheduler.due, self.thruster_cmd
+            physics_step, take_due, cmd = physics.step, scheduler.take_due, self.thruster_cmd
+            dt, eps = physics.dt_s, scheduler.eps_s
             for _ in range(self.substeps):
-                physics_step(cmd)
-                due = scheduler_due(physics.t_s)
-                if due:
-                    with timer.stage("truth"):
+                t_end = (physics.n_steps + 1) * dt
+                if scheduler.next_fire_s < t_end - eps and truth.t_s != physics.t_s:
+                    with timer.stage("truth"):  # a firing inside this step: the state at its start
                         truth = physics.truth()
-                        scene = physics.scene()
-                    for name in due:
-                        with timer.stage(f"sensor:{name}"):
-                            self._fire(name, truth, scene)
+                before = truth
+                physics_step(cmd)
+                due = take_due(physics.t_s)
+                if due:
+                    truth = self._fire_all(due, before)
         if truth.t_s != physics.t_s:  # not already taken for a sensor on the last substep
             with timer.stage("truth"):
                 truth = physics.truth()
@@ -392,6 +410,34 @@ class Mission:
                               fsm.abort_reason or "", fsm.mode, MappingProxyType(dict(self._delivered)))
 
     # -- internals -------------------------------------------------------------------
+    def _fire_all(self, due: list[tuple[float, str]], before: VehicleTruth) -> VehicleTruth:
+        """Fire the sensors of ``due`` (``(firing time, name)`` in time order, all within the
+        step just taken, from ``before.t_s`` to now), each with the true state and the scene
+        at its own time: the state now for a firing now, else the state interpolated between
+        ``before`` and now (:func:`sim.truth.interpolate_truth`). Returns the state now."""
+        physics, timer, eps = self.physics, self.timer, self.parts.scheduler.eps_s
+        with timer.stage("truth"):
+            now = physics.truth()
+        inside = [(t, name) for t, name in due if t < now.t_s - eps]
+        at_now = [name for t, name in due if t >= now.t_s - eps]
+        k = 0
+        while k < len(inside):  # firings between the steps, grouped by time
+            t_fire = inside[k][0]
+            with timer.stage("truth"):
+                truth = interpolate_truth(before, now, t_fire)
+                scene = physics.scene(t_fire)
+            while k < len(inside) and inside[k][0] == t_fire:
+                with timer.stage(f"sensor:{inside[k][1]}"):
+                    self._fire(inside[k][1], truth, scene)
+                k += 1
+        if at_now:
+            with timer.stage("truth"):
+                scene = physics.scene()
+            for name in at_now:
+                with timer.stage(f"sensor:{name}"):
+                    self._fire(name, now, scene)
+        return now
+
     def _fire(self, name: str, truth: VehicleTruth, scene: SceneView) -> None:
         pipeline = self._pipeline
         if pipeline is not None and name == self.parts.sonar.name:
@@ -406,7 +452,7 @@ class Mission:
     def _deliver(self, name: str, msg: Any) -> None:
         self._delivered[name] += 1
         timer = self.timer
-        if isinstance(msg, FrameTicket):  # pipelined: perception with the estimate of now, on a worker
+        if isinstance(msg, FrameTicket):  # pipelined: perception with the estimate of now (moved to the capture time)
             self._pipeline.deliver(name, msg, self.nav_filter.estimate())
             return
         with timer.stage("nav_filter"):

@@ -122,7 +122,7 @@ def build_mission_parts(scenario: Scenario, physics: Physics, seed: int, *, nav_
     if nav_source not in NAV_SOURCES:
         raise ValueError(f"nav_source must be one of {NAV_SOURCES}, got {nav_source!r}")
     sensors = build_sensors(scenario.sensors.enabled(), physics.site_pos_body, seed)
-    scheduler = SensorScheduler(eps_s=0.25 * physics.dt_s)
+    scheduler = SensorScheduler(eps_s=1e-6 * physics.dt_s)  # exact times: only rounding absorbed
     for name, sensor in sensors.items():
         scheduler.add(name, sensor.rate_hz, sensor.latency_s)
 

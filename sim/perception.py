@@ -17,6 +17,7 @@ from autonomy.atr import build_detector
 from autonomy.frames import euler_from_rot
 from autonomy.localization import fls_visibility, localize
 from autonomy.messages import Detection, NavEstimate
+from autonomy.navigation.pose_at import estimate_at
 from autonomy.world_model import CLASS_NAMES, PMHA
 from autonomy.world_model.surface import SonarFootprint
 from scenarios.schema import Scenario
@@ -94,7 +95,9 @@ class Perception:
         if detections is None:
             detections = self.detector.detect(frame)
 
-        nav_loc = self._truth_nav(render) if self.nav_source == "truth" else nav
+        # the pose at the frame's capture: the true one, or the estimate (of its delivery,
+        # latency and a tick later) moved back to the capture time
+        nav_loc = self._truth_nav(render) if self.nav_source == "truth" else estimate_at(nav, frame.t_s)
         localized = [localize(d, nav_loc, self.fls.mount_pos_body_m, self.fls.mount_rpy_rad, self.loc_cfg,
                               geometry=frame.geometry) for d in detections]
         g = self.fls.geometry

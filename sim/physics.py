@@ -3,7 +3,8 @@
 :class:`Physics` is what the mission loop, the gym environments, the physics benchmark and
 the scene tests step. Per physics step (:meth:`Physics.step`): the thrusters and the
 hydrodynamic wrench are updated with the present current (:meth:`VehicleDynamics.step_inputs`),
-MuJoCo integrates one step, the clock advances and the current evolves.
+MuJoCo integrates one step, the clock advances and the current evolves. The clock is the
+step count times the step (``t_s = n dt``), not a running sum, so it does not drift.
 
 More than one vehicle: the scenario's ``vehicle`` is the AUV (``physics.vehicle``, the
 default of every readout); ``scenario.vehicles`` adds surface vessels
@@ -57,7 +58,8 @@ class Physics:
         movers: the moving targets (mocap bodies) and their seeded trajectories.
         caster: ray caster over the acoustic geoms (the hull excluded).
         dt_s: physics step, s.
-        t_s: simulated time since :meth:`reset`, s.
+        n_steps: physics steps since :meth:`reset`.
+        t_s: simulated time since :meth:`reset`, s (``n_steps * dt_s``).
     """
 
     def __init__(self, scenario: Scenario, *, seed: int | None = None) -> None:
@@ -84,6 +86,7 @@ class Physics:
         self.current: OceanCurrent
         self.reseed(scenario.seed if seed is None else seed)
         self._moving = self._moving_objects()
+        self.n_steps = 0
         self.t_s = 0.0
 
     # ------------------------------------------------------------------ set-up
@@ -122,6 +125,7 @@ class Physics:
         if self.movers:
             self.movers.apply(self.data, 0.0)
         mujoco.mj_forward(self.model, self.data)
+        self.n_steps = 0
         self.t_s = 0.0
 
     # ------------------------------------------------------------------ stepping
@@ -134,7 +138,8 @@ class Physics:
         if self.movers:
             self.movers.apply(self.data, self.t_s)
         mujoco.mj_step(self.model, self.data)
-        self.t_s += self.dt_s
+        self.n_steps += 1
+        self.t_s = self.n_steps * self.dt_s
         self.current.step(self.dt_s)
 
     def advance(self, thruster_cmd: ArrayLike, n_steps: int) -> bool:
@@ -152,7 +157,8 @@ class Physics:
             if movers is not None:
                 movers.apply(data, self.t_s)
             mj_step(model, data)
-            self.t_s += dt
+            self.n_steps += 1
+            self.t_s = self.n_steps * dt
             current_step(dt)
             if data.ncon and not contact:
                 contact = self.vehicle_in_contact()
@@ -192,14 +198,18 @@ class Physics:
         except KeyError:
             raise KeyError(f"no vehicle {name!r}; vehicles: {', '.join(self.vehicles)}") from None
 
-    def scene(self) -> SceneView:
-        """What sensors see now: the ray caster and the scene objects at their present poses
-        (movers are placed at the present time first: ``mj_step`` leaves geom poses at the
-        start of the step)."""
+    def scene(self, t_s: float | None = None) -> SceneView:
+        """What sensors see at ``t_s`` (default: now): the ray caster and the scene objects
+        with the movers placed at that time (placed first: ``mj_step`` leaves geom poses at
+        the start of the step). A time within the last step is a sensor firing between two
+        steps; the vehicles' own bodies stay where the step left them (the hull is not in
+        the caster; other vehicles' hulls are off by at most their motion in one step), and
+        the next step places the movers again."""
+        t = self.t_s if t_s is None else float(t_s)
         if self.movers:
-            self.movers.apply(self.data, self.t_s)
+            self.movers.apply(self.data, t)
             mujoco.mj_kinematics(self.model, self.data)
-        return SceneView(self.t_s, self.caster, self.objects())
+        return SceneView(t, self.caster, self.objects())
 
     def objects(self) -> tuple[SceneObject, ...]:
         """Scene objects with their present centroid and base (objects on moving bodies follow them)."""

@@ -4,6 +4,13 @@ Sensors fire at their own rate on the physics clock; each message is delivered t
 autonomy its latency later, in order of delivery time (ties: in the order pushed). A latency
 is a fixed number of seconds or a function of the message (an acoustic fix is late by its
 travel time). Sensors keep no clocks: the scheduler owns timing.
+
+Firing times are exact: the n-th firing of a channel (n = 0, 1, ...) is at
+``first_fire_s + n / rate_hz``, computed from the count (no accumulated floating step, so no
+drift over a long run), and no firing is skipped: a sensor faster than the physics step fires
+several times in one step, each firing at its own time (:meth:`SensorScheduler.take_due`
+gives them in time order; the mission loop moves the true state to each of these times,
+:func:`sim.truth.interpolate_truth`).
 """
 
 from __future__ import annotations
@@ -20,22 +27,30 @@ Latency = float | Callable[[Any], float]
 @dataclass
 class _Channel:
     name: str
-    period_s: float
+    order: int  # position in the table: breaks ties between channels firing at the same time
+    rate_hz: float
     latency_s: Callable[[Any], float]
-    next_fire_s: float
+    first_fire_s: float
+    n_fired: int = 0
+
+    @property
+    def next_fire_s(self) -> float:
+        return self.first_fire_s + self.n_fired / self.rate_hz
 
 
 class SensorScheduler:
     """Tracks when each named sensor is due and queues messages until delivery.
 
     Args:
-        eps_s: tolerance when comparing clocks (a fraction of the physics step).
+        eps_s: tolerance when comparing clocks, s: a firing or delivery at most ``eps_s``
+            after the time asked is due then (the mission uses a millionth of the physics
+            step: only rounding of exact times is absorbed).
     """
 
     def __init__(self, eps_s: float = 1e-9) -> None:
         self.eps_s = eps_s
         self._channels: dict[str, _Channel] = {}
-        self._next_any_s = math.inf  # earliest next_fire_s of any channel
+        self._next_any_s = math.inf  # earliest next firing of any channel
         # (deliver_s, seq, name, message): ordered by time, then push order (seq is unique)
         self._queue: list[tuple[float, int, str, Any]] = []
         self._seq = 0
@@ -62,28 +77,47 @@ class SensorScheduler:
             if not fixed >= 0.0:
                 raise ValueError(f"sensor {name!r}: latency_s must be >= 0, got {latency_s}")
             latency = lambda _msg, _fixed=fixed: _fixed  # noqa: E731
-        self._channels[name] = _Channel(name, 1.0 / rate_hz, latency, first_fire_s)
+        order = self._channels[name].order if name in self._channels else len(self._channels)
+        self._channels[name] = _Channel(name, order, float(rate_hz), latency, float(first_fire_s))
         self._next_any_s = min(ch.next_fire_s for ch in self._channels.values())
 
     def reset(self, t_s: float = 0.0) -> None:
+        """Empty the queue; every channel fires next (its firing 0) at ``t_s``."""
         self._queue.clear()
         self._seq = 0
         for ch in self._channels.values():
-            ch.next_fire_s = t_s
-        self._next_any_s = t_s
+            ch.first_fire_s = float(t_s)
+            ch.n_fired = 0
+        self._next_any_s = float(t_s) if self._channels else math.inf
 
-    def due(self, t_s: float) -> list[str]:
-        """Names of the sensors that fire at time ``t_s`` (each advances its clock)."""
-        if self._next_any_s > t_s + self.eps_s:  # most physics steps: nothing due
+    @property
+    def next_fire_s(self) -> float:
+        """Time of the earliest firing not yet taken, s (inf without channels)."""
+        return self._next_any_s
+
+    def take_due(self, t_s: float) -> list[tuple[float, str]]:
+        """Every firing at or before ``t_s`` not yet taken, as ``(firing time s, name)`` in
+        time order (ties: in the order the channels were added); each channel's clock
+        advances past them. A channel faster than the interval since the last call fires
+        once per period in it (no firing is skipped)."""
+        limit = t_s + self.eps_s
+        if self._next_any_s > limit:  # most physics steps: nothing due
             return []
         out = []
         for ch in self._channels.values():
-            if ch.next_fire_s <= t_s + self.eps_s:
-                out.append(ch.name)
-                # Catch up without bursts if a sensor was starved.
-                ch.next_fire_s += ch.period_s * max(1, math.floor((t_s - ch.next_fire_s) / ch.period_s + 1e-9) + 1)
+            t_fire = ch.next_fire_s
+            while t_fire <= limit:
+                out.append((t_fire, ch.order, ch.name))
+                ch.n_fired += 1
+                t_fire = ch.next_fire_s
         self._next_any_s = min((ch.next_fire_s for ch in self._channels.values()), default=math.inf)
-        return out
+        out.sort()
+        return [(t, name) for t, _, name in out]
+
+    def due(self, t_s: float) -> list[str]:
+        """Names of the firings at or before ``t_s`` not yet taken, in time order (a channel
+        appears once per firing); see :meth:`take_due`, which also gives the times."""
+        return [name for _, name in self.take_due(t_s)]
 
     def push(self, name: str, t_s: float, message: Any) -> None:
         """Queue ``message`` sampled at ``t_s`` for delivery after the channel's latency.

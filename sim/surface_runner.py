@@ -104,8 +104,10 @@ class SurfaceVehicleRunner:
     def reset(self) -> None:
         """Clocks to 0 (call after :meth:`Physics.reset`)."""
         self.autonomy.reset()
-        self._next_s = {entry: 0.0 for entry in self.sensors}
-        self._next_tick_s = 0.0
+        # index of each sensor's next firing (the k-th at k / rate_hz) and of the next
+        # autonomy tick: counts, not running sums of periods (no drift)
+        self._next_k = {entry: 0 for entry in self.sensors}
+        self._next_tick_k = 0
         self._gnss: list[GpsMsg] = []
         self._compass: ImuMsg | None = None
         self._usbl_in_flight: list[tuple[float, UsblMsg]] = []
@@ -125,6 +127,11 @@ class SurfaceVehicleRunner:
         """At the physics' present time: fire the sensors that are due and, when the
         autonomy is due, run it with what arrived and hold its thruster commands.
 
+        The mission ticks this once per autonomy period (and at t = 0), so each sensor and
+        the autonomy fire at most once per tick, at the tick's time: their rates may not
+        exceed the mission's ``autonomy.rate_hz`` (the scenario is refused at load otherwise)
+        and a rate that does not divide it fires at the first tick at or after each due time.
+
         Args:
             target_pos_ned: the followed vehicle's latest position, NED m, or None; used
                 when the vessel has no USBL.
@@ -135,7 +142,7 @@ class SurfaceVehicleRunner:
         eps = 1e-9
         truth = None
         for entry, sensor in self.sensors.items():
-            if t + eps >= self._next_s[entry]:
+            if t + eps >= self._next_k[entry] / sensor.rate_hz:
                 truth = self.physics.truth(self.name) if truth is None else truth
                 if entry == "usbl":
                     if auv_truth is not None:
@@ -148,12 +155,11 @@ class SurfaceVehicleRunner:
                         self._last_gnss = gnss
                 else:
                     self._compass = sensor.measure(truth)
-                period = 1.0 / sensor.rate_hz
-                self._next_s[entry] += period * max(1, math.floor((t + eps - self._next_s[entry]) / period) + 1)
-        if t + eps < self._next_tick_s:
+                self._next_k[entry] = math.floor((t + eps) * sensor.rate_hz) + 1
+        rate = self.cfg.autonomy.rate_hz
+        if t + eps < self._next_tick_k / rate:
             return
-        period = 1.0 / self.cfg.autonomy.rate_hz
-        self._next_tick_s += period * max(1, math.floor((t + eps - self._next_tick_s) / period) + 1)
+        self._next_tick_k = math.floor((t + eps) * rate) + 1
         if self.usbl_fixer is not None:
             target_pos_ned = self._take_usbl(t)
         cmd = self.autonomy.update(t, self._gnss, self._compass, target_pos_ned)

@@ -51,6 +51,7 @@ from autonomy.msis.config import MsisLocalizationConfig
 from autonomy.msis.fuzzy_segments import FuzzySegment, FuzzySegmentMap
 from autonomy.msis.line_segments import fit_line, iepf_split
 from autonomy.msis.sonar_buffer import SonarBuffer
+from autonomy.navigation.pose_at import estimate_at
 
 FloatArray = NDArray[np.float64]
 
@@ -122,9 +123,12 @@ class MsisLocalizer:
         self.last_walls: dict[int, FuzzySegment] = {}
 
     def process(self, ping: MsisPing, nav: NavEstimate) -> PositionFixMsg | None:
-        """Add a ping; return a fix when one is due and found."""
+        """Add a ping; return a fix when one is due and found. ``nav`` (of the filter's
+        time, near the ping's) is moved to the ping time first, so that the points, the map's
+        motion and the fix (stamped with the ping time) all use the pose of that time."""
         if self.cfg.method == "none":
             return None
+        nav = estimate_at(nav, ping.t_s)
         self.buffer.add_ping(ping, nav)
         if self.cfg.method == "walls":
             self._move_map(ping.t_s, nav)

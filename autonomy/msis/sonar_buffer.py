@@ -2,7 +2,8 @@
 
 Each ping gives its echo ranges above an intensity threshold (the first strong return's leading
 edge or its centre, or all local peaks); each is placed where the head saw it, with the navigation estimate of the ping
-time (extrapolated from the estimate's own time with its velocity): body point
+time (moved from the estimate's own time with its velocity and body rates,
+:func:`autonomy.navigation.pose_at.pose_at`): body point
 ``mount + R_bs Rz(angle) [r, 0, 0]`` (the head frame of :mod:`autonomy.sonar_frame` turned by
 the head angle), then ``pos + R(rpy) p_body`` in NED. Points older than ``max_age_s`` age out.
 Stored in the navigation frame, the points are the vehicle-centred consistent local map of the
@@ -19,6 +20,7 @@ from numpy.typing import NDArray
 
 from autonomy.frames import rot_from_euler, rot_z
 from autonomy.messages import MsisPing, NavEstimate
+from autonomy.navigation.pose_at import pose_at
 from autonomy.sonar_frame import sonar_to_body_rotation
 
 FloatArray = NDArray[np.float64]
@@ -111,8 +113,8 @@ class SonarBuffer:
         if R_bh is None:
             R_bh = sonar_to_body_rotation(ping.mount_rpy_rad) @ rot_z(ping.angle_rad)
             self._R_head[key] = R_bh
-        R_nb = rot_from_euler(*nav.rpy_rad)
-        pos = np.asarray(nav.pos_ned, dtype=float) + R_nb @ np.asarray(nav.vel_body_mps) * (ping.t_s - nav.t_s)
+        pos, rpy = pose_at(nav, ping.t_s)
+        R_nb = rot_from_euler(*rpy)
         p_body = np.asarray(ping.mount_pos_body_m)[None, :] + ranges[:, None] * R_bh[:, 0][None, :]
         p_ned = pos[None, :] + p_body @ R_nb.T
         for q in p_ned:

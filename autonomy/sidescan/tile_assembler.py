@@ -3,7 +3,9 @@
 Every ``tile_period_s`` seconds of pings (tile k holds the pings with ``t`` in
 ``((k - 1) T, k T]``) the assembler emits a :class:`SssTileImage`: the port and starboard
 waterfalls (one row per ping; ground range when the pings carry ground-range lines, else
-slant range) and, per row, the transducer's pose from the navigation estimate. The tile
+slant range) and, per row, the transducer's pose from the navigation estimate moved to the
+ping's own time (:func:`autonomy.navigation.pose_at.pose_at`: the filter's time is its last
+IMU message, up to an IMU period from the ping; held, the rows would be unevenly spaced). The tile
 frame is the vehicle frame at the tile's last ping (paper 003, Section V: along-track
 forward, across-track starboard, m): :meth:`SssTileImage.to_tile_frame` maps a pixel there
 through its row's pose, so turns within a tile are followed.
@@ -17,6 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from autonomy.messages import NavEstimate, SssPing
+from autonomy.navigation.pose_at import pose_at
 
 FloatArray = NDArray[np.float64]
 
@@ -98,7 +101,9 @@ class SssTileAssembler:
         self._bin_size_m = 0.0
 
     def add(self, ping: SssPing, nav: NavEstimate) -> SssTileImage | None:
-        """Add a ping taken at the pose ``nav``; returns the tile it closes, else None.
+        """Add a ping with the navigation estimate ``nav`` (of any time near the ping's: it
+        is moved to ``ping.t_s`` with its velocity and rates); returns the tile it closes,
+        else None.
 
         The ping with ``t > k T`` closes tile k (made of the pings before it) and opens tile
         k + 1; a tile with no ping (a gap longer than T) is skipped.
@@ -110,11 +115,12 @@ class SssTileAssembler:
         lines = ping.ground_lines_u8 if ping.ground_lines_u8 is not None else ping.lines_u8
         self._ground = ping.ground_lines_u8 is not None
         self._bin_size_m = float(ping.bin_size_m)
-        c, s = np.cos(nav.rpy_rad[2]), np.sin(nav.rpy_rad[2])
+        pos_ned, rpy = pose_at(nav, ping.t_s)
+        c, s = np.cos(rpy[2]), np.sin(rpy[2])
         m = np.asarray(ping.mount_pos_body_m, dtype=float)
-        pos = np.asarray(nav.pos_ned[:2], dtype=float) + np.array([c * m[0] - s * m[1], s * m[0] + c * m[1]])
+        pos = pos_ned[:2] + np.array([c * m[0] - s * m[1], s * m[0] + c * m[1]])
         self._rows.append((float(ping.t_s), np.asarray(lines, dtype=np.uint8), float(ping.altitude_m), pos,
-                           float(nav.rpy_rad[2])))
+                           float(rpy[2])))
         return out
 
     def _cut(self) -> SssTileImage:

@@ -38,3 +38,34 @@ def test_rates_and_latency_on_physics_clock():
 def test_bad_rate_rejected():
     with pytest.raises(ValueError, match="rate_hz"):
         SensorScheduler().add("x", 0.0)
+
+
+def test_a_sensor_faster_than_the_step_fires_at_every_own_time_without_drift():
+    # 400 Hz and 3 Hz on a 200 Hz clock for 100 s: the n-th firing at exactly n / rate (the
+    # 400 Hz one twice per step, the 3 Hz one between steps), none skipped
+    dt = 1.0 / 200.0
+    sch = SensorScheduler(eps_s=1e-6 * dt)
+    sch.add("imu", 400.0)
+    sch.add("fls", 3.0)
+    sch.reset(0.0)
+    fired = {"imu": [], "fls": []}
+    times = []
+    for k in range(0, 20001):
+        for t_fire, name in sch.take_due(k * dt):
+            fired[name].append(t_fire)
+            times.append(t_fire)
+            assert (k - 1) * dt < t_fire <= k * dt + 1e-12  # within the step just taken
+    assert len(fired["imu"]) == 40001 and len(fired["fls"]) == 301
+    np.testing.assert_allclose(fired["imu"], np.arange(40001) / 400.0, rtol=0.0, atol=1e-12)
+    np.testing.assert_allclose(fired["fls"], np.arange(301) / 3.0, rtol=0.0, atol=1e-12)
+    assert times == sorted(times)  # in time order across the channels
+
+
+def test_first_firing_at_the_reset_time_and_ties_in_table_order():
+    sch = SensorScheduler()
+    sch.add("a", 50.0)
+    sch.add("b", 100.0)
+    sch.reset(0.0)
+    assert sch.take_due(0.0) == [(0.0, "a"), (0.0, "b")]
+    assert sch.next_fire_s == pytest.approx(0.01)
+    assert sch.take_due(0.02) == [(0.01, "b"), (0.02, "a"), (0.02, "b")]

@@ -24,8 +24,10 @@ def test_track_static_vehicle_run_writes_tracking_outputs(tmp_path):
     assert {n for n in names if not n.startswith(".")} <= RUN_FILES
     tr = json.loads((tmp_path / "run" / "metrics.json").read_text())["tracking"]
     assert tr["mode"] == "fused" and set(tr["errors"]) == {"sonar", "sonar_when_available", "usbl", "fused"}
-    # 15 s scored at 10 Hz; the diver starts in view 8.5 m ahead: every filter within a metre
-    assert tr["errors"]["fused"]["n"] == 150
+    # the ticks at 10.0, 10.1, ..., 25.0 s scored (the clock is the step count times the
+    # step: the tick at 10 s is at 10 s); the diver starts in view 8.5 m ahead: every filter
+    # within a metre
+    assert tr["errors"]["fused"]["n"] == 151
     for k in ("usbl", "fused"):
         assert tr["errors"][k]["mean_m"] < 1.0, (k, tr["errors"][k])
     assert 0.0 < tr["fused_sonar_step_fraction"] <= 1.0

@@ -3,6 +3,8 @@ rendered by the analytic caster (a box on a flat seabed: its true position is kn
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -94,3 +96,50 @@ def test_detector_finds_a_box_where_it_lies_and_nothing_on_bare_seabed():
     assert 1.4 <= out.length_m[0] <= 2.1 and out.pi1[0] > 0.5  # 2 m long; the beam trims its ends
     bare = [det.detect(fly(AnalyticCaster(SEABED_M), [], 250, seed=s)) for s in range(3)]
     assert sum(len(b.ell_m) for b in bare) == 0
+
+
+IMU_HZ, PING_HZ, CRUISE = 50.0, 15.0, 0.85
+
+
+def nav_of_last_imu(t: float, speed: float) -> NavEstimate:
+    """The filter's estimate when a ping taken at ``t`` is handed over: exact, but of the time
+    of the last IMU message (50 Hz), up to 20 ms before the ping; heading north at ``speed``."""
+    t_nav = math.floor(t * IMU_HZ + 1e-9) / IMU_HZ
+    return NavEstimate(t_nav, np.array([speed * t_nav, 0.0, DEPTH_M]), np.zeros(3), np.array([speed, 0.0, 0.0]),
+                       np.zeros(3), np.eye(3))
+
+
+def test_rows_are_posed_at_the_ping_time_not_the_filter_time():
+    # 15 pings/s at 0.85 m/s: rows 5.67 cm apart, whatever the filter's time at each ping
+    asm = SssTileAssembler(4.0)
+    tile = None
+    for k in range(1, 80):
+        t = k / PING_HZ
+        tile = asm.add(ping(t), nav_of_last_imu(t, CRUISE)) or tile
+    step = np.linalg.norm(np.diff(tile.pos_ne, axis=0), axis=1)
+    assert np.median(step) == pytest.approx(CRUISE / PING_HZ, rel=0.02)
+    np.testing.assert_allclose(tile.pos_ne[:, 0], CRUISE * tile.ping_t_s, rtol=0, atol=1e-12)
+
+
+def test_a_2m_box_measures_the_same_length_with_the_filter_of_the_last_imu_message():
+    centre = np.array([10.0, 22.0, SEABED_M - 0.3])  # 2 m along track, 22 m to starboard
+    caster = AnalyticCaster(SEABED_M, boxes=(AnalyticBox(centre, np.array([1.0, 0.4, 0.3]), 0),))
+    cfg = SssConfig(range_max_m=40.0, n_bins=600, elevation_rays=32, ground_range=True, gain_db=-10.0,
+                    rate_hz=PING_HZ)
+    det = SssHighlightShadowDetector(SssDetectorConfig())
+    lengths = {}
+    for how in ("exact", "last_imu"):
+        sonar = SideScanSonar(cfg, (0.0, 0.0, 0.0), np.random.default_rng(3))
+        n_pings = 300
+        asm, tile = SssTileAssembler(n_pings / PING_HZ), None
+        for k in range(1, n_pings + 2):
+            t = k / PING_HZ
+            pos = np.array([CRUISE * t, 0.0, DEPTH_M])
+            r = sonar.render(t, pos, rot_from_euler(0.0, 0.0, 0.0), caster, [Obj(0, "b", "mine_like", True, centre)])
+            nav_t = nav(t, pos[0], pos[1], 0.0) if how == "exact" else nav_of_last_imu(t, CRUISE)
+            tile = asm.add(r.ping, nav_t) or tile
+        out = det.detect(tile)
+        assert len(out.length_m) == 1, how
+        lengths[how] = float(out.length_m[0])
+    assert 1.6 <= lengths["exact"] <= 2.1
+    assert lengths["last_imu"] == pytest.approx(lengths["exact"], rel=0.02)
