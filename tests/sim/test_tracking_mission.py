@@ -40,7 +40,8 @@ def test_nav_filter_takes_the_beacon_of_the_usbl_config():
     scn = load_scenario(str(SCENARIOS / "track_static_vehicle.yaml"),
                         ["duration_s=1", "sensors.usbl.transponder=beacon", "sensors.usbl.beacon_pos_ned=[3.0,-2.0,10.0]",
                          "autonomy.tracking.enabled=false", "autonomy.guidance.buddy.enabled=false",
-                         "autonomy.atr.detector=none"])  # no tracker: the survey's CNN would not take the ARIS fan
+                         "autonomy.atr.detector=none",  # no tracker: the survey's CNN would not take the ARIS fan
+                         "autonomy.guidance.mission.safe_depth_max_m=14"])  # the survey (tracking off) flies 13 m deep
     m = Mission(scn, perception=False)
     np.testing.assert_array_equal(m.parts.usbl_beacon_pos_ned, [3.0, -2.0, 10.0])
     m.reset()
