@@ -33,35 +33,22 @@ class BasinRandomization(StrictModel):
     reflectivity: Range = (0.4, 0.9)
 
 
-class Randomization(StrictModel):
-    """Uniform ranges ``(low, high)`` every scene parameter is drawn from.
+class SceneRanges(StrictModel):
+    """The ranges ``(low, high)`` a forward-looking and a side-scan scene share: seabed texture,
+    echo level and noise, and the objects (count, shape, size, reflectivity, burial). Every
+    two-number range must have its lower bound first."""
 
-    Targets (``class_name`` ``opi``) are the five mine-like shapes; distractors are rocks
-    (tumbled boxes, flattened half spheres) and debris (thin lying cylinders), never targets.
-    """
-
-    seabed_kinds: tuple[str, ...] = ("plane", "slope", "rough", "ripple")
-    seabed_depth_m: Range = (8.0, 20.0)
     seabed_reflectivity: Range = (0.15, 0.5)
-    slope_deg: Range = (1.0, 10.0)
     roughness_m: Range = (0.02, 0.15)
     roughness_corr_m: Range = (1.0, 4.0)
     ripple_amplitude_m: Range = (0.02, 0.12)
     ripple_wavelength_m: Range = (0.8, 3.5)
-    altitude_m: Range = (1.5, 6.0)
-    tilt_deg: Range = (3.0, 14.0)
-    vertical_beamwidth_deg: float = Field(20.0, gt=0.0, le=90.0, description="to place objects on insonified bed")
-    roll_pitch_jitter_deg: float = Field(3.0, ge=0.0, le=20.0)
-    range_max_m: Range = (15.0, 35.0)
-    range_min_m: Range = (1.0, 2.0)
     gain_db: Range = (-4.0, 4.0)
     noise_scale: Range = (0.5, 2.0)
     k_speckle_probability: float = Field(0.3, ge=0.0, le=1.0)
     k_shape: Range = (1.5, 10.0)
     n_targets: tuple[int, int] = (0, 4)
     n_distractors: tuple[int, int] = (0, 4)
-    cluster_probability: float = Field(0.3, ge=0.0, le=1.0)
-    cluster_spacing_m: Range = (1.0, 3.0)
     burial_fraction: Range = (0.0, 0.5)
     burial_probability: float = Field(0.3, ge=0.0, le=1.0)
     target_shapes: tuple[str, ...] = ("half_sphere", "truncated_cone", "cylinder", "box", "tyre")
@@ -69,15 +56,40 @@ class Randomization(StrictModel):
     target_reflectivity: Range = (0.6, 1.0)
     distractor_size_m: Range = (0.2, 1.0)
     distractor_reflectivity: Range = (0.15, 0.45)
+
+    @model_validator(mode="after")
+    def _ordered_ranges(self) -> "SceneRanges":
+        for name, value in self:
+            if isinstance(value, tuple) and len(value) == 2 and all(isinstance(v, (int, float)) for v in value):
+                _check_range(name, value)
+        return self
+
+
+class Randomization(SceneRanges):
+    """Uniform ranges ``(low, high)`` every scene parameter is drawn from (the shared ones in
+    :class:`SceneRanges`).
+
+    Targets (``class_name`` ``opi``) are the five mine-like shapes; distractors are rocks
+    (tumbled boxes, flattened half spheres) and debris (thin lying cylinders), never targets.
+    """
+
+    seabed_kinds: tuple[str, ...] = ("plane", "slope", "rough", "ripple")
+    seabed_depth_m: Range = (8.0, 20.0)
+    slope_deg: Range = (1.0, 10.0)
+    altitude_m: Range = (1.5, 6.0)
+    tilt_deg: Range = (3.0, 14.0)
+    vertical_beamwidth_deg: float = Field(20.0, gt=0.0, le=90.0, description="to place objects on insonified bed")
+    roll_pitch_jitter_deg: float = Field(3.0, ge=0.0, le=20.0)
+    range_max_m: Range = (15.0, 35.0)
+    range_min_m: Range = (1.0, 2.0)
+    cluster_probability: float = Field(0.3, ge=0.0, le=1.0)
+    cluster_spacing_m: Range = (1.0, 3.0)
     frames_per_scene: int = Field(4, ge=1, le=100)
     step_m: Range = (1.0, 4.0)
     basin: BasinRandomization | None = Field(None, description="basin walls as background (None: never)")
 
     @model_validator(mode="after")
     def _ranges(self) -> "Randomization":
-        for name, value in self:
-            if isinstance(value, tuple) and len(value) == 2 and all(isinstance(v, (int, float)) for v in value):
-                _check_range(name, value)
         bad = set(self.seabed_kinds) - {"plane", "slope", "rough", "ripple"}
         if bad:
             raise ValueError(f"seabed_kinds: unknown {sorted(bad)}, allowed plane, slope, rough, ripple")

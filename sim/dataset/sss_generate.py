@@ -22,13 +22,12 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from pydantic import Field, model_validator
+from pydantic import model_validator
 
-from scenarios.config.base import StrictModel
 from scenarios.config.world import SeabedConfig, TargetConfig
 from sim.dataset.coco_io import IMAGES_DIR, write_png_atomic
 from sim.dataset.errors import DatasetError
-from sim.dataset.randomization import Range, Randomization, _check_range, _object, _u
+from sim.dataset.randomization import Range, Randomization, SceneRanges, _object, _u
 from sim.rng import component_rng
 
 #: Side-scan altitude over the seabed as a fraction of the slant range per side: the usual
@@ -89,7 +88,7 @@ class SssSettings:
         return int(self.line_length_m // self.tile_length_m)
 
 
-class SssRandomization(StrictModel):
+class SssRandomization(SceneRanges):
     """Uniform ranges ``(low, high)`` a side-scan scene is drawn from: the part of
     :class:`sim.dataset.randomization.Randomization` a side-scan line uses, with a side-scan
     altitude. This, not the FLS ranges it may be made from, is what a side-scan dataset's
@@ -103,31 +102,10 @@ class SssRandomization(StrictModel):
 
     seabed_kinds: tuple[str, ...] = ("plane", "rough", "ripple")
     seabed_depth_m: Range = (10.0, 20.0)
-    seabed_reflectivity: Range = (0.15, 0.5)
-    roughness_m: Range = (0.02, 0.15)
-    roughness_corr_m: Range = (1.0, 4.0)
-    ripple_amplitude_m: Range = (0.02, 0.12)
-    ripple_wavelength_m: Range = (0.8, 3.5)
     altitude_m: Range = (4.0, 8.0)
-    gain_db: Range = (-4.0, 4.0)
-    noise_scale: Range = (0.5, 2.0)
-    k_speckle_probability: float = Field(0.3, ge=0.0, le=1.0)
-    k_shape: Range = (1.5, 10.0)
-    n_targets: tuple[int, int] = (0, 4)
-    n_distractors: tuple[int, int] = (0, 4)
-    burial_fraction: Range = (0.0, 0.5)
-    burial_probability: float = Field(0.3, ge=0.0, le=1.0)
-    target_shapes: tuple[str, ...] = ("half_sphere", "truncated_cone", "cylinder", "box", "tyre")
-    target_size_m: Range = (0.4, 1.2)
-    target_reflectivity: Range = (0.6, 1.0)
-    distractor_size_m: Range = (0.2, 1.0)
-    distractor_reflectivity: Range = (0.15, 0.45)
 
     @model_validator(mode="after")
     def _ranges(self) -> "SssRandomization":
-        for name, value in self:
-            if isinstance(value, tuple) and len(value) == 2 and all(isinstance(v, (int, float)) for v in value):
-                _check_range(name, value)
         bad = set(self.seabed_kinds) - {"plane", "rough", "ripple"}
         if bad or not self.seabed_kinds:
             raise ValueError(f"seabed_kinds: {sorted(bad) or 'none'} not allowed; a side-scan line takes plane, "
@@ -151,8 +129,7 @@ def sss_randomization(rz: Randomization | SssRandomization, settings: SssSetting
     floor = altitude[1] + MIN_TRANSDUCER_DEPTH_M
     depth = (max(rz.seabed_depth_m[0], floor), max(rz.seabed_depth_m[1], floor))
     kinds = tuple(k for k in rz.seabed_kinds if k != "slope") or ("plane",)
-    own = {"seabed_kinds", "seabed_depth_m", "altitude_m"}
-    shared = {k: getattr(rz, k) for k in SssRandomization.model_fields if k not in own}
+    shared = {k: getattr(rz, k) for k in SceneRanges.model_fields}
     return SssRandomization(seabed_kinds=kinds, seabed_depth_m=depth, altitude_m=altitude, **shared)
 
 
