@@ -1,11 +1,14 @@
 """CNN detector: the ONNX CenterNet-style model run with onnxruntime.
 
 Model contract (written by ``sim.training``, checked on load):
-- input ``image`` float32 (1, 1, H, W): the fan resized to W x H (``cv2.INTER_AREA``), / 255;
+- input ``image`` float32 (1, 1, H, W), / 255: the fan resized to W x H (``cv2.INTER_AREA``),
+  or, with metadata ``input_transform`` = ``pad``, the fan at native resolution in the
+  top-left corner with zeros beyond (H, W at least the fan's; no resize, boxes in fan px);
 - outputs ``heatmap`` (1, C, H/s, W/s), ``size`` (1, 2, H/s, W/s), ``offset`` (1, 2, H/s, W/s)
   as described in :mod:`autonomy.atr.centernet_decode`;
 - metadata ``auvsim_atr_format`` = ``centernet-v1``, ``class_names`` (JSON list), ``stride``,
-  ``fan_width_px``, ``fan_height_px`` (the fan size the model was trained on).
+  ``fan_width_px``, ``fan_height_px`` (the fan size the model was trained on), optional
+  ``input_transform`` (``resize``, the default, or ``pad``).
 """
 
 from __future__ import annotations
@@ -25,6 +28,8 @@ from autonomy.atr.nms import nms
 from autonomy.messages import Detection, FlsFrame
 
 MODEL_FORMAT = "centernet-v1"
+#: How a fan becomes the model input (metadata ``input_transform``).
+INPUT_TRANSFORMS = ("resize", "pad")
 INPUT_NAME = "image"
 OUTPUT_NAMES = ("heatmap", "size", "offset")
 #: The input scale of the model contract (uint8 grey level -> [0, 1]).
@@ -91,6 +96,16 @@ class CnnDetector:
         if not all(isinstance(v, int) for v in shape[1:]) or shape[1] != 1:
             raise ModelFileError(f"ATR model file {self.model_path}: input must be (1, 1, H, W) with fixed H, W; got {shape}")
         self.input_hw = (int(shape[2]), int(shape[3]))
+        self.input_transform = meta.get("input_transform", "resize")
+        if self.input_transform not in INPUT_TRANSFORMS:
+            raise ModelFileError(f"ATR model file {self.model_path}: metadata input_transform is "
+                                 f"{self.input_transform!r}, expected one of {', '.join(INPUT_TRANSFORMS)}")
+        if self.input_transform == "pad" and (self.fan_hw[0] > self.input_hw[0] or self.fan_hw[1] > self.input_hw[1]):
+            raise ModelFileError(f"ATR model file {self.model_path}: input {self.input_hw} is smaller than the "
+                                 f"fan {self.fan_hw} it pads")
+        if self.input_transform == "pad" and accept_any_fan_size:
+            raise ModelFileError(f"ATR model file {self.model_path}: reads fans at native resolution "
+                                 f"({self.fan_hw[1]} x {self.fan_hw[0]} px) and cannot take fans of any size")
         out_names = tuple(o.name for o in self._session.get_outputs())
         if set(OUTPUT_NAMES) - set(out_names):
             raise ModelFileError(f"ATR model file {self.model_path}: outputs {out_names}, expected {OUTPUT_NAMES}")
@@ -124,6 +139,10 @@ class CnnDetector:
     def preprocess(self, fan: NDArray[np.uint8]) -> NDArray[np.float32]:
         """Fan image (H_fan, W_fan) uint8 -> model input (1, 1, H, W) float32."""
         h, w = self.input_hw
+        if self.input_transform == "pad":
+            out = np.zeros((1, 1, h, w), np.float32)
+            np.multiply(fan, INPUT_SCALE, out=out[0, 0, :fan.shape[0], :fan.shape[1]], dtype=np.float32)
+            return out
         small = cv2.resize(fan, (w, h), interpolation=cv2.INTER_AREA)
         # one pass: uint8 -> float32 and the scale (the same float32 products as astype, then *)
         return np.multiply(small, INPUT_SCALE, dtype=np.float32)[None, None]
@@ -140,7 +159,10 @@ class CnnDetector:
         so only under ``self._lock``)."""
         if self._binding is None:
             return self.raw_outputs(fan)
-        if fan.ndim == 2 and fan.dtype == np.uint8:
+        if self.input_transform == "pad" and fan.shape == self.fan_hw and fan.dtype == np.uint8:
+            # the padding stays zero from allocation; only the fan's corner is written
+            np.multiply(fan, INPUT_SCALE, out=self._input[0, 0, :fan.shape[0], :fan.shape[1]])
+        elif self.input_transform == "resize" and fan.ndim == 2 and fan.dtype == np.uint8:
             h, w = self.input_hw
             cv2.resize(fan, (w, h), dst=self._small, interpolation=cv2.INTER_AREA)
             np.multiply(self._small, INPUT_SCALE, out=self._input[0, 0])
@@ -159,10 +181,11 @@ class CnnDetector:
                                                   thr, self.max_detections)
         if boxes.shape[0] == 0:
             return boxes, scores, cls
-        sx = fan.shape[1] / self.input_hw[1]
-        sy = fan.shape[0] / self.input_hw[0]
-        # Input px (pixel centres at integers) -> fan px.
-        boxes = (boxes + 0.5) * np.array([sx, sy, sx, sy]) - 0.5
+        if self.input_transform == "resize":
+            sx = fan.shape[1] / self.input_hw[1]
+            sy = fan.shape[0] / self.input_hw[0]
+            # Input px (pixel centres at integers) -> fan px.
+            boxes = (boxes + 0.5) * np.array([sx, sy, sx, sy]) - 0.5
         if boxes.shape[0] == 1:  # nothing to suppress
             return boxes, scores, cls
         keep = nms(boxes, scores, self.nms_iou, cls)

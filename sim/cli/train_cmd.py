@@ -48,13 +48,39 @@ def _cmd_train(args: argparse.Namespace) -> int:
     if val_dirs is not None and not val_dirs:
         raise CliError("--val-data: name at least one dataset folder")
     val = [require_dataset(d, "--val-data") for d in val_dirs] if val_dirs is not None else None
-    out = _check_model_out(args.out, args.overwrite)
-    params = TrainParams(input_hw=args.input, crop_hw=args.crop, width=args.width, epochs=args.epochs,
+    out = _check_model_out(args.out, args.overwrite or args.resume)
+    if args.resume and args.checkpoint is None:
+        raise CliError("--resume: name the checkpoint to continue with --checkpoint FILE")
+    if args.checkpoint is not None:
+        ckpt = Path(args.checkpoint).expanduser()
+        if ckpt.is_dir():
+            raise CliError(f"--checkpoint {ckpt}: is a folder; name the checkpoint file, e.g. {ckpt / 'atr.ckpt'}")
+        if args.resume and not ckpt.is_file():
+            raise CliError(f"--checkpoint {ckpt}: no such file to resume from")
+        if not args.resume and ckpt.exists():
+            raise CliError(f"--checkpoint {ckpt}: file exists; pass --resume to continue that run, or name a new file")
+    if args.input == "native":
+        from sim.dataset.errors import fls_fan_hw
+
+        fan_h, fan_w = fls_fan_hw(data[0], "--data")
+        input_hw, transform = (-(-fan_h // 16) * 16, -(-fan_w // 16) * 16), "pad"
+    else:
+        input_hw, transform = args.input, "resize"
+    params = TrainParams(input_hw=input_hw, crop_hw=args.crop, width=args.width, epochs=args.epochs,
                          batch_size=args.batch_size, lr=args.lr, max_minutes=args.max_minutes,
                          threads=args.threads, seed=args.seed, size_loss_weight=args.size_loss_weight,
-                         light_heads=args.light_heads,
+                         light_heads=args.light_heads, arch=args.arch, input_transform=transform,
                          classes=tuple(c.strip() for c in args.classes.split(",")) if args.classes else None)
-    summary = train_atr(data if len(data) > 1 else data[0], out, params, val_data=val)
+    from sim.training.train import CheckpointError
+
+    try:
+        summary = train_atr(data if len(data) > 1 else data[0], out, params, val_data=val,
+                            checkpoint=args.checkpoint, resume=args.resume,
+                            checkpoint_minutes=args.checkpoint_minutes, stop_after_minutes=args.stop_after_minutes)
+    except CheckpointError as exc:
+        raise CliError(str(exc)) from None
+    if not summary["finished"]:
+        return 0
     check = summary["check"]
     if check["detections"] == 0:
         frames = "validation" if check["held_out"] else "training (no --val-data)"
@@ -65,8 +91,13 @@ def _cmd_train(args: argparse.Namespace) -> int:
     return 0
 
 
+def _input_arg(text: str):
+    """``HxW`` (:func:`size_hw`) or ``native``."""
+    return "native" if str(text).lower() == "native" else size_hw(text)
+
+
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    from sim.training.train import DEFAULT_INPUT_HW, TrainParams
+    from sim.training.train import ARCH_NAMES, DEFAULT_INPUT_HW, TrainParams
 
     p = sub.add_parser("train-atr", help="train the ATR CNN on a dataset and export ONNX (needs auvsim[train])")
     p.add_argument("--data", required=True,
@@ -77,11 +108,25 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--batch-size", type=positive_int, default=TrainParams.batch_size)
     p.add_argument("--lr", type=positive_float, default=TrainParams.lr)
     p.add_argument("--width", type=positive_int, default=TrainParams.width, help="base channel width")
-    p.add_argument("--input", type=size_hw, default=DEFAULT_INPUT_HW,
-                   help="model input HxW, multiples of 16 (default %dx%d)" % DEFAULT_INPUT_HW)
+    p.add_argument("--input", type=_input_arg, default=DEFAULT_INPUT_HW,
+                   help="model input HxW, multiples of 16, the fan resized to it (default %dx%d); or 'native': "
+                        "the fan at its own resolution, zero-padded to multiples of 16" % DEFAULT_INPUT_HW)
+    p.add_argument("--arch", choices=ARCH_NAMES, default=TrainParams.arch,
+                   help="s4: heads at stride 4 (the v2 model); s8: stride-4 patch stem, heads at stride 8 "
+                        "(for --input native)")
+    p.add_argument("--checkpoint", default=None, metavar="FILE",
+                   help="save the whole training state here every --checkpoint-minutes and at the end")
+    p.add_argument("--resume", action="store_true",
+                   help="continue the run saved in --checkpoint (same data and parameters; --out is replaced)")
+    p.add_argument("--checkpoint-minutes", type=positive_float, default=5.0, metavar="MIN")
+    p.add_argument("--stop-after-minutes", type=positive_float, default=None, metavar="MIN",
+                   help="end this session after MIN minutes (checkpoint saved, model exported as it stands); "
+                        "the run goes on with --resume")
     p.add_argument("--crop", type=size_hw_or_none, default=TrainParams.crop_hw,
                    help="training crop HxW in input px, or 'none' (default 128x224)")
-    p.add_argument("--max-minutes", type=positive_float, default=TrainParams.max_minutes)
+    p.add_argument("--max-minutes", type=positive_float, default=TrainParams.max_minutes,
+                   help="training time budget over all sessions of the run; the learning rate decays over "
+                        "whichever ends first, this or --epochs")
     p.add_argument("--threads", type=positive_int, default=TrainParams.threads)
     p.add_argument("--seed", type=non_negative_int, default=0)
     p.add_argument("--size-loss-weight", type=positive_float, default=TrainParams.size_loss_weight)

@@ -39,8 +39,16 @@ def fan_to_input_xyxy(boxes_fan: NDArray, fan_hw: tuple[int, int], input_hw: tup
 
 
 def load_detection_arrays(data_dir: str | Path, input_hw: tuple[int, int],
-                          class_names: list[str] | None = None) -> DetectionArrays:
-    """Read ``data_dir``'s COCO file and PNGs, resized to ``input_hw`` with INTER_AREA."""
+                          class_names: list[str] | None = None, input_transform: str = "resize") -> DetectionArrays:
+    """Read ``data_dir``'s COCO file and PNGs, resized to ``input_hw`` with INTER_AREA
+    (``input_transform="resize"``) or placed at native resolution in the top-left corner of a
+    zero ``input_hw`` image (``"pad"``, boxes unchanged; see
+    :class:`autonomy.atr.cnn_detector.CnnDetector`).
+
+    Raises:
+        ValueError: with ``"pad"``, a fan larger than ``input_hw``; images of different sizes.
+        FileNotFoundError: no annotations file, or an image that cannot be read.
+    """
     data_dir = Path(data_dir)
     ann_path = data_dir / ANNOTATIONS_FILE
     if not ann_path.is_file():
@@ -63,10 +71,19 @@ def load_detection_arrays(data_dir: str | Path, input_hw: tuple[int, int],
             fan_hw = fan.shape
         elif fan.shape != fan_hw:
             raise ValueError(f"dataset {data_dir}: image {im['file_name']} is {fan.shape}, others {fan_hw}")
-        images.append(cv2.resize(fan, (w, h), interpolation=cv2.INTER_AREA))
         anns = [a for a in by_image.get(im["id"], []) if cats[a["category_id"]] in name_to_idx]
         xyxy = coco_bbox_to_xyxy(np.array([a["bbox"] for a in anns], dtype=np.float64).reshape(-1, 4))
-        boxes.append(fan_to_input_xyxy(xyxy, fan_hw, input_hw))
+        if input_transform == "pad":
+            if fan.shape[0] > h or fan.shape[1] > w:
+                raise ValueError(f"dataset {data_dir}: fan {fan.shape[1]} x {fan.shape[0]} px is larger than the "
+                                 f"input {w} x {h} it is padded into")
+            padded = np.zeros((h, w), np.uint8)
+            padded[:fan.shape[0], :fan.shape[1]] = fan
+            images.append(padded)
+            boxes.append(xyxy)
+        else:
+            images.append(cv2.resize(fan, (w, h), interpolation=cv2.INTER_AREA))
+            boxes.append(fan_to_input_xyxy(xyxy, fan_hw, input_hw))
         cls.append(np.array([name_to_idx[cats[a["category_id"]]] for a in anns], dtype=np.int64))
         ign.append(np.array([bool(a.get("iscrowd", 0)) for a in anns], dtype=bool))
     if not images:

@@ -10,13 +10,21 @@ import onnx
 import torch
 
 from autonomy.atr.cnn_detector import INPUT_NAME, MODEL_FORMAT, OUTPUT_NAMES
-from sim.training.model import STRIDE, CenterNetSmall, ExportWrapper
+from torch import nn
+
+from sim.training.model import ExportWrapper
 
 
-def export_onnx(model: CenterNetSmall, out_path: str | Path, input_hw: tuple[int, int],
+def export_onnx(model: nn.Module, out_path: str | Path, input_hw: tuple[int, int],
                 fan_hw: tuple[int, int], class_names: list[str],
-                extra_metadata: Mapping[str, str] | None = None) -> Path:
-    """Write ``model`` to ``out_path`` (fixed input (1, 1, H, W)); returns the path."""
+                extra_metadata: Mapping[str, str] | None = None, input_transform: str = "resize") -> Path:
+    """Write ``model`` (a :data:`sim.training.model.ARCHITECTURES` model) to ``out_path``
+    (fixed input (1, 1, H, W)); returns the path.
+
+    ``input_transform``: how the detector turns a fan into the input, ``"resize"`` (INTER_AREA
+    to W x H) or ``"pad"`` (the fan at native resolution in the top-left corner, zeros
+    beyond), recorded in the metadata.
+    """
     out_path = Path(out_path)
     out_path.parent.mkdir(parents=True, exist_ok=True)
     was_training = model.training
@@ -27,7 +35,8 @@ def export_onnx(model: CenterNetSmall, out_path: str | Path, input_hw: tuple[int
     model.train(was_training)
     proto = onnx.load(str(out_path))
     meta = {"auvsim_atr_format": MODEL_FORMAT, "class_names": json.dumps(list(class_names)),
-            "stride": str(STRIDE), "fan_height_px": str(fan_hw[0]), "fan_width_px": str(fan_hw[1])}
+            "stride": str(model.stride),
+            "input_transform": input_transform, "fan_height_px": str(fan_hw[0]), "fan_width_px": str(fan_hw[1])}
     meta.update(extra_metadata or {})
     del proto.metadata_props[:]
     for k, v in meta.items():

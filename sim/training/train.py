@@ -12,6 +12,8 @@ import numpy as np
 from sim.training import require_torch
 
 DEFAULT_INPUT_HW = (240, 448)
+#: The architectures of :data:`sim.training.model.ARCHITECTURES` (named here without torch).
+ARCH_NAMES = ("s4", "s8")
 
 
 @dataclass(frozen=True)
@@ -32,6 +34,16 @@ class TrainParams:
     object_crop_fraction: float = 0.75
     size_loss_weight: float = 0.5
     light_heads: bool = False
+    #: model architecture, a key of :data:`sim.training.model.ARCHITECTURES`
+    arch: str = "s4"
+    #: how a fan becomes the input: ``resize`` (INTER_AREA) or ``pad`` (native resolution)
+    input_transform: str = "resize"
+
+
+#: Parameters a resumed run may change (the others define the run and must match).
+RESUMABLE_CHANGES = ("threads",)
+#: Checkpoint file format tag.
+CHECKPOINT_FORMAT = "auvsim-train-atr-checkpoint-1"
 
 
 def _focal_loss(torch, logits, target, weight):
@@ -111,11 +123,11 @@ def _log(msg: str) -> None:
     print(msg, flush=True)
 
 
-def _load_all(data_dirs: list[Path], input_hw: tuple[int, int], classes):
+def _load_all(data_dirs: list[Path], input_hw: tuple[int, int], classes, input_transform: str = "resize"):
     """Load and concatenate several dataset directories (class lists must agree)."""
     from sim.training.data import DetectionArrays, load_detection_arrays
 
-    parts = [load_detection_arrays(d, input_hw, classes) for d in data_dirs]
+    parts = [load_detection_arrays(d, input_hw, classes, input_transform) for d in data_dirs]
     first = parts[0]
     for d, a in zip(data_dirs[1:], parts[1:]):
         if a.class_names != first.class_names or a.fan_hw != first.fan_hw:
@@ -173,12 +185,53 @@ def detection_check(model_path: str | Path, data_dirs: list[Path], classes: list
             "score_threshold": float(score_threshold), "data": [str(d) for d in data_dirs]}
 
 
+class CheckpointError(ValueError):
+    """A checkpoint that cannot be resumed: wrong format, or another run's parameters or data."""
+
+
+def _save_checkpoint(torch, path: Path, state: dict) -> None:
+    """Write ``state`` to ``path`` atomically (a crash mid-write keeps the previous one)."""
+    tmp = path.with_name(path.name + ".tmp")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    torch.save(state, tmp)
+    tmp.replace(path)
+
+
+def _load_checkpoint(torch, path: Path, params: TrainParams, data_dirs: list[Path], n_img: int) -> dict:
+    """Read a checkpoint and check it belongs to this run (parameters and data)."""
+    try:
+        state = torch.load(path, map_location="cpu", weights_only=False)
+    except Exception as exc:  # torch raises several exception types for bad files
+        raise CheckpointError(f"--checkpoint {path}: cannot be read as a checkpoint ({type(exc).__name__})") from None
+    if not isinstance(state, dict) or state.get("format") != CHECKPOINT_FORMAT:
+        raise CheckpointError(f"--checkpoint {path}: not a train-atr checkpoint")
+    saved = state["params"]
+    now = asdict(params)
+    diff = [f"{k} {saved.get(k)!r} -> {now[k]!r}" for k in now
+            if k not in RESUMABLE_CHANGES and json.dumps(saved.get(k), default=list) != json.dumps(now[k], default=list)]
+    if diff:
+        raise CheckpointError(f"--resume {path}: the run was started with other parameters ({'; '.join(diff)}); "
+                              "give the same ones (only --threads may change)")
+    dirs = [str(d) for d in data_dirs]
+    if state["data_dirs"] != dirs or state["n_images"] != n_img:
+        raise CheckpointError(f"--resume {path}: the run was started on {','.join(state['data_dirs'])} "
+                              f"({state['n_images']} images), not {','.join(dirs)} ({n_img} images)")
+    return state
+
+
 def train_atr(data_dir: str | Path | list, out_path: str | Path, params: TrainParams = TrainParams(),
-              log=_log, val_data: str | Path | list | None = None) -> dict:
+              log=_log, val_data: str | Path | list | None = None, checkpoint: str | Path | None = None,
+              resume: bool = False, checkpoint_minutes: float = 5.0, stop_after_minutes: float | None = None) -> dict:
     """Train on ``data_dir`` (an ``auvsim dataset`` output, or a list of them, concatenated)
     and export ONNX to ``out_path``.
 
-    Stops after ``params.epochs`` epochs or ``params.max_minutes``, whichever comes first.
+    Stops after ``params.epochs`` epochs or ``params.max_minutes`` of training (summed over
+    resumed sessions), whichever comes first; the learning-rate schedule runs over the same.
+    With ``checkpoint``, the whole training state (model, optimiser, random generators,
+    position in the epoch) is saved there every ``checkpoint_minutes`` and when the run stops;
+    ``resume`` continues from it (same parameters and data; a resumed run takes the same steps
+    as an unbroken one). ``stop_after_minutes`` ends this session early (checkpoint saved,
+    model exported as it stands) without ending the run.
     Then runs the model at the default operating threshold (``AtrConfig.score_threshold``) on
     up to :data:`CHECK_FRAMES` frames holding labelled objects of ``val_data`` (folders
     held out of training; None: of the training data), :func:`detection_check`.
@@ -191,14 +244,17 @@ def train_atr(data_dir: str | Path | list, out_path: str | Path, params: TrainPa
         sim.dataset.errors.DatasetError: ``params.classes`` names a class without a labelled
             object in the data, or the datasets disagree on classes or fan size (before any
             training).
-        FileNotFoundError: a folder has no annotations file.
+        FileNotFoundError: a folder has no annotations file, or ``resume`` without a
+            checkpoint file.
+        CheckpointError: ``resume`` from a checkpoint of another run.
+        ValueError: an unknown ``arch`` or ``input_transform``.
     """
     torch = require_torch()
     from autonomy.atr.config import AtrConfig
     from sim.dataset.errors import DatasetError, fls_fan_hw
     from sim.training.data import check_training_classes
     from sim.training.export import export_onnx
-    from sim.training.model import STRIDE, CenterNetSmall
+    from sim.training.model import ARCHITECTURES
     from sim.training.targets import encode_targets
 
     torch.manual_seed(params.seed)
@@ -225,7 +281,15 @@ def train_atr(data_dir: str | Path | list, out_path: str | Path, params: TrainPa
         raise DatasetError("--data / --val-data: the datasets hold fans of different sizes ("
                            + ", ".join(f"{d}: {w} x {h} px" for d, (h, w) in fans.items())
                            + "); a model is trained and checked on one sonar's fans")
-    arrays = _load_all(data_dirs, params.input_hw, list(params.classes) if params.classes else None)
+    if params.arch not in ARCHITECTURES:
+        raise ValueError(f"arch {params.arch!r}: expected one of {', '.join(ARCHITECTURES)}")
+    if params.input_transform not in ("resize", "pad"):
+        raise ValueError(f"input_transform {params.input_transform!r}: expected resize or pad")
+    ckpt_path = None if checkpoint is None else Path(checkpoint)
+    if resume and (ckpt_path is None or not ckpt_path.is_file()):
+        raise FileNotFoundError(f"--resume: no checkpoint file {ckpt_path}")
+    arrays = _load_all(data_dirs, params.input_hw, list(params.classes) if params.classes else None,
+                       params.input_transform)
     n_img = arrays.images.shape[0]
     h, w = params.input_hw
     if h % 16 or w % 16:
@@ -234,24 +298,53 @@ def train_atr(data_dir: str | Path | list, out_path: str | Path, params: TrainPa
     crop = (min(crop[0], h), min(crop[1], w))
     if crop[0] % 16 or crop[1] % 16:
         raise ValueError(f"crop_hw {crop}: height and width must be multiples of 16")
-    grid = (crop[0] // STRIDE, crop[1] // STRIDE)
-    model = CenterNetSmall(len(arrays.class_names), params.width, light_heads=params.light_heads)
+    model = ARCHITECTURES[params.arch](len(arrays.class_names), params.width, light_heads=params.light_heads)
+    stride = model.stride
+    grid = (crop[0] // stride, crop[1] // stride)
     n_params = sum(p.numel() for p in model.parameters())
     opt = torch.optim.AdamW(model.parameters(), lr=params.lr, weight_decay=params.weight_decay)
     steps_per_epoch = max(1, int(np.ceil(n_img / params.batch_size)))
     total_steps = params.epochs * steps_per_epoch
     log(f"train-atr: {n_img} images, crops {crop}, classes {arrays.class_names}, {n_params} parameters, "
         f"input {h}x{w}, load {time.perf_counter() - t0:.1f} s")
-    deadline = t0 + 60.0 * params.max_minutes
+    budget_s = 60.0 * params.max_minutes
+    history: list[dict] = []
+    epoch, step, s_start, elapsed0 = 1, 0, 0, 0.0
+    order = None
+    sums = np.zeros(3)
+    if resume:
+        state = _load_checkpoint(torch, ckpt_path, params, data_dirs, n_img)
+        model.load_state_dict(state["model"])
+        opt.load_state_dict(state["optimizer"])
+        rng.bit_generator.state = state["numpy_rng"]
+        torch.set_rng_state(state["torch_rng"])
+        epoch, step, s_start, elapsed0 = state["epoch"], state["step"], state["step_in_epoch"], state["elapsed_s"]
+        order, sums, history = np.asarray(state["order"]), np.asarray(state["sums"]), state["history"]
+        log(f"train-atr: resumed {ckpt_path} at epoch {epoch}, step {step} of {total_steps} "
+            f"({elapsed0 / 60:.1f} min trained)")
+    t_session = time.perf_counter()
+    session_deadline = None if stop_after_minutes is None else t_session + 60.0 * stop_after_minutes
+    last_save = t_session
+
+    def elapsed() -> float:
+        return elapsed0 + (time.perf_counter() - t_session)
+
+    def save(epoch_now: int, s_next: int) -> None:
+        _save_checkpoint(torch, ckpt_path, {
+            "format": CHECKPOINT_FORMAT, "params": asdict(params), "data_dirs": [str(d) for d in data_dirs],
+            "n_images": n_img, "model": model.state_dict(), "optimizer": opt.state_dict(),
+            "numpy_rng": rng.bit_generator.state, "torch_rng": torch.get_rng_state(), "epoch": epoch_now,
+            "step": step, "step_in_epoch": s_next, "elapsed_s": elapsed(),
+            "order": None if order is None else order.tolist(), "sums": sums.tolist(), "history": history})
+
     model.train()
-    history = []
-    epoch = 0
-    step = 0
-    stopped_early = False
-    for epoch in range(1, params.epochs + 1):
-        order = rng.permutation(n_img)
-        sums = np.zeros(3)
-        for s in range(steps_per_epoch):
+    stopped_early = session_stop = False
+    finished = epoch > params.epochs
+    while not finished:
+        if order is None:
+            order = rng.permutation(n_img)
+            sums = np.zeros(3)
+        for s in range(s_start, steps_per_epoch):
             idx = order[s * params.batch_size:(s + 1) * params.batch_size]
             if idx.size == 0:
                 continue
@@ -259,7 +352,7 @@ def train_atr(data_dir: str | Path | list, out_path: str | Path, params: TrainPa
                                                      idx, crop, rng, params.object_crop_fraction)
             imgs = torch.from_numpy(crops.astype(np.float32) / 255.0)[:, None]
             imgs, boxes = _augment(torch, imgs, boxes, rng, crop[1])
-            tg = [encode_targets(boxes[k], cls_b[k], ign_b[k], len(arrays.class_names), grid, STRIDE)
+            tg = [encode_targets(boxes[k], cls_b[k], ign_b[k], len(arrays.class_names), grid, stride)
                   for k in range(len(idx))]
             heat_t = torch.from_numpy(np.stack([t.heat for t in tg]))
             weight_t = torch.from_numpy(np.stack([t.weight for t in tg]))
@@ -273,7 +366,7 @@ def train_atr(data_dir: str | Path | list, out_path: str | Path, params: TrainPa
             l_off = (torch.abs(offset - off_t) * reg_t).sum() / n_reg
             loss = l_heat + params.size_loss_weight * l_size + l_off
             # Warm-up then cosine decay over whichever runs out first: steps or the time budget.
-            progress = max(step / total_steps, (time.perf_counter() - t0) / (deadline - t0))
+            progress = max(step / total_steps, elapsed() / budget_s)
             for group in opt.param_groups:
                 group["lr"] = _lr_at(min(progress, 1.0), params.lr)
             opt.zero_grad()
@@ -281,16 +374,38 @@ def train_atr(data_dir: str | Path | list, out_path: str | Path, params: TrainPa
             opt.step()
             step += 1
             sums += [l_heat.item(), l_size.item(), l_off.item()]
-            if time.perf_counter() > deadline:
+            if elapsed() > budget_s:
                 stopped_early = True
+                s_start = s + 1
                 break
-        mean = sums / steps_per_epoch
-        history.append({"epoch": epoch, "heat": mean[0], "size": mean[1], "offset": mean[2]})
-        log(f"epoch {epoch}: heat {mean[0]:.3f} size {mean[1]:.3f} offset {mean[2]:.3f} "
-            f"({time.perf_counter() - t0:.0f} s)")
+            now = time.perf_counter()
+            if session_deadline is not None and now > session_deadline:
+                session_stop = True
+                s_start = s + 1
+                break
+            if ckpt_path is not None and now - last_save > 60.0 * checkpoint_minutes:
+                save(epoch, s + 1)
+                last_save = now
+        else:
+            s_start = steps_per_epoch
+        if s_start >= steps_per_epoch or stopped_early:
+            mean = sums / steps_per_epoch
+            history.append({"epoch": epoch, "heat": mean[0], "size": mean[1], "offset": mean[2]})
+            log(f"epoch {epoch}: heat {mean[0]:.3f} size {mean[1]:.3f} offset {mean[2]:.3f} "
+                f"({elapsed():.0f} s trained)")
+            epoch += 1
+            order, s_start = None, 0
+        finished = stopped_early or epoch > params.epochs
         if stopped_early:
             log(f"train-atr: time budget of {params.max_minutes} min reached")
+        if ckpt_path is not None and (finished or session_stop or s_start == 0):
+            save(epoch, s_start)
+            last_save = time.perf_counter()
+        if session_stop:
+            log(f"train-atr: stopped after {stop_after_minutes} min this session at epoch {epoch}, step {step} "
+                f"of {total_steps}; continue with --resume")
             break
+    epoch = epoch - 1 if s_start == 0 else epoch
     model.eval()
     train_data = []
     for d in data_dirs:
@@ -304,10 +419,13 @@ def train_atr(data_dir: str | Path | list, out_path: str | Path, params: TrainPa
                                       "seed": train_data[0]["seed"] if len(train_data) == 1
                                       else [t["seed"] for t in train_data], "datasets": train_data}),
             "epochs_run": str(epoch)}
-    export_onnx(model, out_path, params.input_hw, arrays.fan_hw, arrays.class_names, meta)
-    summary = {"epochs_run": epoch, "seconds": time.perf_counter() - t0, "parameters": n_params,
+    export_onnx(model, out_path, params.input_hw, arrays.fan_hw, arrays.class_names, meta,
+                input_transform=params.input_transform)
+    model.train()
+    summary = {"epochs_run": epoch, "seconds": time.perf_counter() - t0, "training_seconds": elapsed(),
+               "steps": step, "total_steps": total_steps, "parameters": n_params,
                "images": n_img, "classes": arrays.class_names, "history": history,
-               "out": str(out_path), "stopped_on_time": stopped_early}
+               "out": str(out_path), "stopped_on_time": stopped_early, "finished": finished and not session_stop}
     log(f"train-atr: wrote {out_path} after {summary['seconds']:.0f} s")
     check = summary["check"] = detection_check(out_path, val_dirs or data_dirs, arrays.class_names,
                                                AtrConfig().score_threshold)

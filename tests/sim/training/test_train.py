@@ -61,3 +61,52 @@ def test_training_reduces_the_loss(tiny_dataset, tmp_path):
 def test_train_on_a_folder_without_annotations_names_it(tmp_path):
     with pytest.raises(FileNotFoundError, match="annotations.json"):
         train_atr(tmp_path, tmp_path / "x.onnx", TrainParams(), log=lambda *_: None)
+
+
+def test_a_resumed_run_takes_the_same_steps_as_an_unbroken_one(tiny_dataset, tmp_path):
+    import onnxruntime as ort
+    from sim.training.train import CheckpointError
+
+    params = TrainParams(input_hw=(96, 176), width=8, epochs=3, batch_size=2, threads=1, max_minutes=1e6)
+    whole = train_atr(tiny_dataset, tmp_path / "whole.onnx", params, log=lambda *_: None)
+    ckpt = tmp_path / "run.ckpt"
+    # stop after the first step (a deadline already passed), then resume twice more
+    first = train_atr(tiny_dataset, tmp_path / "part.onnx", params, log=lambda *_: None, checkpoint=ckpt,
+                      stop_after_minutes=1e-9)
+    assert not first["finished"] and first["steps"] == 1 and ckpt.is_file()
+    second = train_atr(tiny_dataset, tmp_path / "part.onnx", params, log=lambda *_: None, checkpoint=ckpt,
+                       resume=True, stop_after_minutes=1e-9)
+    assert second["steps"] == 2
+    rest = train_atr(tiny_dataset, tmp_path / "part.onnx", params, log=lambda *_: None, checkpoint=ckpt, resume=True)
+    assert rest["finished"] and rest["steps"] == whole["steps"] == whole["total_steps"]
+    assert [h["heat"] for h in rest["history"]] == pytest.approx([h["heat"] for h in whole["history"]], rel=1e-5)
+    x = {"image": np.random.default_rng(0).random((1, 1, 96, 176), dtype=np.float32)}
+    a = ort.InferenceSession(str(tmp_path / "whole.onnx")).run(None, x)
+    b = ort.InferenceSession(str(tmp_path / "part.onnx")).run(None, x)
+    for u, v in zip(a, b):
+        np.testing.assert_allclose(u, v, atol=1e-5)
+    other = TrainParams(input_hw=(96, 176), width=8, epochs=3, batch_size=2, threads=1, max_minutes=1e6, lr=1e-2)
+    with pytest.raises(CheckpointError, match=r"lr 0\.003 -> 0\.01"):
+        train_atr(tiny_dataset, tmp_path / "x.onnx", other, log=lambda *_: None, checkpoint=ckpt, resume=True)
+
+
+def test_stride8_model_at_native_resolution_pads_the_fan(tiny_dataset, tmp_path):
+    out = tmp_path / "s8.onnx"
+    params = TrainParams(input_hw=(480, 896), crop_hw=(96, 160), width=8, epochs=1, batch_size=3, threads=1,
+                         arch="s8", input_transform="pad", light_heads=True)
+    train_atr(tiny_dataset, out, params, log=lambda *_: None)
+    det = CnnDetector(out, score_threshold=0.0, max_detections=5)
+    assert det.input_transform == "pad" and det.stride == 8 and det.input_hw == (480, 896)
+    fan = np.random.default_rng(1).integers(0, 255, det.fan_hw, dtype=np.uint8)
+    x = det.preprocess(fan)
+    # the fan sits unresized in the top-left corner, zeros beyond
+    np.testing.assert_array_equal(x[0, 0, :477, :894], fan.astype(np.float32) * np.float32(1 / 255))
+    assert not x[0, 0, 477:].any() and not x[0, 0, :, 894:].any()
+    # the bound (allocation-free) path and the plain one give the same boxes, in fan px unscaled
+    with det._lock:
+        bound = {k: v.copy() for k, v in det._run_bound(fan).items()}
+    plain = det.raw_outputs(fan)
+    for k in plain:
+        np.testing.assert_array_equal(bound[k], plain[k])
+    boxes, _, _ = det.detect_boxes(fan)
+    assert boxes.shape[0] == 5 and (boxes[:, :2] > -50).all() and (boxes[:, 2:] < 950).all()
