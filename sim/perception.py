@@ -140,13 +140,27 @@ def world_model_metrics(objects: list[Any], truth_targets: np.ndarray) -> dict[s
     """Targets of a world model (its :class:`autonomy.world_model.WorldObject` list) scored
     against the true targets ((k, 3) NED m): optimal assignment within 2 m, GOSPA c = 2 m,
     p = 1, alpha = 2. Objects the world model itself classifies as not-targets are counted
-    apart, not as false targets."""
+    apart, not as false targets.
+
+    ``nees_horizontal``: the matched targets' horizontal (north, east) NEES against the true
+    positions with the world model's covariance (each pair's ``nees`` too), their mean and
+    its chi-square 95 % band (:func:`sim.evaluation.nees.nees_summary`): a mean within the
+    band means the map's ellipses say how far off its positions are."""
+    from sim.evaluation.nees import horizontal_nees, nees_summary
+
     targets = target_objects(objects)
     est = np.array([o.pos_ned for o in targets], dtype=float).reshape(-1, 3)
-    s = score_world_model(est, truth_targets, match_radius_m=2.0, gospa_c_m=2.0, gospa_p=1.0)
+    truth = np.asarray(truth_targets, dtype=float).reshape(-1, 3)
+    s = score_world_model(est, truth, match_radius_m=2.0, gospa_c_m=2.0, gospa_p=1.0)
     out = {k: v for k, v in s.items() if k in ("objects", "matched", "missed", "false", "mean_position_error_m",
                                                  "gospa", "pairs")}
     out["objects_not_target"] = len(objects) - len(targets)
+    nees = []
     for pair in out["pairs"]:
-        pair["estimate_id"] = targets[pair["estimate"]].id
+        o = targets[pair["estimate"]]
+        pair["estimate_id"] = o.id
+        pair["nees"] = horizontal_nees(np.asarray(o.pos_ned[:2]) - truth[pair["truth"], :2],
+                                       np.asarray(o.cov_ned)[:2, :2])
+        nees.append(pair["nees"])
+    out["nees_horizontal"] = nees_summary(nees, dof=2)
     return out

@@ -21,7 +21,8 @@ _LOG_2PI = math.log(2.0 * math.pi)
 
 
 def innovation_log_likelihoods(
-    z_pred: ArrayLike, covar_pred: ArrayLike, z: ArrayLike, noise_covar: ArrayLike
+    z_pred: ArrayLike, covar_pred: ArrayLike, z: ArrayLike, noise_covar: ArrayLike,
+    shared_covar: ArrayLike | None = None,
 ) -> tuple[FloatArray, FloatArray]:
     """Squared Mahalanobis distances and Gaussian log-likelihoods of every (object, measurement) pair.
 
@@ -30,6 +31,10 @@ def innovation_log_likelihoods(
         covar_pred: (n, m, m) their covariances ``H P H^T``.
         z: (k, m) measurements.
         noise_covar: (k, m, m) their noise covariances.
+        shared_covar: optional (n, k, m, m) part of ``covar_pred + noise_covar`` the object
+            and the measurement share (errors common to both, ``H M L^T + L M^T H^T`` of
+            :class:`autonomy.estimation.updater.ConsiderKalmanUpdater`), subtracted from
+            each pair's innovation covariance.
 
     Returns:
         ``maha2`` (n, k) and ``log N(z_j; z_pred_i, S_ij)`` (n, k).
@@ -40,6 +45,8 @@ def innovation_log_likelihoods(
     z_pred = np.asarray(z_pred, dtype=float)
     z = np.asarray(z, dtype=float)
     S = np.asarray(covar_pred, dtype=float)[:, None] + np.asarray(noise_covar, dtype=float)[None]
+    if shared_covar is not None:
+        S = S - np.asarray(shared_covar, dtype=float)
     d = z[None] - z_pred[:, None]  # (n, k, m)
     L = np.linalg.cholesky(S)
     w = np.linalg.solve(L, d[..., None])[..., 0]

@@ -77,6 +77,61 @@ class KalmanUpdater:
         return x_new, 0.5 * (P_new + P_new.swapaxes(-1, -2))
 
 
+class ConsiderKalmanUpdater(KalmanUpdater):
+    """Schmidt-Kalman ("consider") update for a linear :class:`PositionFix` ([Schmidt1966]).
+
+    Errors shared between the state and its measurements enter through unit-variance
+    consider parameters ``u`` that are not estimated: the state's error is ``e_r + M u``
+    (``covar`` = ``P_r + M M^T``, ``M`` (n, q) its consider sensitivity) and the
+    measurement's ``L u + v`` (``noise_covar`` = ``R_v + L L^T``, ``L`` (m, q)). Then
+
+        S = H P H^T + R - H M L^T - L M^T H^T,   G = P H^T - M L^T,   K = G S^-1,
+        x+ = x + K (z - H x),   P+ = P - K G^T - G K^T + K S K^T,   M+ = M + K (L - H M),
+
+    the minimum-variance update that never lets the shared part average out: repeated
+    measurements with the same ``L`` leave ``M+ M+^T -> L L^T``. With ``M`` and ``L`` zero
+    it is the Kalman update (to rounding).
+    """
+
+    def update_consider_batch(self, mean: ArrayLike, covar: ArrayLike, sens: ArrayLike, z: ArrayLike,
+                              noise_covar: ArrayLike, noise_sens: ArrayLike
+                              ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """N pairs at once: means (N, n), covariances (N, n, n), sensitivities ``M`` (N, n, q),
+        measurements (N, m), noise covariances (N, m, m) and their sensitivities ``L``
+        (N, m, q) -> posterior means (N, n), covariances (N, n, n) and sensitivities (N, n, q).
+
+        Raises:
+            numpy.linalg.LinAlgError: a singular innovation covariance (in any pair).
+        """
+        model = self.model
+        x = np.asarray(mean, dtype=float)
+        P = np.asarray(covar, dtype=float)
+        M = np.asarray(sens, dtype=float)
+        R = np.asarray(noise_covar, dtype=float)
+        L = np.asarray(noise_sens, dtype=float)
+        HM = M[..., model.mapping, :]
+        G = model.cross_covar(P).swapaxes(-1, -2) - M @ L.swapaxes(-1, -2)  # P H^T - M L^T (N, n, m)
+        C = HM @ L.swapaxes(-1, -2)
+        S = model.project_covar(P) + R - C - C.swapaxes(-1, -2)
+        S = 0.5 * (S + S.swapaxes(-1, -2))
+        K = np.linalg.solve(S, G.swapaxes(-1, -2)).swapaxes(-1, -2)  # G S^-1 (S symmetric)
+        r = model.residual(z, model.function(x))
+        x_new = x + np.matmul(K, r[..., None])[..., 0]
+        KGt = K @ G.swapaxes(-1, -2)
+        P_new = P - KGt - KGt.swapaxes(-1, -2) + K @ S @ K.swapaxes(-1, -2)
+        M_new = M + K @ (L - HM)
+        return x_new, 0.5 * (P_new + P_new.swapaxes(-1, -2)), M_new
+
+    def update_consider(self, mean: ArrayLike, covar: ArrayLike, sens: ArrayLike, z: ArrayLike,
+                        noise_covar: ArrayLike, noise_sens: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """One pair of :meth:`update_consider_batch`: (n,), (n, n), (n, q) -> the same."""
+        x, P, M = self.update_consider_batch(np.asarray(mean, float)[None], np.asarray(covar, float)[None],
+                                             np.asarray(sens, float)[None], np.asarray(z, float)[None],
+                                             np.asarray(noise_covar, float)[None],
+                                             np.asarray(noise_sens, float)[None])
+        return x[0], P[0], M[0]
+
+
 class ExtendedKalmanUpdater:
     """Extended Kalman update for a nonlinear measurement model of the state (its ``function``
     and ``jacobian`` taking the state; angle residuals wrapped by the model's ``residual``).

@@ -44,6 +44,13 @@ class LocalizedDetection:
         class_score: ATR probability that it is a target, in [0, 1].
         class_name: ATR class label.
         method: "flat_seabed" or "planar" (planar also when no altitude was available).
+        shared_ned: (3, q) m, or None (no shared part): the error this detection shares with
+            others, as columns on unit-variance consider parameters (:data:`SHARED_ERRORS`:
+            the navigation position and heading errors, common to every detection taken from
+            one drifting pose, and where on the object the box lands, common to the looks at
+            one object). ``cov_ned`` includes ``shared_ned @ shared_ned.T``; the world model
+            keeps these parts from averaging out over repeated looks ([Schmidt1966] in
+            docs/references.md).
     """
 
     t_s: float
@@ -52,6 +59,19 @@ class LocalizedDetection:
     class_score: float
     class_name: str = "target"
     method: str = "flat_seabed"
+    shared_ned: FloatArray | None = None
+
+
+#: The consider parameters of :attr:`LocalizedDetection.shared_ned`'s columns, in order.
+SHARED_ERRORS = ("nav_north", "nav_east", "nav_down", "nav_heading", "point_north", "point_east", "point_down")
+
+
+def covariance_root(cov: ArrayLike) -> FloatArray:
+    """A (3, 3) factor ``L`` with ``L @ L.T == cov`` for a symmetric positive semi-definite
+    ``cov`` (eigen-decomposition, so a singular covariance, e.g. a known pose, gives zeros)."""
+    c = np.asarray(cov, dtype=float)
+    w, v = np.linalg.eigh(0.5 * (c + c.T))
+    return v * np.sqrt(np.clip(w, 0.0, None))
 
 
 def sonar_point_ned(
@@ -171,12 +191,17 @@ def localize(
         var_r += (cfg.box_sigma_fraction * dr) ** 2
         var_a += (cfg.box_sigma_fraction * da) ** 2
     var_att = cfg.attitude_sigma_rad**2
+    # per-frame errors; the heading error is a shared one (below)
     var_in = np.array(
         [var_r, var_a, cfg.altitude_sigma_m**2 if use_seabed else 0.0, var_att, var_att,
-         max(float(nav.cov_yaw_rad2), 0.0), cfg.tilt_sigma_rad**2]
+         0.0, cfg.tilt_sigma_rad**2]
     )
-    cov = (J * var_in) @ J.T + np.asarray(nav.cov_pos_ned, dtype=float)
-    cov = 0.5 * (cov + cov.T) + cfg.min_sigma_m**2 * np.eye(3)
+    shared = np.empty((3, len(SHARED_ERRORS)))
+    shared[:, :3] = covariance_root(nav.cov_pos_ned)
+    shared[:, 3] = J[:, 5] * np.sqrt(max(float(nav.cov_yaw_rad2), 0.0))
+    shared[:, 4:] = cfg.min_sigma_m * np.eye(3)
+    cov = (J * var_in) @ J.T + shared @ shared.T
+    cov = 0.5 * (cov + cov.T)
     return LocalizedDetection(
         t_s=float(detection.t_s),
         pos_ned=np.asarray(nav.pos_ned, dtype=float) + p_rel,
@@ -184,4 +209,5 @@ def localize(
         class_score=float(detection.score),
         class_name=detection.class_name,
         method="flat_seabed" if use_seabed else "planar",
+        shared_ned=shared,
     )

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from autonomy.localization.geolocate import LocalizedDetection
+from autonomy.localization.geolocate import SHARED_ERRORS, LocalizedDetection
 from autonomy.world_model.config import WorldModelConfig
 
 FloatArray = NDArray[np.float64]
@@ -35,6 +35,9 @@ class Anchor:
         n_detections: measurements absorbed.
         class_pmf: (2,) probabilities of CLASS_NAMES.
         measurement_ids: uids of the absorbed measurements, oldest first.
+        consider_ned: (3, q) sensitivity of the position error to the consider parameters
+            of :data:`autonomy.localization.geolocate.SHARED_ERRORS` (``cov_ned`` includes
+            ``consider_ned @ consider_ned.T``), or None (no shared error).
     """
 
     id: int
@@ -45,6 +48,7 @@ class Anchor:
     n_detections: int
     class_pmf: FloatArray
     measurement_ids: tuple[int, ...]
+    consider_ned: FloatArray | None = None
 
 
 def class_likelihood(score: float, cfg: WorldModelConfig) -> FloatArray:
@@ -72,3 +76,20 @@ def measurement_cov(z: LocalizedDetection, cfg: WorldModelConfig) -> FloatArray:
     if cfg.measurement_cov_m2 is not None:
         return cfg.measurement_cov_m2 * np.eye(3)
     return np.asarray(z.cov_ned, dtype=float)
+
+
+def measurement_shared(z: LocalizedDetection, cfg: WorldModelConfig) -> FloatArray:
+    """The measurement's shared-error sensitivity (3, q = len(SHARED_ERRORS)): its
+    ``shared_ned``, or zeros when it has none, when a fixed covariance replaces the
+    localisation's, or when ``consider_shared_errors`` is off.
+
+    Raises:
+        ValueError: ``shared_ned`` of another shape.
+    """
+    q = len(SHARED_ERRORS)
+    if z.shared_ned is None or cfg.measurement_cov_m2 is not None or not cfg.consider_shared_errors:
+        return np.zeros((3, q))
+    L = np.asarray(z.shared_ned, dtype=float)
+    if L.shape != (3, q):
+        raise ValueError(f"LocalizedDetection.shared_ned must have shape (3, {q}), got {L.shape}")
+    return L

@@ -42,6 +42,12 @@ class WorldModelConfig(StrictModel):
         None, description="if set, replaces each measurement covariance by this x I3 (paper: 1)"
     )
     use_class_likelihood: bool = Field(True, description="class pmf enters the association")
+    consider_shared_errors: bool = Field(
+        True, description="keep the errors detections share (navigation position and heading, where on "
+        "the object the box lands) from averaging out over repeated looks (Schmidt consider update); "
+        "false: every detection's error is independent (paper 000's model), so ellipses shrink below "
+        "the navigation error",
+    )
     class_score_floor: float = Field(0.01, gt=0.0, lt=0.5, description="ATR score clip")
     min_detections: int = Field(2, ge=1, description="supporting detections to report an object")
     region_margin_m: float = Field(

@@ -63,8 +63,8 @@ from autonomy.estimation.initiator import SingleMeasurementInitiator
 from autonomy.estimation.measurement import PositionFix
 from autonomy.estimation.predictor import KalmanPredictor
 from autonomy.estimation.transition import ConstantPosition
-from autonomy.estimation.updater import KalmanUpdater
-from autonomy.localization.geolocate import LocalizedDetection
+from autonomy.estimation.updater import ConsiderKalmanUpdater
+from autonomy.localization.geolocate import SHARED_ERRORS, LocalizedDetection
 from autonomy.world_model.anchor import (
     CLASS_NAMES,
     Anchor,
@@ -72,6 +72,7 @@ from autonomy.world_model.anchor import (
     class_update,
     class_update_batch,
     measurement_cov,
+    measurement_shared,
 )
 from autonomy.world_model.config import WorldModelConfig
 
@@ -150,7 +151,8 @@ class PMHA:
         self.transition = ConstantPosition(cfg.process_noise_m2_per_s, ndim=3)
         self.predictor = KalmanPredictor(self.transition, cfg.kf_timeout_s, cfg.fallback_cov_m2 * np.eye(3))
         self.measurement_model = PositionFix(3, (0, 1, 2))  # NED position; covariance per detection
-        self.updater = KalmanUpdater(self.measurement_model)
+        self.updater = ConsiderKalmanUpdater(self.measurement_model)
+        self._consider = cfg.consider_shared_errors and cfg.measurement_cov_m2 is None
         self.gater = MahalanobisGater(cfg.gate_mahalanobis2)
         self.initiator = SingleMeasurementInitiator(self.measurement_model)
         self.deleter = (
@@ -210,19 +212,25 @@ class PMHA:
             Z = np.stack([np.asarray(z.pos_ned, dtype=float) for z in measurements])
             R = np.stack([measurement_cov(z, cfg) for z in measurements])
             Q = np.stack([class_likelihood(z.class_score, cfg) for z in measurements])  # (m, 2)
-        posterior: dict[tuple[int, int], tuple[FloatArray, FloatArray, FloatArray]] = {}
+            Ls = np.stack([measurement_shared(z, cfg) for z in measurements]) if self._consider else None
+        posterior: dict[tuple[int, int], tuple] = {}
+        M_pred = None
         if m and n_u:
             dt = np.maximum(t_s - np.array([a.t_last_s for a in anchors]), 0.0)
             P_pred = self.predictor.predict_covar(np.stack([a.cov_ned for a in anchors]), dt)
+            if self._consider:
+                M_pred = np.stack([self._sens(a) for a in anchors])
+                # after the timeout the position is a fresh fixed Gaussian, sharing nothing
+                M_pred[dt > cfg.kf_timeout_s] = 0.0
             pmf = np.stack([a.class_pmf for a in anchors])  # (n_u, 2)
-            assoc = self._association_logw(X, P_pred, p_d, log_miss, pmf, Z, R, Q)
+            assoc = self._association_logw(X, P_pred, p_d, log_miss, pmf, Z, R, Q, M_pred, Ls)
             inside = np.isfinite(assoc)
             gated = [
                 [(versions[u], -float(assoc[u, j])) for u in np.flatnonzero(inside[:, j])]
                 for j in range(m)
             ]
             row_of = dict(zip(versions, range(n_u)))
-            posterior = self._posteriors(versions, X, P_pred, pmf, Z, R, Q, inside)
+            posterior = self._posteriors(versions, X, P_pred, pmf, Z, R, Q, inside, M_pred, Ls)
         else:
             gated = [[] for _ in range(m)]
         private_in = [(_NEW, -self._log_new), (_CLUTTER, -self._log_clutter)]
@@ -300,8 +308,10 @@ class PMHA:
                     key = (lab, j)
                     a = update_cache.get(key)
                     if a is None:
+                        u = row_of[lab]
                         a = update_cache[key] = self._updated(
-                            anchor_of[lab], posterior.get(key), P_pred[row_of[lab]], Z[j], R[j], Q[j], uids[j], t_s
+                            anchor_of[lab], posterior.get(key), P_pred[u], Z[j], R[j], Q[j], uids[j], t_s,
+                            None if M_pred is None else M_pred[u], None if Ls is None else Ls[j],
                         )
                         if canon is not None:
                             self._register(a, canon, reps, id_of)
@@ -310,7 +320,8 @@ class PMHA:
                 elif lab == _NEW:
                     a = birth_cache.get(j)
                     if a is None:
-                        a = birth_cache[j] = self._born(measurements[j], Z[j], R[j], uids[j])
+                        a = birth_cache[j] = self._born(measurements[j], Z[j], R[j], uids[j],
+                                                        None if Ls is None else Ls[j])
                         if canon is not None:
                             self._register(a, canon, reps, id_of)
                     added.append(a.version)
@@ -396,7 +407,10 @@ class PMHA:
                 continue
             pos, cov = fuse_cluster(Z[members], R[members])
             score = float(np.mean([measurements[j].class_score for j in members]))
-            out.append(dataclasses.replace(first, pos_ned=pos, cov_ned=cov, class_score=score))
+            # the members' errors are taken as fully correlated (fuse_cluster): so are their shared parts
+            shared = (np.mean([measurement_shared(measurements[j], self.cfg) for j in members], axis=0)
+                      if self._consider else first.shared_ned)
+            out.append(dataclasses.replace(first, pos_ned=pos, cov_ned=cov, class_score=score, shared_ned=shared))
         return out
 
     def _register(
@@ -454,13 +468,20 @@ class PMHA:
         Z: FloatArray,
         R: FloatArray,
         Q: FloatArray,
+        M: FloatArray | None = None,
+        L: FloatArray | None = None,
     ) -> FloatArray:
         """Log weight (n_u, m) of each anchor-measurement pair relative to the anchor's miss;
         -inf outside the gate. ``pmf`` (n_u, 2): the anchors' class pmfs; ``Q`` (m, 2): the
-        measurements' class likelihoods."""
+        measurements' class likelihoods; ``M`` (n_u, 3, q) and ``L`` (m, 3, q): the anchors'
+        and measurements' shared-error sensitivities (None: nothing shared)."""
         cfg = self.cfg
         model = self.measurement_model
-        maha2, loglik = innovation_log_likelihoods(model.function(X), model.project_covar(P_pred), Z, R)
+        shared = None
+        if M is not None and L is not None:
+            C = np.einsum("uaq,jbq->ujab", M[:, model.mapping], L)
+            shared = C + C.swapaxes(-1, -2)
+        maha2, loglik = innovation_log_likelihoods(model.function(X), model.project_covar(P_pred), Z, R, shared)
         with np.errstate(divide="ignore"):
             logw = self._log_existing + np.log(p_d)[:, None] + loglik - log_miss[:, None]
         if cfg.use_class_likelihood:
@@ -470,36 +491,50 @@ class PMHA:
 
     def _posteriors(
         self, versions: list[int], X: FloatArray, P_pred: FloatArray, pmf: FloatArray, Z: FloatArray,
-        R: FloatArray, Q: FloatArray, inside: NDArray[np.bool_],
-    ) -> dict[tuple[int, int], tuple[FloatArray, FloatArray, FloatArray]]:
+        R: FloatArray, Q: FloatArray, inside: NDArray[np.bool_], M: FloatArray | None = None,
+        L: FloatArray | None = None,
+    ) -> dict[tuple[int, int], tuple]:
         """Kalman and class posteriors of every gated (anchor u, measurement j) pair in one
-        batch, keyed ``(version of u, j)``: ``(pos_ned (3,), cov_ned (3, 3), class_pmf (2,))``,
-        each bit for bit what :meth:`_updated` computes for the pair alone
-        (:meth:`KalmanUpdater.update_batch`, :func:`class_update_batch`). Empty when an
+        batch, keyed ``(version of u, j)``: ``(pos_ned (3,), cov_ned (3, 3), class_pmf (2,),
+        consider_ned (3, q) or None)``, each bit for bit what :meth:`_updated` computes for the
+        pair alone (:meth:`ConsiderKalmanUpdater.update_consider_batch` with shared errors,
+        else :meth:`KalmanUpdater.update_batch`; :func:`class_update_batch`). Empty when an
         innovation covariance is singular: the pairs are then updated one by one when drawn,
         so the error is raised only for a pair a child uses, as before."""
         us, js = np.nonzero(inside)
         if us.size == 0:
             return {}
         try:
-            x, P = self.updater.update_batch(X[us], P_pred[us], Z[js], R[js])
+            if M is None:
+                x, P = self.updater.update_batch(X[us], P_pred[us], Z[js], R[js])
+                Mn = [None] * len(us)
+            else:
+                x, P, Mn = self.updater.update_consider_batch(X[us], P_pred[us], M[us], Z[js], R[js], L[js])
         except np.linalg.LinAlgError:
             return {}
         post = class_update_batch(pmf[us], Q[js])
-        return {(versions[u], j): (x[i], P[i], post[i]) for i, (u, j) in enumerate(zip(us.tolist(), js.tolist()))}
+        return {(versions[u], j): (x[i], P[i], post[i], Mn[i])
+                for i, (u, j) in enumerate(zip(us.tolist(), js.tolist()))}
 
     def _updated(
         self, anchor: Anchor, posterior: tuple[FloatArray, FloatArray, FloatArray] | None, P_pred: FloatArray,
         z_pos: FloatArray, R: FloatArray, q: FloatArray, uid: int, t_s: float,
+        M_pred: FloatArray | None = None, L: FloatArray | None = None,
     ) -> Anchor:
         """New version of ``anchor`` after measurement ``z_pos`` (3,) with noise ``R`` (3, 3)
-        and class likelihood ``q`` (2,): Kalman and class updates, or their ``posterior``
-        precomputed by :meth:`_posteriors`."""
+        and class likelihood ``q`` (2,): Kalman (consider, with the anchor's ``M_pred`` and
+        the measurement's ``L`` shared-error sensitivities) and class updates, or their
+        ``posterior`` precomputed by :meth:`_posteriors`."""
+        M = None
         if posterior is None:
-            x, P = self.updater.update(anchor.pos_ned, P_pred, z_pos, R)
+            if M_pred is None:
+                x, P = self.updater.update(anchor.pos_ned, P_pred, z_pos, R)
+            else:
+                x, P, M = self.updater.update_consider(anchor.pos_ned, P_pred, M_pred, z_pos, R, L)
             pmf = class_update(anchor.class_pmf, q)
         else:
-            x, P, pmf = (v.copy() for v in posterior)
+            x, P, pmf = (v.copy() for v in posterior[:3])
+            M = None if posterior[3] is None else posterior[3].copy()
         return Anchor(
             id=anchor.id,
             version=self._version(),
@@ -509,10 +544,17 @@ class PMHA:
             n_detections=anchor.n_detections + 1,
             class_pmf=pmf,
             measurement_ids=anchor.measurement_ids + (uid,),
+            consider_ned=M,
         )
 
-    def _born(self, z: LocalizedDetection, z_pos: FloatArray, R: FloatArray, uid: int) -> Anchor:
-        """Anchor initialised from its first measurement (the uid becomes its symbol)."""
+    @staticmethod
+    def _sens(a: Anchor) -> FloatArray:
+        return np.zeros((3, len(SHARED_ERRORS))) if a.consider_ned is None else a.consider_ned
+
+    def _born(self, z: LocalizedDetection, z_pos: FloatArray, R: FloatArray, uid: int,
+              L: FloatArray | None = None) -> Anchor:
+        """Anchor initialised from its first measurement (the uid becomes its symbol); its
+        position error shares the measurement's shared part ``L`` (3, q)."""
         x, P = self.initiator.initiate(z_pos, R)
         return Anchor(
             id=uid,
@@ -523,6 +565,7 @@ class PMHA:
             n_detections=1,
             class_pmf=class_likelihood(z.class_score, self.cfg),
             measurement_ids=(uid,),
+            consider_ned=None if L is None else L.copy(),
         )
 
     def _version(self) -> int:

@@ -35,6 +35,7 @@ from scipy.stats import chi2
 
 from autonomy.tracking.onboard import MODES, TrackingStack
 from sim.movers import DIVER_HALF_LENGTH_M, DIVER_RADIUS_M, VEHICLE_HALF_SIZE_M
+from sim.evaluation.nees import horizontal_nees  # noqa: F401 (also imported from here)
 
 FloatArray = NDArray[np.float64]
 ERROR_SETS = ("sonar", "sonar_when_available", "usbl", "fused")
@@ -318,16 +319,6 @@ class TrackingEvaluation:
         fig.tight_layout()
         fig.savefig(error_png, dpi=110)
         error_boxplot_png(self.error_sets(), box_png, title or "error sets", ylabel="3-D position error (m)")
-
-
-def horizontal_nees(err_ne_m: FloatArray, covar_ne_m2: FloatArray) -> float:
-    """Normalised estimation error squared ``e^T P^-1 e`` of a horizontal error (2,) m with
-    its covariance (2, 2) m^2 (chi-square with 2 degrees of freedom for a consistent filter;
-    Bar-Shalom, Li and Kirubarajan 2001 section 5.4); NaN for a singular covariance."""
-    try:
-        return float(err_ne_m @ np.linalg.solve(covar_ne_m2, err_ne_m))
-    except np.linalg.LinAlgError:
-        return math.nan
 
 
 def error_boxplot_png(sets: dict[str, FloatArray], path: Path, title: str, ylabel: str = "position error (m)") -> None:

@@ -182,3 +182,28 @@ def test_batched_rotations_bit_identical_to_stacked_form_and_equal_rot_from_eule
     np.testing.assert_array_equal(got, stacked)
     for R, angles in zip(got, rpy):
         np.testing.assert_allclose(R, rot_from_euler(*angles), atol=1e-15)
+
+
+def test_shared_part_is_the_navigation_and_reference_point_error():
+    # The shared columns must reproduce, by Monte Carlo through the geometry itself, the error
+    # a position and heading offset of the navigation solution makes (common to every
+    # detection from that pose), plus the configured reference-point floor.
+    cfg = LocalizationConfig(box_sigma_fraction=0.0, min_sigma_m=0.15)
+    pos, rpy, alt = np.array([1.0, 2.0, 1.0]), np.array([0.0, 0.0, 0.4]), 3.0
+    mount, mount_rpy = np.array([0.5, 0.0, 0.2]), np.array([0.0, np.deg2rad(15), 0.0])
+    cov_pos, cov_yaw = 0.04, np.deg2rad(1.0) ** 2
+    loc = localize(_det(12.0, 0.3), _nav(pos, rpy, alt, cov_pos, cov_yaw), mount, mount_rpy, cfg)
+    L = loc.shared_ned
+    assert L.shape == (3, 7)
+    np.testing.assert_allclose(L[:, :3] @ L[:, :3].T, cov_pos * np.eye(3), atol=1e-12)
+    np.testing.assert_allclose(L[:, 4:], 0.15 * np.eye(3))
+    rng = np.random.default_rng(2)
+    dyaw = rng.normal(0, np.sqrt(cov_yaw), 4000)
+    pts = np.array([sonar_point_ned(12.0, 0.3, pos, rpy + [0, 0, d], mount, mount_rpy, altitude_m=alt) for d in dyaw])
+    np.testing.assert_allclose(np.outer(L[:, 3], L[:, 3]), np.cov(pts.T), atol=2e-4)
+    # the rest of the covariance is the per-frame part: positive semi-definite, and without
+    # navigation or floor terms the same detection has no shared part at all
+    assert np.linalg.eigvalsh(loc.cov_ned - L @ L.T).min() > -1e-12
+    bare = localize(_det(12.0, 0.3), _nav(pos, rpy, alt), mount, mount_rpy,
+                    LocalizationConfig(box_sigma_fraction=0.0, min_sigma_m=0.0))
+    assert not bare.shared_ned.any()

@@ -292,3 +292,46 @@ def test_batched_class_update_is_bit_identical():
     lik = rng.uniform(0.01, 0.99, (500, 1)) * [1.0, -1.0] + [0.0, 1.0]
     batch = class_update_batch(pmf, lik)
     assert all(np.array_equal(class_update(p, q), b) for p, q, b in zip(pmf, lik, batch))
+
+
+def _shared_stream(rng, looks, q=7):
+    """One object seen ``looks`` times from a drifting pose: the detections share one
+    navigation / reference-point error draw u through slowly changing sensitivities L_k."""
+    x_true = np.array([0.0, 15.0, 4.0])
+    u = rng.normal(size=q)
+    A, B = rng.normal(scale=0.12, size=(3, q)), rng.normal(scale=0.0015, size=(3, q))
+    scans = []
+    for k in range(looks):
+        L = A + k * B
+        Rv = 0.02 * np.eye(3)
+        z = x_true + L @ u + rng.multivariate_normal(np.zeros(3), Rv)
+        scans.append(LocalizedDetection(0.5 * k, z, Rv + L @ L.T, 0.9, shared_ned=L))
+    return x_true, scans
+
+
+@pytest.mark.parametrize("consider", [True, False])
+def test_world_model_ellipses_hold_the_shared_navigation_error(consider):
+    # Monte Carlo over runs: horizontal NEES of the one object against its true position.
+    # Consistent (mean 2, chi-square band of 150 runs) with the consider terms; without them
+    # repeated looks shrink the ellipse far below the error they share.
+    from sim.evaluation.nees import horizontal_nees, mean_nees_band
+
+    rng = np.random.default_rng(11)
+    cfg = WorldModelConfig(consider_shared_errors=consider, process_noise_m2_per_s=0.0)  # the model the stream follows
+    nees, n_objects = [], []
+    for _ in range(150):
+        x_true, scans = _shared_stream(rng, 25)
+        wm = PMHA(cfg, region_ned=([-10.0, 5.0, -2.0], [10.0, 25.0, 10.0]))
+        for z in scans:
+            wm.update(z.t_s, [z])
+        objs = wm.world_model()
+        n_objects.append(len(objs))
+        obj = max(objs, key=lambda o: o.n_detections)
+        nees.append(horizontal_nees(obj.pos_ned[:2] - x_true[:2], obj.cov_ned[:2, :2]))
+    lo, hi = mean_nees_band(len(nees), 2)
+    # a consistent model splits an object only on a rare innovation past the gate
+    assert np.mean(np.array(n_objects) == 1) >= 0.98, np.bincount(n_objects)
+    if consider:
+        assert lo <= np.mean(nees) <= hi, (np.mean(nees), lo, hi)
+    else:
+        assert np.mean(nees) > 3 * hi, np.mean(nees)
