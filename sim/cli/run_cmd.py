@@ -34,6 +34,11 @@ def print_summary(metrics: dict, out: str) -> None:
         print(f"world model: {wm['objects']} targets ({n_other} more object{'' if n_other == 1 else 's'} classified "
               f"not target), {wm['matched']} matched, {wm['missed']} missed, {wm['false']} false, "
               f"mean error {_fmt(wm.get('mean_position_error_m'), '.2f', ' m')}, GOSPA {_fmt(wm.get('gospa'), '.2f')}")
+        nees = wm.get("nees_horizontal")
+        if nees and nees["n"]:
+            lo, hi = nees["band_95"]
+            print(f"world model ellipses: mean horizontal NEES {nees['mean']:.2f} over {nees['n']} matched targets "
+                  f"(a consistent map: 2, 95 % band {lo:.2f}-{hi:.2f})")
     if "surface_world_model" in metrics:
         wm = metrics["surface_world_model"]
         print(f"surface world model: {wm['objects']} targets, {wm['matched']} matched, {wm['missed']} missed, "

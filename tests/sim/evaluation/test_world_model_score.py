@@ -57,3 +57,26 @@ def test_empty_sets():
     assert gospa(np.zeros((0, 2)), TRUTHS, c=2.0) == pytest.approx(3.0)
     s = score_world_model(np.zeros((0, 3)), np.zeros((0, 3)))
     assert s["matched"] == 0 and s["gospa"] == 0.0 and np.isnan(s["mean_position_error_m"])
+
+
+def test_world_model_metrics_report_each_targets_nees_and_the_chi_square_band():
+    from scipy.stats import chi2
+
+    from autonomy.world_model.pmha import WorldObject
+    from sim.perception import world_model_metrics
+
+    truth = np.array([[0.0, 0.0, 5.0], [10.0, 0.0, 5.0]])
+    target = np.array([0.99, 0.01])
+    objs = [WorldObject(1, target, np.array([0.9, -0.8, 5.0]), np.diag([0.09, 0.04, 1.0]), 5, 1.0),
+            WorldObject(2, target, np.array([10.0, 0.2, 5.0]), np.array([[0.05, 0.01, 0], [0.01, 0.02, 0], [0, 0, 1]]),
+                        5, 1.0)]
+    m = world_model_metrics(objs, truth)
+    by_id = {p["estimate_id"]: p["nees"] for p in m["pairs"]}
+    # hand algebra: 0.9^2 / 0.09 + 0.8^2 / 0.04 = 25; e^T P^-1 e with P = [[.05 .01] [.01 .02]], e = (0, .2)
+    assert by_id[1] == pytest.approx(25.0)
+    assert by_id[2] == pytest.approx(0.2**2 * 0.05 / (0.05 * 0.02 - 0.01**2))
+    s = m["nees_horizontal"]
+    assert s["n"] == 2 and s["mean"] == pytest.approx((by_id[1] + by_id[2]) / 2)
+    assert s["band_95"] == pytest.approx([chi2.ppf(0.025, 4) / 2, chi2.ppf(0.975, 4) / 2])
+    assert s["within_band"] is False  # mean 13.6 > 5.57
+    assert s["above_95_fraction"] == pytest.approx(0.5)  # 25 > 5.99 > 2.22
