@@ -13,7 +13,7 @@ from sim.cli.args import non_negative_int, positive_int
 from sim.cli.errors import CliError
 from sim.cli.scenario_cmds import DEFAULT_SCENARIO, add_scenario_args, load_scenario_noting, refuse_sweep_only
 
-OPTION_BENCHES = {"workers": ("mission", "gym", "dataset"), "sonar": ("mission",)}  # benches taking each option
+OPTION_BENCHES = {"workers": ("mission", "gym", "dataset"), "sonar": ("mission",), "model": ("atr",)}  # benches taking each option
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
@@ -27,12 +27,18 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     params = inspect.signature(bench).parameters
     options = {}
     for flag, key, value, default in (("--workers", "workers", args.workers, None),
-                                      ("--no-sonar", "sonar", not args.no_sonar, True)):
+                                      ("--no-sonar", "sonar", not args.no_sonar, True),
+                                      ("--model", "model", args.model, None)):
         if value == default or (key == "workers" and value is None):
             continue
         if key not in params:
             raise CliError(f"{flag}: only for bench {', '.join(OPTION_BENCHES[key])}, not {args.name}")
         options[key] = value
+    if args.model is not None:
+        from pathlib import Path
+
+        if not Path(args.model).is_file():
+            raise CliError(f"--model {args.model}: no such ONNX file")
     if args.no_sonar and args.workers is not None and args.workers > 1:
         raise CliError("--workers: times the pipelined sonar against the serial loop; not with --no-sonar "
                        "(drop one of them)")
@@ -62,5 +68,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                         "vector-env processes (gym) or N dataset worker processes against one, in the same run")
     p.add_argument("--no-sonar", action="store_true", help="mission: without the forward-looking sonar "
                                                            "(and so without perception)")
+    p.add_argument("--model", default=None, metavar="FILE.onnx",
+                   help="atr: also time this ATR model against the shipped one, alternating, in CPU seconds "
+                        "(model_cpu_ratio)")
     add_scenario_args(p, positional=False)
     p.set_defaults(func=_cmd_bench)

@@ -229,11 +229,16 @@ def ensure_heldout(seed: int = HELDOUT_SEED, n_frames: int = HELDOUT_FRAMES, wor
     return out
 
 
-def bench_atr(data_dir: str | Path | None = None, n_frames: int = 50, repeats: int = 3) -> dict:
+def bench_atr(data_dir: str | Path | None = None, n_frames: int = 50, repeats: int = 3,
+              model: str | Path | None = None) -> dict:
     """Inference speed on one core: ``frames_per_s`` of the CNN and classical detectors.
 
     Times ``detect`` over the first ``n_frames`` frames of ``data_dir`` (default: the
-    held-out set), best of ``repeats`` passes; frames are decoded before timing.
+    held-out set), best of ``repeats`` passes; frames are decoded before timing. With
+    ``model`` (an ONNX file), that model and the shipped one also run in alternating passes
+    over the same frames, timed in CPU seconds: ``model_cpu_ratio`` is the model's CPU time per
+    ``detect`` (pre-processing and decoding included) over the shipped model's, from the
+    ``5 * repeats`` alternated passes' medians.
     """
     from autonomy.atr import build_detector
     from autonomy.atr.config import AtrConfig
@@ -254,4 +259,23 @@ def bench_atr(data_dir: str | Path | None = None, n_frames: int = 50, repeats: i
             best = min(best, time.perf_counter() - t0)
         out[f"{kind}_frames_per_s"] = len(frames) / best
         out[f"{kind}_ms_per_frame"] = 1000.0 * best / len(frames)
+    if model is not None:
+        from autonomy.atr.cnn_detector import CnnDetector
+
+        cfg = AtrConfig(detector="cnn", intra_op_threads=1)
+        pair = {"shipped": build_detector(cfg),
+                "model": CnnDetector(model, score_threshold=cfg.score_threshold, intra_op_threads=1)}
+        cpu: dict[str, list[float]] = {k: [] for k in pair}
+        for det in pair.values():
+            det.detect(frames[0])
+        for i in range(5 * repeats):
+            for k in (("shipped", "model") if i % 2 == 0 else ("model", "shipped")):
+                t0 = time.process_time()
+                for f in frames:
+                    pair[k].detect(f)
+                cpu[k].append((time.process_time() - t0) / len(frames))
+        med = {k: float(np.median(v)) for k, v in cpu.items()}
+        out.update({"model": str(model), "model_cpu_ms_per_frame": 1000.0 * med["model"],
+                    "shipped_cpu_ms_per_frame": 1000.0 * med["shipped"],
+                    "model_cpu_ratio": med["model"] / med["shipped"]})
     return out

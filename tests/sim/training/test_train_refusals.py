@@ -69,3 +69,27 @@ def test_a_model_that_detects_nothing_is_written_with_a_warning(data, tmp_path, 
     assert ("warning: the model in" in captured.err and "detects nothing at score threshold 0.40 on 3 validation "
             "frames holding 6 labelled objects" in captured.err), captured.err
     assert "makes 0 detections on 3 validation frames" in captured.out
+
+
+@pytest.mark.parametrize("case", ["resume_without_checkpoint", "resume_missing", "checkpoint_exists",
+                                  "checkpoint_folder", "other_parameters"])
+def test_checkpoint_misuse_gets_one_line_and_keeps_what_was_written(data, tmp_path, capsys, case):
+    out, ckpt = tmp_path / "m.onnx", tmp_path / "run.ckpt"
+    if case in ("checkpoint_exists", "other_parameters"):
+        assert main(["train-atr", "--data", str(data), "--out", str(out), "--checkpoint", str(ckpt), *TINY]) == 0
+        capsys.readouterr()
+    before = ckpt.read_bytes() if ckpt.exists() else None
+    args = {"resume_without_checkpoint": ["--resume"],
+            "resume_missing": ["--checkpoint", str(ckpt), "--resume"],
+            "checkpoint_exists": ["--checkpoint", str(ckpt)],
+            "checkpoint_folder": ["--checkpoint", str(tmp_path)],
+            "other_parameters": ["--checkpoint", str(ckpt), "--resume", "--lr", "0.01"]}[case]
+    code = main(["train-atr", "--data", str(data), "--out", str(tmp_path / "n.onnx"), *TINY, *args])
+    err = capsys.readouterr().err
+    assert code == 2 and "Traceback" not in err and len(err.strip().splitlines()) == 1, err
+    assert {"resume_without_checkpoint": "--resume: name the checkpoint",
+            "resume_missing": "no such file to resume from",
+            "checkpoint_exists": "pass --resume to continue",
+            "checkpoint_folder": "is a folder",
+            "other_parameters": "lr 0.003 -> 0.01"}[case] in err
+    assert (ckpt.read_bytes() if ckpt.exists() else None) == before
