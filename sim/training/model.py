@@ -34,6 +34,17 @@ def _dw_block(c_in: int, c_out: int, stride: int = 1) -> nn.Sequential:
         nn.Conv2d(c_in, c_out, 1, bias=False), nn.BatchNorm2d(c_out), nn.ReLU(inplace=True))
 
 
+def _add_heads(model: nn.Module, c: int, num_classes: int, light_heads: bool) -> None:
+    """The heat-map (``model.heat``, bias at the foreground prior) and box (``model.box``:
+    log size and offset) heads on ``c`` channels."""
+    head = _dw_block if light_heads else _conv_bn
+    model.heat = nn.Sequential(head(c, c), nn.Conv2d(c, num_classes, 1))
+    model.box = nn.Sequential(head(c, c), nn.Conv2d(c, 4, 1))
+    prior = float(torch.log(torch.tensor(HEATMAP_PRIOR / (1 - HEATMAP_PRIOR))))
+    nn.init.constant_(model.heat[-1].bias, prior)
+    model.num_classes = num_classes
+
+
 class CenterNetSmall(nn.Module):
     stride = STRIDE
 
@@ -57,12 +68,7 @@ class CenterNetSmall(nn.Module):
         self.fuse3 = _dw_block(w3, w3)
         self.lat2 = nn.Conv2d(w3, w2, 1)
         self.fuse2 = _dw_block(w2, w2)
-        head = _dw_block if light_heads else _conv_bn
-        self.heat = nn.Sequential(head(w2, w2), nn.Conv2d(w2, num_classes, 1))
-        self.box = nn.Sequential(head(w2, w2), nn.Conv2d(w2, 4, 1))
-        prior = float(torch.log(torch.tensor(HEATMAP_PRIOR / (1 - HEATMAP_PRIOR))))
-        nn.init.constant_(self.heat[-1].bias, prior)
-        self.num_classes = num_classes
+        _add_heads(self, w2, num_classes, light_heads)
 
     def forward(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
         x = x - 0.25  # centre the typical sonar grey level
@@ -100,12 +106,7 @@ class CenterNetS8(nn.Module):
         self.stage16 = nn.Sequential(_dw_block(w2, w3, 2), _dw_block(w3, w3), _dw_block(w3, w3))  # /16
         self.lat8 = nn.Conv2d(w3, w2, 1)
         self.fuse8 = _dw_block(w2, w2)
-        head = _dw_block if light_heads else _conv_bn
-        self.heat = nn.Sequential(head(w2, w2), nn.Conv2d(w2, num_classes, 1))
-        self.box = nn.Sequential(head(w2, w2), nn.Conv2d(w2, 4, 1))
-        prior = float(torch.log(torch.tensor(HEATMAP_PRIOR / (1 - HEATMAP_PRIOR))))
-        nn.init.constant_(self.heat[-1].bias, prior)
-        self.num_classes = num_classes
+        _add_heads(self, w2, num_classes, light_heads)
 
     def forward(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
         x = x - 0.25  # centre the typical sonar grey level
