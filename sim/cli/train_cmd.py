@@ -93,7 +93,12 @@ def _cmd_train(args: argparse.Namespace) -> int:
 
 def _input_arg(text: str):
     """``HxW`` (:func:`size_hw`) or ``native``."""
-    return "native" if str(text).lower() == "native" else size_hw(text)
+    if str(text).lower() == "native":
+        return "native"
+    try:
+        return size_hw(text)
+    except argparse.ArgumentTypeError as exc:
+        raise argparse.ArgumentTypeError(f"{exc}; or 'native' (the fan at its own resolution)") from None
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
