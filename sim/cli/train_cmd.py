@@ -48,9 +48,11 @@ def _cmd_train(args: argparse.Namespace) -> int:
     if val_dirs is not None and not val_dirs:
         raise CliError("--val-data: name at least one dataset folder")
     val = [require_dataset(d, "--val-data") for d in val_dirs] if val_dirs is not None else None
-    out = _check_model_out(args.out, args.overwrite or args.resume)
+    out = _check_model_out(args.out, args.overwrite)
     if args.resume and args.checkpoint is None:
         raise CliError("--resume: name the checkpoint to continue with --checkpoint FILE")
+    if args.stop_after_minutes is not None and args.checkpoint is None:
+        raise CliError("--stop-after-minutes: only with --checkpoint FILE (without one the run could not be resumed)")
     if args.checkpoint is not None:
         ckpt = Path(args.checkpoint).expanduser()
         if ckpt.is_dir():
@@ -59,6 +61,11 @@ def _cmd_train(args: argparse.Namespace) -> int:
             raise CliError(f"--checkpoint {ckpt}: no such file to resume from")
         if not args.resume and ckpt.exists():
             raise CliError(f"--checkpoint {ckpt}: file exists; pass --resume to continue that run, or name a new file")
+        probe = ckpt.parent.resolve()
+        while not probe.exists():
+            probe = probe.parent
+        if not probe.is_dir() or not os.access(probe, os.W_OK | os.X_OK):
+            raise CliError(f"--checkpoint {ckpt}: cannot write in {probe}")
     if args.input == "native":
         from sim.dataset.errors import fls_fan_hw
 
@@ -122,7 +129,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--checkpoint", default=None, metavar="FILE",
                    help="save the whole training state here every --checkpoint-minutes and at the end")
     p.add_argument("--resume", action="store_true",
-                   help="continue the run saved in --checkpoint (same data and parameters; --out is replaced)")
+                   help="continue the run saved in --checkpoint (same data and parameters; an existing --out "
+                        "needs --overwrite)")
     p.add_argument("--checkpoint-minutes", type=positive_float, default=5.0, metavar="MIN")
     p.add_argument("--stop-after-minutes", type=positive_float, default=None, metavar="MIN",
                    help="end this session after MIN minutes (checkpoint saved, model exported as it stands); "

@@ -319,7 +319,9 @@ def train_atr(data_dir: str | Path | list, out_path: str | Path, params: TrainPa
         rng.bit_generator.state = state["numpy_rng"]
         torch.set_rng_state(state["torch_rng"])
         epoch, step, s_start, elapsed0 = state["epoch"], state["step"], state["step_in_epoch"], state["elapsed_s"]
-        order, sums, history = np.asarray(state["order"]), np.asarray(state["sums"]), state["history"]
+        # an epoch-boundary checkpoint has no order yet: the next epoch draws its own
+        order = None if state["order"] is None else np.asarray(state["order"])
+        sums, history = np.asarray(state["sums"]), state["history"]
         log(f"train-atr: resumed {ckpt_path} at epoch {epoch}, step {step} of {total_steps} "
             f"({elapsed0 / 60:.1f} min trained)")
     t_session = time.perf_counter()

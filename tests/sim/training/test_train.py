@@ -77,6 +77,11 @@ def test_a_resumed_run_takes_the_same_steps_as_an_unbroken_one(tiny_dataset, tmp
     second = train_atr(tiny_dataset, tmp_path / "part.onnx", params, log=lambda *_: None, checkpoint=ckpt,
                        resume=True, stop_after_minutes=1e-9)
     assert second["steps"] == 2
+    # the third stop falls on the end of the first epoch (6 images, batch 2): the checkpoint
+    # then holds no epoch order
+    third = train_atr(tiny_dataset, tmp_path / "part.onnx", params, log=lambda *_: None, checkpoint=ckpt,
+                      resume=True, stop_after_minutes=1e-9)
+    assert third["steps"] == 3 and len(third["history"]) == 1
     rest = train_atr(tiny_dataset, tmp_path / "part.onnx", params, log=lambda *_: None, checkpoint=ckpt, resume=True)
     assert rest["finished"] and rest["steps"] == whole["steps"] == whole["total_steps"]
     assert [h["heat"] for h in rest["history"]] == pytest.approx([h["heat"] for h in whole["history"]], rel=1e-5)
