@@ -37,8 +37,12 @@ def print_summary(metrics: dict, out: str) -> None:
         nees = wm.get("nees_horizontal")
         if nees and nees["n"]:
             lo, hi = nees["band_95"]
+            verdict = ("inside it" if lo <= nees["mean"] <= hi else
+                       "below it: ellipses larger than the errors" if nees["mean"] < lo else
+                       "above it: ellipses smaller than the errors")
             print(f"world model ellipses: mean horizontal NEES {nees['mean']:.2f} over {nees['n']} matched targets "
-                  f"(a consistent map: 2, 95 % band {lo:.2f}-{hi:.2f})")
+                  f"(a consistent map: 2, 95 % band {lo:.2f}-{hi:.2f}, {verdict}; one run's targets share its "
+                  "navigation error, so judge over seeds)")
     if "surface_world_model" in metrics:
         wm = metrics["surface_world_model"]
         print(f"surface world model: {wm['objects']} targets, {wm['matched']} matched, {wm['missed']} missed, "
