@@ -368,7 +368,9 @@ def train_atr(data_dir: str | Path | list, out_path: str | Path, params: TrainPa
             l_off = (torch.abs(offset - off_t) * reg_t).sum() / n_reg
             loss = l_heat + params.size_loss_weight * l_size + l_off
             # Warm-up then cosine decay over whichever runs out first: steps or the time budget.
-            progress = max(step / total_steps, elapsed() / budget_s)
+            # (the time term waits for the first step, so a budget that does not bind never
+            # touches the schedule and reruns are step for step the same)
+            progress = step / total_steps if step == 0 else max(step / total_steps, elapsed() / budget_s)
             for group in opt.param_groups:
                 group["lr"] = _lr_at(min(progress, 1.0), params.lr)
             opt.zero_grad()
