@@ -78,16 +78,17 @@ def measurement_cov(z: LocalizedDetection, cfg: WorldModelConfig) -> FloatArray:
     return np.asarray(z.cov_ned, dtype=float)
 
 
-def measurement_shared(z: LocalizedDetection, cfg: WorldModelConfig) -> FloatArray:
+def measurement_shared(z: LocalizedDetection) -> FloatArray:
     """The measurement's shared-error sensitivity (3, q = len(SHARED_ERRORS)): its
-    ``shared_ned``, or zeros when it has none, when a fixed covariance replaces the
-    localisation's, or when ``consider_shared_errors`` is off.
+    ``shared_ned``, or zeros when it has none. (Whether shared errors are considered at all
+    is the world model's choice: :class:`autonomy.world_model.PMHA` calls this only when
+    ``consider_shared_errors`` is on and no fixed covariance replaces the localisation's.)
 
     Raises:
         ValueError: ``shared_ned`` of another shape.
     """
     q = len(SHARED_ERRORS)
-    if z.shared_ned is None or cfg.measurement_cov_m2 is not None or not cfg.consider_shared_errors:
+    if z.shared_ned is None:
         return np.zeros((3, q))
     L = np.asarray(z.shared_ned, dtype=float)
     if L.shape != (3, q):

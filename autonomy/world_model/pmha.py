@@ -152,6 +152,7 @@ class PMHA:
         self.predictor = KalmanPredictor(self.transition, cfg.kf_timeout_s, cfg.fallback_cov_m2 * np.eye(3))
         self.measurement_model = PositionFix(3, (0, 1, 2))  # NED position; covariance per detection
         self.updater = ConsiderKalmanUpdater(self.measurement_model)
+        # shared errors enter only with the localisation's own covariances
         self._consider = cfg.consider_shared_errors and cfg.measurement_cov_m2 is None
         self.gater = MahalanobisGater(cfg.gate_mahalanobis2)
         self.initiator = SingleMeasurementInitiator(self.measurement_model)
@@ -212,7 +213,7 @@ class PMHA:
             Z = np.stack([np.asarray(z.pos_ned, dtype=float) for z in measurements])
             R = np.stack([measurement_cov(z, cfg) for z in measurements])
             Q = np.stack([class_likelihood(z.class_score, cfg) for z in measurements])  # (m, 2)
-            Ls = np.stack([measurement_shared(z, cfg) for z in measurements]) if self._consider else None
+            Ls = np.stack([measurement_shared(z) for z in measurements]) if self._consider else None
         posterior: dict[tuple[int, int], tuple] = {}
         M_pred = None
         if m and n_u:
@@ -408,7 +409,7 @@ class PMHA:
             pos, cov = fuse_cluster(Z[members], R[members])
             score = float(np.mean([measurements[j].class_score for j in members]))
             # the members' errors are taken as fully correlated (fuse_cluster): so are their shared parts
-            shared = (np.mean([measurement_shared(measurements[j], self.cfg) for j in members], axis=0)
+            shared = (np.mean([measurement_shared(measurements[j]) for j in members], axis=0)
                       if self._consider else first.shared_ned)
             out.append(dataclasses.replace(first, pos_ned=pos, cov_ned=cov, class_score=score, shared_ned=shared))
         return out

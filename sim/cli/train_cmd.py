@@ -22,12 +22,17 @@ def _check_model_out(path: str, overwrite: bool) -> Path:
         raise CliError(f"--out {out}: the model file name must end in .onnx")
     if out.exists() and not overwrite:
         raise CliError(f"--out {out}: file exists; pass --overwrite to replace it, or name a new file")
-    probe = out.parent.resolve()
+    _require_writable_folder(out, "--out")
+    return out
+
+
+def _require_writable_folder(path: Path, flag: str) -> None:
+    """Refuse ``path`` when the nearest existing folder above it cannot be written in."""
+    probe = path.parent.resolve()
     while not probe.exists():
         probe = probe.parent
     if not probe.is_dir() or not os.access(probe, os.W_OK | os.X_OK):
-        raise CliError(f"--out {out}: cannot write in {probe}")
-    return out
+        raise CliError(f"{flag} {path}: cannot write in {probe}")
 
 
 def _cmd_train(args: argparse.Namespace) -> int:
@@ -61,11 +66,7 @@ def _cmd_train(args: argparse.Namespace) -> int:
             raise CliError(f"--checkpoint {ckpt}: no such file to resume from")
         if not args.resume and ckpt.exists():
             raise CliError(f"--checkpoint {ckpt}: file exists; pass --resume to continue that run, or name a new file")
-        probe = ckpt.parent.resolve()
-        while not probe.exists():
-            probe = probe.parent
-        if not probe.is_dir() or not os.access(probe, os.W_OK | os.X_OK):
-            raise CliError(f"--checkpoint {ckpt}: cannot write in {probe}")
+        _require_writable_folder(ckpt, "--checkpoint")
     if args.input == "native":
         from sim.dataset.errors import fls_fan_hw
 
