@@ -13,7 +13,7 @@ from sim.cli.app import run_script, script_parser
 from sim.cli.args import positive_int
 from sim.cli.errors import CliError
 from sim.mission import Mission
-from sim.msis_evaluation import LocalizationErrorObserver
+from sim.features import MsisLocalizationFeature
 
 
 def check_localizes(scenario_arg: str, overrides: list[str]) -> None:
@@ -34,7 +34,7 @@ def evaluate(args) -> int:
     for seed in range(args.seeds):
         scn = load_scenario(args.scenario, [*args.overrides, f"seed={seed}"])
         mission = Mission(scn)
-        obs = LocalizationErrorObserver(mission)
+        obs = mission.feature(MsisLocalizationFeature).error_observer()
         mission.observers.append(obs)
         t0 = time.perf_counter()
         summary = mission.run(progress=False)

@@ -1,4 +1,4 @@
-"""Sea-trial evaluation over seeds (issue 20): the world model on the surface against the
+"""Sea-trial evaluation over seeds: the world model on the surface against the
 onboard one, the AUV's navigation with the buoy's USBL fixes against DVL-only, and the
 wall-time share of the acoustic link and the second vehicle.
 
@@ -61,6 +61,7 @@ def run_seed(seed: int, scenario: str, overrides: tuple[str, ...]) -> dict:
     """Fly ``scenario`` with ``seed``; its figures."""
     from scenarios import load_scenario
     from sim.evaluation.nav_baseline import DvlOnlyBaseline
+    from sim.features import SeaTrialFeature
     from sim.mission import Mission
     from sim.outputs.trajectory_log import TrajectoryLog
     from sim.perception import world_model_metrics
@@ -70,19 +71,20 @@ def run_seed(seed: int, scenario: str, overrides: tuple[str, ...]) -> dict:
     timer = StageTimer()
     log = TrajectoryLog()
     mission = Mission(scn, observers=[log], timer=timer)
-    baseline = DvlOnlyBaseline(mission)
+    baseline = DvlOnlyBaseline(mission.parts.make_nav_filter)
     mission.observers.append(baseline)
     mission.reset()
     t0 = time.perf_counter()
     mission.run(progress=False)
     wall = time.perf_counter() - t0
+    link = mission.feature(SeaTrialFeature).link
     onboard = mission.perception.world_model_metrics()
-    surface = world_model_metrics(mission.link.surface_world_model.world_model(), mission.perception.truth_targets)
+    surface = world_model_metrics(link.surface_world_model.world_model(), mission.perception.truth_targets)
     fused, dvl_only = baseline.mean_errors_m("survey")
     share = {name: sum(timer.seconds.get(s, 0.0) for s in stages) / wall
              for name, stages in (("link", LINK_STAGES), ("second_vehicle", VEHICLE_STAGES),
                                   ("surface_world_model", SURFACE_WM_STAGES))}
-    link = mission.link.metrics()
+    link_metrics = link.metrics()
     nav = mission.nav_filter
     return {
         "seed": seed, "sim_time_s": mission.t_s, "wall_time_s": wall, "finished": mission.fsm.done,
@@ -90,9 +92,9 @@ def run_seed(seed: int, scenario: str, overrides: tuple[str, ...]) -> dict:
         "surface": {k: surface[k] for k in ("matched", "missed", "false", "mean_position_error_m")},
         "nav_mean_error_survey_m": {"usbl_fused": fused, "dvl_only": dvl_only},
         "wall_time_share": share,
-        "link": {"uplink": link["uplink_detections"], "downlink": link["downlink_usbl_fixes"],
-                 "detections_queued": link["detections_queued"],
-                 "detections_dropped_stale": link["detections_dropped_stale"],
+        "link": {"uplink": link_metrics["uplink_detections"], "downlink": link_metrics["downlink_usbl_fixes"],
+                 "detections_queued": link_metrics["detections_queued"],
+                 "detections_dropped_stale": link_metrics["detections_dropped_stale"],
                  "usbl_fixes_fused": nav.n_late_fused, "usbl_fixes_refused": nav.n_late_gated + nav.n_late_too_old},
         "contact": [list(p) for p in mission.physics.vehicles_in_contact()],
     }

@@ -1,4 +1,4 @@
-"""Closed-loop world-model evaluation over seeds (issue: PMHA on the CSSN survey).
+"""Closed-loop world-model evaluation over seeds: PMHA on the CSSN survey.
 
 Runs the survey for each seed and configuration and prints per-configuration means of the
 world-model metrics; writes ``world_model_eval.json`` next to the runs.

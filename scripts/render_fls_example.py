@@ -29,7 +29,7 @@ def render(args) -> int:
     world = build_world(scenario)
     caster = MujocoRayCaster(world.model, world.data, world.geom_object_id, world.geom_reflectivity,
                              world.vehicle_body_id)
-    sensor = FlsSensor(cfg, np.zeros(3), np.deg2rad([0.0, cfg.tilt_deg, 0.0]), component_rng(scenario.seed, "fls"))
+    sensor = FlsSensor(cfg, np.zeros(3), component_rng(scenario.seed, "fls"))
     centroids = np.array([o.centroid_ned for o in world.objects])
     seabed_z = float(world.seabed.depth_at(*centroids[:, :2].mean(axis=0)))
     pos = np.array([centroids[:, 0].mean(), centroids[:, 1].min() - 6.0, seabed_z - args.altitude])

@@ -33,7 +33,8 @@ from sim.cli.app import run_script, script_parser  # noqa: E402
 from sim.cli.args import positive_float, positive_int  # noqa: E402
 from sim.cli.errors import CliError  # noqa: E402
 from sim.evaluation.binomial_interval import proportion_ci95  # noqa: E402
-from sim.evaluation.tracking_eval import ERROR_SETS, error_boxplot_png, evaluation_for  # noqa: E402
+from sim.evaluation.tracking_eval import ERROR_SETS, error_boxplot_png  # noqa: E402
+from sim.features import TrackingFeature  # noqa: E402
 from sim.mission import Mission  # noqa: E402
 from sim.outputs.mission_outputs import standard_json  # noqa: E402
 
@@ -42,7 +43,7 @@ def run_one(scenario: str, seed: int, duration_s: float | None,
             extra: list[str] = ()) -> tuple[dict, dict[str, np.ndarray]]:
     overrides = [f"seed={seed}"] + ([f"duration_s={duration_s}"] if duration_s else []) + list(extra)
     mission = Mission(load_scenario(scenario, overrides), perception=True)
-    ev = evaluation_for(mission)
+    ev = mission.feature(TrackingFeature).observers({})[0]
     mission.observers.append(ev)
     mission.reset()
     while not mission.done:

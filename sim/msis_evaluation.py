@@ -9,28 +9,37 @@ horizontal error of both against the true body position.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from autonomy.frames import wrap_angle
 from autonomy.messages import PositionFixMsg, WrenchCmdMsg
 from autonomy.msis.localization import tank_walls
-from sim.records import MissionInfo, MissionSummary, StepRecord
+from sim.records import MissionInfo, MissionSummary, ObserverBase, StepRecord
 
 
 @dataclass
-class LocalizationErrorObserver:
+class LocalizationErrorObserver(ObserverBase):
     """Horizontal errors (m) of the mission's estimate and of a fix-free shadow filter.
 
     Args:
-        mission: the :class:`sim.mission.Mission` observed (its parts build the shadow filter).
+        make_nav_filter: scenario -> a fresh navigation filter at the start pose
+            (:meth:`sim.mission.parts.MissionParts.make_nav_filter`): the shadow filter.
+        localizer: the mission's scanning-sonar localiser (its wall estimates are scored; None:
+            no wall figures).
+        basin: the scenario's basin (``world.basin``: the true walls).
         t_start_s: errors are recorded from this time on.
     """
 
+    sonar_frames = True
     sonar_truth = False  # reads no sonar ground truth (the sonar need not compute it)
 
-    mission: object
+    make_nav_filter: Callable[[Any], Any]
+    localizer: Any = None
+    basin: Any = None
     t_start_s: float = 0.0
     t_s: list[float] = field(default_factory=list)
     err_fused_m: list[float] = field(default_factory=list)
@@ -42,7 +51,7 @@ class LocalizationErrorObserver:
     _heading_err_rad: list[float] = field(default_factory=list)
 
     def on_start(self, info: MissionInfo) -> None:
-        self._dr = self.mission.parts.make_nav_filter(info.scenario)
+        self._dr = self.make_nav_filter(info.scenario)
         self._handlers = {t: h for t, h in self._dr.message_handlers().items() if t is not PositionFixMsg}
 
     def on_message(self, name: str, msg) -> None:
@@ -77,11 +86,9 @@ class LocalizationErrorObserver:
         and fix) against the true wall, per wall index: as placed in the navigation frame, and
         with the navigation's heading error (its mean since the last fix: the points of a sweep
         are placed with it) taken out, the sonar processing's own error."""
-        proc = self.mission.parts.processors.get(name)
-        loc = getattr(proc, "localizer", None)
-        if loc is None or loc.cfg.method != "walls":
+        loc, basin = self.localizer, self.basin
+        if loc is None or loc.cfg.method != "walls" or basin is None:
             return
-        basin = self.mission.scenario.world.basin
         walls = tank_walls(np.asarray(basin.center_ne_m, float), np.asarray(basin.size_ne_m, float))
         for i, s in loc.last_walls.items():
             n_w = walls[i][0]

@@ -49,8 +49,7 @@ class Perception:
         auto = scenario.autonomy
         self.detector = build_detector(auto.atr)
         #: The ATR's class labels (the class table of the detection messages).
-        self.class_names: tuple[str, ...] = tuple(getattr(self.detector, "class_names", None)
-                                                  or (getattr(self.detector, "class_name", "target"),))
+        self.class_names: tuple[str, ...] = tuple(self.detector.class_names)
         self.loc_cfg = auto.localization
         self.wm_cfg = auto.world_model
         self.truth_targets = np.array([t.pos_ned for t in scenario.world.targets if t.is_target], dtype=float)
@@ -98,10 +97,10 @@ class Perception:
         # the pose at the frame's capture: the true one, or the estimate (of its delivery,
         # latency and a tick later) moved back to the capture time
         nav_loc = self._truth_nav(render) if self.nav_source == "truth" else estimate_at(nav, frame.t_s)
-        localized = [localize(d, nav_loc, self.fls.mount_pos_body_m, self.fls.mount_rpy_rad, self.loc_cfg,
+        localized = [localize(d, nav_loc, self.fls.mount_pos_body_m, self.fls.mount_roll_tilt_yaw_rad, self.loc_cfg,
                               geometry=frame.geometry) for d in detections]
         g = self.fls.geometry
-        visible = fls_visibility(nav_loc.pos_ned, nav_loc.rpy_rad, self.fls.mount_pos_body_m, self.fls.mount_rpy_rad,
+        visible = fls_visibility(nav_loc.pos_ned, nav_loc.rpy_rad, self.fls.mount_pos_body_m, self.fls.mount_roll_tilt_yaw_rad,
                                  range_min_m=g.window_near_m, range_max_m=g.window_far_m, fov_rad=g.fov_rad,
                                  vertical_fov_rad=g.vertical_beamwidth_rad, margin_m=1.0)
         self.pmha.update(frame.t_s, localized, visible)
@@ -112,7 +111,7 @@ class Perception:
         """The sonar's mount and field of view, as the surface world model places it."""
         g = self.fls.geometry
         return SonarFootprint(tuple(float(v) for v in self.fls.mount_pos_body_m),
-                              tuple(float(v) for v in self.fls.mount_rpy_rad), g.window_near_m, g.window_far_m,
+                              tuple(float(v) for v in self.fls.mount_roll_tilt_yaw_rad), g.window_near_m, g.window_far_m,
                               g.fov_rad, g.vertical_beamwidth_rad)
 
     # -- results --------------------------------------------------------------------------

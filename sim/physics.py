@@ -131,20 +131,14 @@ class Physics:
     # ------------------------------------------------------------------ stepping
     def step(self, thruster_cmd: ArrayLike) -> None:
         """One physics step with the AUV's normalised thruster commands (n_thr,) in [-1, 1]
-        (extra vehicles: their held commands)."""
-        self.vehicle.step_inputs(thruster_cmd, self.dt_s)
-        if self._extra_list:
-            self._step_extras()
-        if self.movers:
-            self.movers.apply(self.data, self.t_s)
-        mujoco.mj_step(self.model, self.data)
-        self.n_steps += 1
-        self.t_s = self.n_steps * self.dt_s
-        self.current.step(self.dt_s)
+        (extra vehicles: their held commands); :meth:`advance` by one step, without the
+        contact check."""
+        self.advance(thruster_cmd, 1, check_contact=False)
 
-    def advance(self, thruster_cmd: ArrayLike, n_steps: int) -> bool:
+    def advance(self, thruster_cmd: ArrayLike, n_steps: int, *, check_contact: bool = True) -> bool:
         """``n_steps`` physics steps holding the AUV's ``thruster_cmd`` (extra vehicles: their
-        held commands); True if the AUV touched anything on any of them."""
+        held commands); True if the AUV touched anything on any of them (always False with
+        ``check_contact`` False)."""
         step_inputs, mj_step, current_step = self.vehicle.step_inputs, mujoco.mj_step, self.current.step
         model, data, dt = self.model, self.data, self.dt_s
         contact = False
@@ -160,7 +154,7 @@ class Physics:
             self.n_steps += 1
             self.t_s = self.n_steps * dt
             current_step(dt)
-            if data.ncon and not contact:
+            if check_contact and data.ncon and not contact:
                 contact = self.vehicle_in_contact()
         return contact
 

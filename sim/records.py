@@ -126,16 +126,20 @@ class MissionObserver(Protocol):
     :class:`autonomy.tracking.onboard.TrackingFrameResult` instead, once the frame is
     processed: at the first vehicle pose at or after its ping).
 
-    An observer that ignores the sonar's renders may set ``sonar_frames = False``: the
+    Every observer declares ``sonar_frames`` and ``sonar_truth`` (:class:`ObserverBase`
+    declares both True). An observer that ignores the sonar's renders sets ``sonar_frames = False``: the
     pipelined loop (:mod:`sim.sonar_pipeline`) then does not ship them from its render worker
     when no observer takes them, and passes only the perception results.
 
     An observer that does not read the forward-looking sonar's ground truth (a render's
     ``truth.objects``, ``truth.mask_polar``, ``truth.mask_fan``; its pose ``t_s``, ``pos_ned``,
-    ``R_ns`` is always there) may set ``sonar_truth = False``: when every observer does, the
+    ``R_ns`` is always there) sets ``sonar_truth = False``: when every observer does, the
     sonar skips that truth (:meth:`sim.sensors.fls.FlsSensor.render` with ``truth=False``), and
     reading it raises :class:`sim.sensors.sonar.ground_truth.SonarTruthNotComputedError`.
     """
+
+    sonar_frames: bool
+    sonar_truth: bool
 
     def on_start(self, info: MissionInfo) -> None: ...
 
@@ -144,3 +148,24 @@ class MissionObserver(Protocol):
     def on_message(self, name: str, msg: Any) -> None: ...
 
     def on_end(self, summary: MissionSummary) -> None: ...
+
+
+class ObserverBase:
+    """A :class:`MissionObserver` that reads everything (``sonar_frames`` and ``sonar_truth``
+    True) and does nothing: subclasses override the hooks they need and declare what they
+    do not read (the loop reads these declarations; it does not probe for them)."""
+
+    sonar_frames: bool = True
+    sonar_truth: bool = True
+
+    def on_start(self, info: MissionInfo) -> None:
+        pass
+
+    def on_step(self, record: StepRecord) -> None:
+        pass
+
+    def on_message(self, name: str, msg: Any) -> None:
+        pass
+
+    def on_end(self, summary: MissionSummary) -> None:
+        pass

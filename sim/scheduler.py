@@ -5,6 +5,11 @@ autonomy its latency later, in order of delivery time (ties: in the order pushed
 is a fixed number of seconds or a function of the message (an acoustic fix is late by its
 travel time). Sensors keep no clocks: the scheduler owns timing.
 
+Besides sensors, the scheduler orders every other periodic event of the mission (the extra
+vehicles' sensors and autonomy, :mod:`sim.features.sea_trial`): a channel may be tied to a
+coarser clock (``quantum_s``, the autonomy period), its n-th firing then at the first tick of
+that clock at or after its due time ([drake]'s periodic events, each declared by its component).
+
 Firing times are exact: the n-th firing of a channel (n = 0, 1, ...) is at
 ``first_fire_s + n / rate_hz``, computed from the count (no accumulated floating step, so no
 drift over a long run), and no firing is skipped: a sensor faster than the physics step fires
@@ -22,6 +27,8 @@ from dataclasses import dataclass
 from typing import Any
 
 Latency = float | Callable[[Any], float]
+#: Rounding absorbed when a due time is moved to a channel's clock ticks, s.
+QUANTUM_TOL_S = 1e-9
 
 
 @dataclass
@@ -32,10 +39,15 @@ class _Channel:
     latency_s: Callable[[Any], float]
     first_fire_s: float
     n_fired: int = 0
+    quantum_s: float | None = None
 
     @property
     def next_fire_s(self) -> float:
-        return self.first_fire_s + self.n_fired / self.rate_hz
+        due = self.first_fire_s + self.n_fired / self.rate_hz
+        if self.quantum_s is None:
+            return due
+        # the first tick k * quantum at or after the due time (a nanosecond of rounding absorbed)
+        return math.ceil((due - QUANTUM_TOL_S) / self.quantum_s) * self.quantum_s
 
 
 class SensorScheduler:
@@ -55,18 +67,23 @@ class SensorScheduler:
         self._queue: list[tuple[float, int, str, Any]] = []
         self._seq = 0
 
-    def add(self, name: str, rate_hz: float, latency_s: Latency = 0.0, first_fire_s: float = 0.0) -> None:
+    def add(self, name: str, rate_hz: float, latency_s: Latency = 0.0, first_fire_s: float = 0.0,
+            quantum_s: float | None = None) -> None:
         """Add a channel firing every ``1 / rate_hz`` s from ``first_fire_s``.
 
         Args:
-            name: channel (sensor) name.
+            name: channel (sensor or event) name.
             rate_hz: firing rate, Hz.
             latency_s: delay from firing to delivery, s, or a function of the message
                 giving it (e.g. ``sensor.latency_s``).
             first_fire_s: time of the first firing, s.
+            quantum_s: None: fire at the exact times. A period, s: each firing moves to the
+                first multiple of it at or after its due time (an event run at the autonomy
+                ticks); ``rate_hz`` must not exceed ``1 / quantum_s``.
 
         Raises:
-            ValueError: a rate that is not positive and finite, or a negative fixed latency.
+            ValueError: a rate that is not positive and finite, a negative fixed latency, a
+                quantum that is not positive or one shorter than the channel's period.
         """
         if not rate_hz > 0.0 or not math.isfinite(rate_hz):
             raise ValueError(f"sensor {name!r}: rate_hz must be > 0, got {rate_hz}")
@@ -77,8 +94,12 @@ class SensorScheduler:
             if not fixed >= 0.0:
                 raise ValueError(f"sensor {name!r}: latency_s must be >= 0, got {latency_s}")
             latency = lambda _msg, _fixed=fixed: _fixed  # noqa: E731
+        if quantum_s is not None and not (quantum_s > 0.0 and rate_hz * quantum_s <= 1.0 + 1e-9):
+            raise ValueError(f"channel {name!r}: quantum_s must be > 0 and at most the period "
+                             f"1 / rate_hz = {1.0 / rate_hz:g} s, got {quantum_s}")
         order = self._channels[name].order if name in self._channels else len(self._channels)
-        self._channels[name] = _Channel(name, order, float(rate_hz), latency, float(first_fire_s))
+        self._channels[name] = _Channel(name, order, float(rate_hz), latency, float(first_fire_s),
+                                        quantum_s=None if quantum_s is None else float(quantum_s))
         self._next_any_s = min(ch.next_fire_s for ch in self._channels.values())
 
     def reset(self, t_s: float = 0.0) -> None:

@@ -9,13 +9,17 @@ USBL's latency and becomes a position of the AUV in the mission frame
 a following vessel follows these fixes, not the AUV's true position, and they are queued in
 :attr:`SurfaceVehicleRunner.auv_fixes` for the acoustic link.
 
-:class:`SurfaceVehicleRunner` is what the mission loop ticks once per autonomy period for
-each extra vehicle of the scenario (and what the tests drive directly).
+:class:`SurfaceVehicleRunner` keeps no clock: it declares its periodic events
+(:meth:`SurfaceVehicleRunner.periodic_events`: each sensor's firing and the autonomy tick, at
+their rates) and whoever runs it orders them on a scheduler (:class:`sim.scheduler.SensorScheduler`;
+in a mission, the loop's, at the autonomy ticks: :mod:`sim.features.sea_trial`).
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from functools import partial
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -102,12 +106,8 @@ class SurfaceVehicleRunner:
         self.reset()
 
     def reset(self) -> None:
-        """Clocks to 0 (call after :meth:`Physics.reset`)."""
+        """A fresh autonomy and empty queues (call after :meth:`Physics.reset`)."""
         self.autonomy.reset()
-        # index of each sensor's next firing (the k-th at k / rate_hz) and of the next
-        # autonomy tick: counts, not running sums of periods (no drift)
-        self._next_k = {entry: 0 for entry in self.sensors}
-        self._next_tick_k = 0
         self._gnss: list[GpsMsg] = []
         self._compass: ImuMsg | None = None
         self._usbl_in_flight: list[tuple[float, UsblMsg]] = []
@@ -123,43 +123,46 @@ class SurfaceVehicleRunner:
         out, self.auv_fixes = self.auv_fixes, []
         return out
 
-    def tick(self, target_pos_ned: ArrayLike | None = None, auv_truth: VehicleTruth | None = None) -> None:
-        """At the physics' present time: fire the sensors that are due and, when the
-        autonomy is due, run it with what arrived and hold its thruster commands.
+    def periodic_events(self) -> list[tuple[str, float, Callable[..., None]]]:
+        """``(name, rate_hz, event)`` of each periodic event, in the order events of one time
+        run: each sensor's firing (``event(auv_truth)``), then the autonomy tick
+        (``event(auv_truth)``: with no USBL the vessel follows the AUV's true position).
+        Names are ``vehicles.<name>.<entry>`` and ``vehicles.<name>.autonomy``. Rates may not
+        exceed the mission's autonomy rate (the scenario is refused at load otherwise)."""
+        events: list[tuple[str, float, Callable[..., None]]] = [
+            (f"vehicles.{self.name}.{entry}", sensor.rate_hz, partial(self.fire_sensor, entry))
+            for entry, sensor in self.sensors.items()]
+        events.append((f"vehicles.{self.name}.autonomy", self.cfg.autonomy.rate_hz,
+                       lambda auv_truth: self.autonomy_tick(None if auv_truth is None else auv_truth.pos_ned)))
+        return events
 
-        The mission ticks this once per autonomy period (and at t = 0), so each sensor and
-        the autonomy fire at most once per tick, at the tick's time: their rates may not
-        exceed the mission's ``autonomy.rate_hz`` (the scenario is refused at load otherwise)
-        and a rate that does not divide it fires at the first tick at or after each due time.
+    def fire_sensor(self, entry: str, auv_truth: VehicleTruth | None = None) -> None:
+        """Fire sensor ``entry`` at the physics' present time (the USBL measures ``auv_truth``,
+        the AUV's true state now; without it the USBL does not fire)."""
+        t = self.physics.t_s
+        sensor = self.sensors[entry]
+        truth = self.physics.truth(self.name)
+        if entry == "usbl":
+            if auv_truth is not None:
+                msg = sensor.measure(truth, SceneView(t, None, (_Transponder(auv_truth.pos_ned),)))
+                self._usbl_in_flight.append((t + sensor.latency_s(msg), msg))
+        elif entry == "gnss":
+            gnss = sensor.measure(truth)
+            self._gnss.append(gnss)
+            if gnss.valid:
+                self._last_gnss = gnss
+        else:
+            self._compass = sensor.measure(truth)
+
+    def autonomy_tick(self, target_pos_ned: ArrayLike | None = None) -> None:
+        """Run the autonomy at the physics' present time with what arrived and hold its
+        thruster commands.
 
         Args:
             target_pos_ned: the followed vehicle's latest position, NED m, or None; used
-                when the vessel has no USBL.
-            auv_truth: the AUV's true state now, for the vessel's USBL to measure (with a
-                USBL the vessel follows its own fixes and ``target_pos_ned`` is ignored).
+                when the vessel has no USBL (with one it follows its own fixes of the AUV).
         """
         t = self.physics.t_s
-        eps = 1e-9
-        truth = None
-        for entry, sensor in self.sensors.items():
-            if t + eps >= self._next_k[entry] / sensor.rate_hz:
-                truth = self.physics.truth(self.name) if truth is None else truth
-                if entry == "usbl":
-                    if auv_truth is not None:
-                        msg = sensor.measure(truth, SceneView(t, None, (_Transponder(auv_truth.pos_ned),)))
-                        self._usbl_in_flight.append((t + sensor.latency_s(msg), msg))
-                elif entry == "gnss":
-                    gnss = sensor.measure(truth)
-                    self._gnss.append(gnss)
-                    if gnss.valid:
-                        self._last_gnss = gnss
-                else:
-                    self._compass = sensor.measure(truth)
-                self._next_k[entry] = math.floor((t + eps) * sensor.rate_hz) + 1
-        rate = self.cfg.autonomy.rate_hz
-        if t + eps < self._next_tick_k / rate:
-            return
-        self._next_tick_k = math.floor((t + eps) * rate) + 1
         if self.usbl_fixer is not None:
             target_pos_ned = self._take_usbl(t)
         cmd = self.autonomy.update(t, self._gnss, self._compass, target_pos_ned)

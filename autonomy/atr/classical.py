@@ -49,6 +49,7 @@ class ClassicalDetector:
         self.cfg = cfg
         self.score_threshold = float(score_threshold)
         self.class_name = class_name
+        self.class_names: tuple[str, ...] = (class_name,)
         self.max_detections = int(max_detections)
 
     def candidates(self, fan: NDArray[np.uint8], m_per_px: float,

@@ -12,7 +12,14 @@ from autonomy.messages import Detection, FlsFrame
 
 
 class Detector(Protocol):
-    """Anything that turns one FLS frame into detections."""
+    """Anything that turns one FLS frame into detections.
+
+    Attributes:
+        class_names: the class labels its detections carry (the class table of the
+            detection messages; a one-class detector: its one label).
+    """
+
+    class_names: tuple[str, ...]
 
     def detect(self, frame: FlsFrame) -> list[Detection]:
         ...
@@ -20,6 +27,8 @@ class Detector(Protocol):
 
 class NullDetector:
     """``detector: none``: never detects anything."""
+
+    class_names: tuple[str, ...] = ("target",)
 
     def detect(self, frame: FlsFrame) -> list[Detection]:
         check_frame(frame, None)

@@ -1,4 +1,4 @@
-"""Config of the SPA mapper (paper 003, Section V; REFERENCE.md section 7)."""
+"""Config of the SPA mapper (paper 003, Section V; [P003] in ``docs/references.md``)."""
 
 from __future__ import annotations
 

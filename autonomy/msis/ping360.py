@@ -3,7 +3,7 @@
 The device samples the echo every ``sample_period`` ticks of 25 ns; ``number_of_samples``
 samples cover the two-way travel time to the range, so
 ``range = number_of_samples * c * 25 ns * sample_period / 2`` ([Ping360] in
-``docs/references.md``; ``REFERENCE.md`` section 2). The sample period is at least 80 ticks
+``docs/references.md``). The sample period is at least 80 ticks
 (and a 16-bit count), the transmit duration 5-500 us and at most 64 sample periods; at most
 1200 samples per ping. The automatic transmit duration is the device software's rule
 ``max(4000 range / c, 1.25 sample period)`` us, clipped to those limits.

@@ -180,21 +180,35 @@ class PMHA:
         ``visible(points_ned (N, 3)) -> (N,)`` gives, for anchor positions, whether (bool) or
         how likely (float in [0, 1]) they lay inside the sonar field of view at ``t_s``
         (e.g. :func:`autonomy.localization.fls_visibility`); None means every anchor was.
+
+        The steps ([P000] section V; named as Stone Soup's tracker composes its roles
+        [StoneSoup]): the scan's anchors and their detection probabilities
+        (:meth:`_scan_anchors`), the gated associations and their posteriors (:meth:`_gate`),
+        the children hypotheses drawn best first (:meth:`_expand`), and the normalised,
+        pruned hypothesis set kept (:meth:`_keep`).
+
+        Raises:
+            ValueError: ``t_s`` before the last scan; ``visible`` of the wrong shape.
         """
-        cfg = self.cfg
         t_s = float(t_s)
         if t_s < self.t_s:
             raise ValueError(f"PMHA.update: time went backwards ({t_s} < {self.t_s})")
-        measurements = self.cluster_scan(measurements)
+        scan = self._scan_anchors(t_s, self.cluster_scan(measurements), visible)
+        self._gate(scan)
+        expansion = _Expansion(self, scan)
+        expansion.run()
+        self._keep(scan, expansion)
+
+    def _scan_anchors(self, t_s: float, measurements: list[LocalizedDetection], visible: Visibility | None) -> _Scan:
+        """The scan's measurements and new ids, the anchors of the present hypotheses and
+        their detection probability and miss factor."""
+        cfg = self.cfg
         m = len(measurements)
         uids = list(range(self._next_uid, self._next_uid + m))
         self._next_uid += m
-
         versions = sorted(frozenset().union(*self._hyps))
         anchors = [self._anchors[v] for v in versions]
         n_u = len(anchors)
-
-        # Per unique anchor: detection probability and miss factor.
         if n_u:
             X = np.stack([a.pos_ned for a in anchors])
             vis = np.ones(n_u) if visible is None else np.asarray(visible(X), dtype=float)
@@ -205,169 +219,53 @@ class PMHA:
         else:
             X = np.zeros((0, 3))
             p_d = log_miss = np.zeros(0)
-        log_miss_of = dict(zip(versions, log_miss.tolist()))
-        anchor_of = dict(zip(versions, anchors))
+        return _Scan(t_s=t_s, measurements=measurements, uids=uids, versions=versions, anchors=anchors, X=X,
+                     p_d=p_d, log_miss=log_miss, log_miss_of=dict(zip(versions, log_miss.tolist())),
+                     anchor_of=dict(zip(versions, anchors)))
 
-        # Gated associations per measurement: (anchor version, cost = -log weight rel. miss).
+    def _gate(self, scan: _Scan) -> None:
+        """Per measurement, the gated anchors with their cost (-log weight relative to a miss),
+        the posteriors of the gated pairs, the private options (new object, clutter), the
+        associator, and the tentative anchors that age out in this scan."""
+        cfg, measurements, anchors = self.cfg, scan.measurements, scan.anchors
+        m, n_u = len(measurements), len(anchors)
         if m:
-            Z = np.stack([np.asarray(z.pos_ned, dtype=float) for z in measurements])
-            R = np.stack([measurement_cov(z, cfg) for z in measurements])
-            Q = np.stack([class_likelihood(z.class_score, cfg) for z in measurements])  # (m, 2)
-            Ls = np.stack([measurement_shared(z) for z in measurements]) if self._consider else None
-        posterior: dict[tuple[int, int], tuple] = {}
-        M_pred = None
+            scan.Z = np.stack([np.asarray(z.pos_ned, dtype=float) for z in measurements])
+            scan.R = np.stack([measurement_cov(z, cfg) for z in measurements])
+            scan.Q = np.stack([class_likelihood(z.class_score, cfg) for z in measurements])  # (m, 2)
+            scan.Ls = np.stack([measurement_shared(z) for z in measurements]) if self._consider else None
         if m and n_u:
-            dt = np.maximum(t_s - np.array([a.t_last_s for a in anchors]), 0.0)
-            P_pred = self.predictor.predict_covar(np.stack([a.cov_ned for a in anchors]), dt)
+            dt = np.maximum(scan.t_s - np.array([a.t_last_s for a in anchors]), 0.0)
+            scan.P_pred = self.predictor.predict_covar(np.stack([a.cov_ned for a in anchors]), dt)
             if self._consider:
-                M_pred = np.stack([self._sens(a) for a in anchors])
+                scan.M_pred = np.stack([self._sens(a) for a in anchors])
                 # after the timeout the position is a fresh fixed Gaussian, sharing nothing
-                M_pred[dt > cfg.kf_timeout_s] = 0.0
+                scan.M_pred[dt > cfg.kf_timeout_s] = 0.0
             pmf = np.stack([a.class_pmf for a in anchors])  # (n_u, 2)
-            assoc = self._association_logw(X, P_pred, p_d, log_miss, pmf, Z, R, Q, M_pred, Ls)
+            assoc = self._association_logw(scan.X, scan.P_pred, scan.p_d, scan.log_miss, pmf, scan.Z, scan.R, scan.Q,
+                                           scan.M_pred, scan.Ls)
             inside = np.isfinite(assoc)
-            gated = [
-                [(versions[u], -float(assoc[u, j])) for u in np.flatnonzero(inside[:, j])]
-                for j in range(m)
-            ]
-            row_of = dict(zip(versions, range(n_u)))
-            posterior = self._posteriors(versions, X, P_pred, pmf, Z, R, Q, inside, M_pred, Ls)
+            gated = [[(scan.versions[u], -float(assoc[u, j])) for u in np.flatnonzero(inside[:, j])]
+                     for j in range(m)]
+            scan.row_of = dict(zip(scan.versions, range(n_u)))
+            scan.posterior = self._posteriors(scan.versions, scan.X, scan.P_pred, pmf, scan.Z, scan.R, scan.Q, inside,
+                                              scan.M_pred, scan.Ls)
         else:
             gated = [[] for _ in range(m)]
         private_in = [(_NEW, -self._log_new), (_CLUTTER, -self._log_clutter)]
         private_out = [(_CLUTTER, -self._log_clutter)]
         privates = [private_in if self._in_region(z.pos_ned) else private_out for z in measurements]
-        associator = KBestAssociator(gated, privates)
+        scan.associator = KBestAssociator(gated, privates)
+        if self.deleter is not None:  # tentative anchors that age out (merged into the "clutter" worlds)
+            scan.stale = frozenset(a.version for a in anchors
+                                   if self.deleter.deletes(scan.t_s, a.t_last_s, a.n_detections))
 
-        # Tentative anchors that age out in this scan (merged into the "clutter" worlds).
-        stale: frozenset[int] = frozenset()
-        if self.deleter is not None:
-            stale = frozenset(
-                a.version for a in anchors if self.deleter.deletes(t_s, a.t_last_s, a.n_detections)
-            )
-
-        # Parents offering the same options share one ranked list of associations.
-        heap: list[tuple[float, int, int]] = []
-        parent_stream: list[LazyRanked] = []
-        parent_base: list[float] = []
-        for h, (log_w, hyp) in enumerate(zip(self._log_w.tolist(), self._hyps)):
-            base = log_w + sum(map(log_miss_of.__getitem__, hyp))
-            stream = associator.ranked(hyp)
-            parent_stream.append(stream)
-            parent_base.append(base)
-            first = stream.get(0)
-            if first is not None:
-                heap.append((first[0] - base, h, 0))
-        heapq.heapify(heap)
-
-        update_cache: dict[tuple[int, int], Anchor] = {}
-        birth_cache: dict[int, Anchor] = {}
-        children: dict[frozenset[int], int] = {}
-        child_logw: list[float] = []
-        log_floor = -np.inf
-        # Once the budget is full: versions describing the same anchor state are merged
-        # (``canon``: version -> representative), each distinct set of objects (a world) keeps
-        # at most ``max_per_world`` hypotheses (further children add their probability to its
-        # best), and children are drawn until the budget is full again (or a budget's worth
-        # of draws brings no new world), so the budget holds the best of each distinct world
-        # instead of near-copies of one.
-        canon: dict[int, int] | None = None
-        reps: dict[int, list[Anchor]] = {}
-        id_of: dict[int, int] = {}  # registered version -> symbol
-        world_of: dict[frozenset[int], list[int]] = {}  # object ids -> child indices, best first
-        parent_keys: dict[int, tuple[frozenset[int], frozenset[int]]] = {}  # h -> (versions, ids)
-        n_drawn = since_new_world = 0
-        while heap:
-            if canon is None and len(children) >= cfg.max_hypotheses:
-                if cfg.merge_mahalanobis2 is None:
-                    break
-                canon = {}
-                created = sorted((*update_cache.values(), *birth_cache.values()), key=lambda a: a.version)
-                for a in (*anchors, *created):
-                    self._register(a, canon, reps, id_of)
-                children, child_logw = self._merged(children, child_logw, canon)
-                for child, i in children.items():
-                    world_of.setdefault(frozenset(map(id_of.__getitem__, child)), []).append(i)
-            if canon is not None:
-                if (len(children) >= cfg.max_hypotheses or n_drawn >= cfg.max_expanded_children
-                        or since_new_world >= cfg.max_hypotheses):
-                    break
-                n_drawn += 1
-                since_new_world += 1
-            neg, h, rank = heapq.heappop(heap)
-            labels = parent_stream[h].get(rank)[1]
-            logw = -neg
-            if not children:
-                log_floor = logw + math.log(cfg.prune_ratio)
-            elif logw < log_floor:
-                break
-            removed: list[int] = []
-            added: list[int] = []
-            born: list[int] = []
-            for j, lab in enumerate(labels):
-                if lab >= 0:
-                    key = (lab, j)
-                    a = update_cache.get(key)
-                    if a is None:
-                        u = row_of[lab]
-                        a = update_cache[key] = self._updated(
-                            anchor_of[lab], posterior.get(key), P_pred[u], Z[j], R[j], Q[j], uids[j], t_s,
-                            None if M_pred is None else M_pred[u], None if Ls is None else Ls[j],
-                        )
-                        if canon is not None:
-                            self._register(a, canon, reps, id_of)
-                    removed.append(lab)
-                    added.append(a.version)
-                elif lab == _NEW:
-                    a = birth_cache.get(j)
-                    if a is None:
-                        a = birth_cache[j] = self._born(measurements[j], Z[j], R[j], uids[j],
-                                                        None if Ls is None else Ls[j])
-                        if canon is not None:
-                            self._register(a, canon, reps, id_of)
-                    added.append(a.version)
-                    born.append(a.id)
-            if canon is None:
-                child = self._hyps[h]
-                if removed or stale:
-                    child = child.difference(removed, stale)
-                if added:
-                    child = child.union(added)
-            else:  # the parent's representative versions and objects, changed by this scan
-                parent = parent_keys.get(h)
-                if parent is None:
-                    rep = frozenset(map(canon.__getitem__, self._hyps[h]))
-                    parent = parent_keys[h] = (rep, frozenset(map(id_of.__getitem__, rep)))
-                child, objects = parent
-                gone = [canon[v] for v in stale if v in self._hyps[h]] if stale else []
-                if removed or gone:
-                    child = child.difference(map(canon.__getitem__, removed), gone)
-                if added:
-                    child = child.union(map(canon.__getitem__, added))
-                if gone:
-                    objects = objects.difference(map(id_of.__getitem__, gone))
-                if born:
-                    objects = objects.union(born)
-            i = children.get(child)
-            if i is None and canon is not None:
-                world = world_of.setdefault(objects, [])
-                if not world:
-                    since_new_world = 0
-                if len(world) >= cfg.max_per_world:
-                    i = world[0]  # the world's best hypothesis absorbs the child
-                else:
-                    world.append(len(child_logw))
-            if i is None:
-                children[child] = len(child_logw)
-                child_logw.append(logw)
-            else:
-                child_logw[i] = float(np.logaddexp(child_logw[i], logw))
-            nxt = parent_stream[h].get(rank + 1)
-            if nxt is not None:
-                heapq.heappush(heap, (nxt[0] - parent_base[h], h, rank + 1))
-
-        child_hyps = list(children)
-        lw = np.asarray(child_logw)
+    def _keep(self, scan: _Scan, expansion: _Expansion) -> None:
+        """The children as the new hypotheses: the best within the budget, normalised, best
+        first; the anchors they use kept, the others dropped."""
+        cfg = self.cfg
+        child_hyps = list(expansion.children)
+        lw = np.asarray(expansion.child_logw)
         if len(child_hyps) > cfg.max_hypotheses:  # worlds found beyond the budget: keep the best
             keep = np.sort(np.argsort(-lw, kind="stable")[: cfg.max_hypotheses])
             child_hyps = [child_hyps[i] for i in keep]
@@ -378,11 +276,11 @@ class PMHA:
         self._hyps = [child_hyps[i] for i in order]
         self._log_w = lw[order]
         live = frozenset().union(*self._hyps)
-        for a in (*anchors, *update_cache.values(), *birth_cache.values()):
+        for a in (*scan.anchors, *expansion.update_cache.values(), *expansion.birth_cache.values()):
             if a.version in live:
                 self._anchors[a.version] = a
         self._anchors = {v: self._anchors[v] for v in live}
-        self.t_s = t_s
+        self.t_s = scan.t_s
         self.n_scans += 1
 
     def cluster_scan(self, measurements: Sequence[LocalizedDetection]) -> list[LocalizedDetection]:
@@ -615,3 +513,189 @@ class PMHA:
             "class_names": list(CLASS_NAMES),
             "objects": [o.to_dict() for o in self.world_model()],
         }
+
+
+@dataclass
+class _Scan:
+    """One scan's working state in :meth:`PMHA.update` (anchors, measurements, gating)."""
+
+    t_s: float
+    measurements: list[LocalizedDetection]
+    uids: list[int]
+    versions: list[int]
+    anchors: list[Anchor]
+    X: FloatArray
+    p_d: FloatArray
+    log_miss: FloatArray
+    log_miss_of: dict[int, float]
+    anchor_of: dict[int, Anchor]
+    Z: FloatArray | None = None
+    R: FloatArray | None = None
+    Q: FloatArray | None = None
+    Ls: FloatArray | None = None
+    P_pred: FloatArray | None = None
+    M_pred: FloatArray | None = None
+    row_of: dict[int, int] = dataclasses.field(default_factory=dict)
+    posterior: dict[tuple[int, int], tuple] = dataclasses.field(default_factory=dict)
+    associator: KBestAssociator | None = None
+    stale: frozenset[int] = frozenset()
+
+
+class _Expansion:
+    """The children hypotheses of one scan, drawn best first from every parent's ranked
+    associations ([P000] eqs. 14-16; murty-style lazy ranking, :class:`LazyRanked`).
+
+    Once the budget is full, versions describing the same anchor state are merged (``canon``:
+    version -> representative), each distinct set of objects (a world) keeps at most
+    ``max_per_world`` hypotheses (further children add their probability to its best), and
+    children are drawn until the budget is full again (or a budget's worth of draws brings no
+    new world), so the budget holds the best of each distinct world instead of near-copies of one.
+    """
+
+    def __init__(self, pmha: PMHA, scan: _Scan) -> None:
+        self.pmha, self.scan, self.cfg = pmha, scan, pmha.cfg
+        self.update_cache: dict[tuple[int, int], Anchor] = {}
+        self.birth_cache: dict[int, Anchor] = {}
+        self.children: dict[frozenset[int], int] = {}
+        self.child_logw: list[float] = []
+        self.canon: dict[int, int] | None = None
+        self.reps: dict[int, list[Anchor]] = {}
+        self.id_of: dict[int, int] = {}  # registered version -> symbol
+        self.world_of: dict[frozenset[int], list[int]] = {}  # object ids -> child indices, best first
+        self.parent_keys: dict[int, tuple[frozenset[int], frozenset[int]]] = {}  # h -> (versions, ids)
+        self.n_drawn = self.since_new_world = 0
+        # parents offering the same options share one ranked list of associations
+        self.heap: list[tuple[float, int, int]] = []
+        self.parent_stream: list[LazyRanked] = []
+        self.parent_base: list[float] = []
+        for h, (log_w, hyp) in enumerate(zip(pmha._log_w.tolist(), pmha._hyps)):
+            base = log_w + sum(map(scan.log_miss_of.__getitem__, hyp))
+            stream = scan.associator.ranked(hyp)
+            self.parent_stream.append(stream)
+            self.parent_base.append(base)
+            first = stream.get(0)
+            if first is not None:
+                self.heap.append((first[0] - base, h, 0))
+        heapq.heapify(self.heap)
+
+    def run(self) -> None:
+        """Draw children until the heap is empty, the budget is full or the rest is pruned."""
+        cfg, heap = self.cfg, self.heap
+        log_floor = -np.inf
+        while heap:
+            if self.canon is None and len(self.children) >= cfg.max_hypotheses:
+                if cfg.merge_mahalanobis2 is None:
+                    break
+                self._start_merging()
+            if self.canon is not None:
+                if (len(self.children) >= cfg.max_hypotheses or self.n_drawn >= cfg.max_expanded_children
+                        or self.since_new_world >= cfg.max_hypotheses):
+                    break
+                self.n_drawn += 1
+                self.since_new_world += 1
+            neg, h, rank = heapq.heappop(heap)
+            labels = self.parent_stream[h].get(rank)[1]
+            logw = -neg
+            if not self.children:
+                log_floor = logw + math.log(cfg.prune_ratio)
+            elif logw < log_floor:
+                break
+            child, objects = self._child(h, labels)
+            self._add(child, objects, logw)
+            nxt = self.parent_stream[h].get(rank + 1)
+            if nxt is not None:
+                heapq.heappush(heap, (nxt[0] - self.parent_base[h], h, rank + 1))
+
+    def _start_merging(self) -> None:
+        """The budget is full: register every anchor so far and re-key the children by their
+        representative versions."""
+        pmha, canon = self.pmha, {}
+        self.canon = canon
+        created = sorted((*self.update_cache.values(), *self.birth_cache.values()), key=lambda a: a.version)
+        for a in (*self.scan.anchors, *created):
+            pmha._register(a, canon, self.reps, self.id_of)
+        self.children, self.child_logw = pmha._merged(self.children, self.child_logw, canon)
+        for child, i in self.children.items():
+            self.world_of.setdefault(frozenset(map(self.id_of.__getitem__, child)), []).append(i)
+
+    def _anchor_after(self, j: int, lab: int) -> tuple[Anchor, bool]:
+        """The anchor measurement ``j`` makes under label ``lab`` (an update of anchor version
+        ``lab``, or a birth), made once per scan; and whether it is a birth."""
+        pmha, scan, canon = self.pmha, self.scan, self.canon
+        if lab >= 0:
+            key = (lab, j)
+            a = self.update_cache.get(key)
+            if a is None:
+                u = scan.row_of[lab]
+                a = self.update_cache[key] = pmha._updated(
+                    scan.anchor_of[lab], scan.posterior.get(key), scan.P_pred[u], scan.Z[j], scan.R[j], scan.Q[j],
+                    scan.uids[j], scan.t_s, None if scan.M_pred is None else scan.M_pred[u],
+                    None if scan.Ls is None else scan.Ls[j],
+                )
+                if canon is not None:
+                    pmha._register(a, canon, self.reps, self.id_of)
+            return a, False
+        a = self.birth_cache.get(j)
+        if a is None:
+            a = self.birth_cache[j] = pmha._born(scan.measurements[j], scan.Z[j], scan.R[j], scan.uids[j],
+                                                 None if scan.Ls is None else scan.Ls[j])
+            if canon is not None:
+                pmha._register(a, canon, self.reps, self.id_of)
+        return a, True
+
+    def _child(self, h: int, labels) -> tuple[frozenset[int], frozenset[int] | None]:
+        """Parent ``h``'s child under ``labels`` (one per measurement: an anchor version,
+        ``_NEW`` or ``_CLUTTER``): its versions and, once merging, its objects."""
+        removed: list[int] = []
+        added: list[int] = []
+        born: list[int] = []
+        for j, lab in enumerate(labels):
+            if lab >= 0 or lab == _NEW:
+                a, is_birth = self._anchor_after(j, lab)
+                if is_birth:
+                    born.append(a.id)
+                else:
+                    removed.append(lab)
+                added.append(a.version)
+        stale, canon, parent_hyp = self.scan.stale, self.canon, self.pmha._hyps[h]
+        if canon is None:
+            child = parent_hyp
+            if removed or stale:
+                child = child.difference(removed, stale)
+            if added:
+                child = child.union(added)
+            return child, None
+        # the parent's representative versions and objects, changed by this scan
+        parent = self.parent_keys.get(h)
+        if parent is None:
+            rep = frozenset(map(canon.__getitem__, parent_hyp))
+            parent = self.parent_keys[h] = (rep, frozenset(map(self.id_of.__getitem__, rep)))
+        child, objects = parent
+        gone = [canon[v] for v in stale if v in parent_hyp] if stale else []
+        if removed or gone:
+            child = child.difference(map(canon.__getitem__, removed), gone)
+        if added:
+            child = child.union(map(canon.__getitem__, added))
+        if gone:
+            objects = objects.difference(map(self.id_of.__getitem__, gone))
+        if born:
+            objects = objects.union(born)
+        return child, objects
+
+    def _add(self, child: frozenset[int], objects: frozenset[int] | None, logw: float) -> None:
+        """Add ``child`` with weight ``logw`` (to an equal child's weight, or once merging to
+        its world's best when the world is full)."""
+        i = self.children.get(child)
+        if i is None and self.canon is not None:
+            world = self.world_of.setdefault(objects, [])
+            if not world:
+                self.since_new_world = 0
+            if len(world) >= self.cfg.max_per_world:
+                i = world[0]  # the world's best hypothesis absorbs the child
+            else:
+                world.append(len(self.child_logw))
+        if i is None:
+            self.children[child] = len(self.child_logw)
+            self.child_logw.append(logw)
+        else:
+            self.child_logw[i] = float(np.logaddexp(self.child_logw[i], logw))

@@ -30,7 +30,8 @@ uncertainty, so an anchor within the association gate of a report of the scan
 (:func:`near_reports`) was in view too and is penalised if the scan does not assign it a
 detection. Without this, anchors near the shrunk fan's edge sit at the visibility floor and
 one object's detections, alternating between two anchors a few tenths of a metre apart, fit
-a pair better than one anchor at almost no miss cost (the twins of issue 20).
+a pair better than one anchor at almost no miss cost: twin objects, two confirmed anchors
+for one true OPI, as the surface model once made in 3 of 10 sea-trial seeds.
 """
 
 from __future__ import annotations

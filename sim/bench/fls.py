@@ -75,7 +75,7 @@ def run(scenario: Scenario, n_frames: int = 60, range_window_m: tuple[float, flo
     caster = _TimedCaster(MujocoRayCaster(world.model, world.data, world.geom_object_id, world.geom_reflectivity,
                                           world.vehicle_body_id))
     mount = world.site_pos_body(cfg.mount_site) if cfg.mount_site in world.site_ids else np.zeros(3)
-    sensor = FlsSensor(cfg, mount, np.deg2rad([0.0, cfg.tilt_deg, 0.0]), component_rng(scenario.seed, "fls"))
+    sensor = FlsSensor(cfg, mount, component_rng(scenario.seed, "fls"))
 
     # survey pose: west of the targets' centre, heading east along the rows, at altitude
     centroids = np.array([o.centroid_ned for o in world.objects]) if world.objects else np.zeros((1, 3))
@@ -123,7 +123,7 @@ def _without_truth(scenario: Scenario, cfg: FlsConfig, mount: np.ndarray, pose, 
     """The bench's frames rendered without the ground truth from a fresh noise state (timed),
     then the first :data:`IDENTITY_FRAMES` again with and without it (untimed, compared)."""
     def sensor() -> FlsSensor:
-        return FlsSensor(cfg, mount, np.deg2rad([0.0, cfg.tilt_deg, 0.0]), component_rng(scenario.seed, "fls"))
+        return FlsSensor(cfg, mount, component_rng(scenario.seed, "fls"))
 
     bare = sensor()
     bare.render_truth = False

@@ -43,7 +43,7 @@ def _cpu_s(pids: list[int]) -> list[float]:
 def _segment(mission, n_steps: int) -> tuple[float, list[float]]:
     """(wall s, CPU s of this process and of each pipeline worker) of ``n_steps`` steps
     (pipelined frames finished)."""
-    pids = [os.getpid()] + (mission._pipeline.pids if mission._pipeline is not None else [])
+    pids = [os.getpid()] + mission.worker_pids
     t0, c0 = time.perf_counter(), _cpu_s(pids)
     for _ in range(n_steps):
         mission.step()
@@ -129,7 +129,7 @@ def run(scenario: Scenario, sim_time_s: float = 120.0, warmup_s: float = 30.0, *
         names = ["mission", "render", "detection"][:len(cpu[1])]
         result["workers"] = {
             "workers": workers,
-            "pipelined": piped._pipeline is not None,
+            "pipelined": piped.pipelined,
             "real_time_factor": sim_time_s / wall[1],
             "cpu_real_time_factor": sim_time_s / sum(cpu[1]),
             "cpu_s_by_process": {n: round(c, 3) for n, c in zip(names, cpu[1])},

@@ -17,7 +17,7 @@ from scenarios.schema import Scenario
 from sim.bench.fls import _TimedCaster
 from sim.rng import component_rng
 from sim.sensors.raycast import MujocoRayCaster
-from sim.sensors.sss import SideScanSonar
+from sim.sensors.sss import SssSensor
 from sim.world import build_world
 
 
@@ -34,7 +34,7 @@ def run(scenario: Scenario, n_pings: int = 400, n_bins: int = 1000, range_max_m:
     world = build_world(scenario)
     caster = _TimedCaster(MujocoRayCaster(world.model, world.data, world.geom_object_id, world.geom_reflectivity,
                                           world.vehicle_body_id))
-    sensor = SideScanSonar(cfg, (0.0, 0.0, 0.0), component_rng(scenario.seed, "sss"))
+    sensor = SssSensor(cfg, (0.0, 0.0, 0.0), component_rng(scenario.seed, "sss"))
     centroids = np.array([o.centroid_ned for o in world.objects]) if world.objects else np.zeros((1, 3))
     seabed_z = float(world.seabed.depth_at(*centroids[:, :2].mean(axis=0)))
     start = np.array([centroids[:, 0].min() - 5.0, centroids[:, 1].mean(), seabed_z - altitude_m])

@@ -1,7 +1,7 @@
 """``auvsim dataset --sensor sss``: side-scan waterfall tiles with exact boxes.
 
 Per scene, a straight, level survey line over a randomised seabed with objects scattered on
-both sides: the side-scan sonar (:class:`sim.sensors.sss.SideScanSonar`) pings along it at
+both sides: the side-scan sonar (:class:`sim.sensors.sss.SssSensor`) pings along it at
 its ping rate, the pings form a waterfall (one row per ping, port far range at column 0,
 starboard far range at the last column; slant range), and the waterfall is cut into tiles of
 ``tile_length_m`` along track. Each object labelled in a tile's bins (the same rays as the
@@ -243,7 +243,7 @@ def render_sss_scene(spec: SssSceneSpec, seed: int, settings: SssSettings, tile_
     from scenarios.schema import Scenario
     from sim.dataset.generate import CLASS_NAMES
     from sim.sensors.raycast import MujocoRayCaster
-    from sim.sensors.sss import SideScanSonar, Waterfall
+    from sim.sensors.sss import SssSensor, Waterfall
     from sim.sensors.sss_tiles import cut_tiles
     from sim.world import build_world
 
@@ -252,7 +252,7 @@ def render_sss_scene(spec: SssSceneSpec, seed: int, settings: SssSettings, tile_
     world = build_world(scenario, with_vehicle=False)
     caster = MujocoRayCaster(world.model, world.data, world.geom_object_id, world.geom_reflectivity,
                              exclude_body_id=-1)
-    sonar = SideScanSonar(sss_config(spec, settings), rng=component_rng(seed, f"dataset/sss/{spec.index}"))
+    sonar = SssSensor(sss_config(spec, settings), rng=component_rng(seed, f"dataset/sss/{spec.index}"))
     ppt = settings.pings_per_tile()
     n_pings = ppt * len(tile_ids)
     positions = track(spec, settings, n_pings)

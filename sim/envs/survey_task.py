@@ -46,7 +46,7 @@ from sim.envs.scenario_arg import resolve_scenario
 from sim.envs.survey_layout import SurveyLayout, episode_scenario, episode_seabed, make_layout
 from sim.envs.world_model_obs import anchor_bounds, anchor_table, match_new_targets
 from sim.mission import Mission
-from sim.records import MissionInfo, MissionSummary
+from sim.records import MissionInfo, MissionSummary, ObserverBase
 from sim.seabed import Seabed
 from sim.sensors.base import Mount
 from sim.sensors.fls import FlsRender
@@ -193,7 +193,7 @@ def require_fls(scn: Scenario) -> None:
                          "(cssn_lawnmower) or add sensors.fls (kind fls)")
 
 
-class _LatestFls:
+class _LatestFls(ObserverBase):
     """Mission observer keeping the latest fan image of the sonar named ``name``."""
 
     sonar_truth = False  # keeps the fan image only

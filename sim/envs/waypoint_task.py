@@ -62,7 +62,7 @@ class WaypointEnvOptions:
         decision_interval_s: time one action is held, s (a multiple of the physics step).
         physics_rate_hz: physics rate override (None: the scenario's). 50 Hz is the
             default: trajectories match 200 Hz to centimetres over a minute
-            (``tests/test_gym_waypoint.py``) at 4x less cost.
+            (``tests/sim/envs/test_waypoint_env.py``) at 4x less cost.
         action_mode: ``wrench``: normalised body wrench [X, Y, Z, N] in [-1, 1] scaled by the
             autopilots' output limits, allocated to the thrusters; ``setpoint``: normalised
             [surge speed in speed_range_mps, yaw rate in +-max yaw rate, depth in

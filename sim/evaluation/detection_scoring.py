@@ -14,10 +14,10 @@ from typing import Any
 import numpy as np
 
 from sim.evaluation.detection_matching import MISSION_DETECTION_MATCH_IOU, match_frame
-from sim.records import MissionInfo, PerceptionResult
+from sim.records import MissionInfo, ObserverBase, PerceptionResult
 
 
-class DetectionScorer:
+class DetectionScorer(ObserverBase):
     """Counts true and false detections of the perception sonar's frames.
 
     Args:

@@ -3,7 +3,7 @@ surface vehicle's USBL fixes: the DVL-only estimate of the same run, for compari
 navigation error with and without the fixes on identical sensor data.
 
 :class:`DvlOnlyBaseline` is a mission observer: it builds a fresh filter at the start pose
-(:meth:`sim.mission_build.MissionParts.make_nav_filter`), hands every delivered message the
+(:meth:`sim.mission.parts.MissionParts.make_nav_filter`), hands every delivered message the
 filter handles to it (the fixes from the acoustic link excepted), predicts it to each
 step's time and records its and the mission's horizontal errors against the truth.
 """
@@ -16,14 +16,15 @@ import numpy as np
 
 from autonomy.messages import PositionFixMsg
 from sim.comms.vehicle_link import FIX_SOURCE
-from sim.records import MissionInfo, StepRecord
+from sim.records import MissionInfo, ObserverBase, StepRecord
 
 
-class DvlOnlyBaseline:
+class DvlOnlyBaseline(ObserverBase):
     """Observer running the DVL-only navigation filter of a mission.
 
     Args:
-        mission: the mission observed (its parts build the filter at :meth:`on_start`).
+        make_nav_filter: scenario -> a fresh navigation filter at the start pose (called at
+            :meth:`on_start`; :meth:`sim.mission.parts.MissionParts.make_nav_filter`).
 
     Attributes:
         t_s, mode: (n,) step times (s) and mission modes.
@@ -31,14 +32,15 @@ class DvlOnlyBaseline:
             the DVL-only one against the truth at each step, m.
     """
 
+    sonar_frames = True
     sonar_truth = False  # reads no sonar ground truth (the sonar need not compute it)
 
-    def __init__(self, mission: Any) -> None:
-        self.mission = mission
+    def __init__(self, make_nav_filter: Any) -> None:
+        self.make_nav_filter = make_nav_filter
         self._nav = None
 
     def on_start(self, info: MissionInfo) -> None:
-        self._nav = self.mission.parts.make_nav_filter(info.scenario)
+        self._nav = self.make_nav_filter(info.scenario)
         self._handlers = self._nav.message_handlers()
         self.t_s: list[float] = []
         self.mode: list[str] = []

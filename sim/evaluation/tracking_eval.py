@@ -29,6 +29,7 @@ import math
 from pathlib import Path
 from typing import Any
 
+from sim.records import ObserverBase
 import numpy as np
 from numpy.typing import NDArray
 from scipy.stats import chi2
@@ -43,7 +44,7 @@ NEES2_95 = float(chi2.ppf(0.95, 2))  # chi-square(2) 95 % point
 _COLS = 14
 
 
-class TrackingEvaluation:
+class TrackingEvaluation(ObserverBase):
     """Mission observer scoring the tracking stack.
 
     Args:
@@ -339,17 +340,20 @@ def error_boxplot_png(sets: dict[str, FloatArray], path: Path, title: str, ylabe
     fig.savefig(path, dpi=110)
 
 
-def evaluation_for(mission: Any, warmup_s: float = 10.0) -> TrackingEvaluation:
-    """The evaluation of a built :class:`sim.mission.Mission` with tracking: the mover named
-    by the tracker's transponder is the truth, its plume the bubbles.
+def evaluation_for(stack: TrackingStack | None, movers: Any, sonar: Any, warmup_s: float = 10.0) -> TrackingEvaluation:
+    """The evaluation of a mission's tracking stack: the mover named by the tracker's
+    transponder is the truth, its plume the bubbles.
+
+    Args:
+        stack: the mission's tracking stack (:attr:`sim.features.tracking.TrackingFeature.stack`).
+        movers: the world's movers (:attr:`sim.physics.Physics.movers`).
+        sonar: the sonar the tracker reads (its mount and geometry).
 
     Raises:
-        ValueError: the mission has no tracking, or no mover carries the transponder.
+        ValueError: no tracking stack, or no mover carries the transponder.
     """
-    stack = mission.parts.tracking
     if stack is None:
         raise ValueError("evaluation_for: the mission has no tracking (autonomy.tracking.enabled)")
-    movers = mission.physics.movers
     name = stack.cfg.transponder
     if name not in movers.trajectories:
         raise ValueError(f"evaluation_for: no mover named {name!r} carries the transponder")
@@ -372,7 +376,6 @@ def evaluation_for(mission: Any, warmup_s: float = 10.0) -> TrackingEvaluation:
         _, ages, pts, wet = plume.breaths_at(t_s)
         return ages, pts, wet
 
-    sonar = mission.parts.sonar
     g = sonar.geometry
     return TrackingEvaluation(stack, lambda t: traj.pose_at(t)[0], bubbles_at if plume is not None else None,
                               sonar.mount.pos_body_m, sonar.mount.R_bs, g.fov_rad, (g.window_near_m, g.window_far_m),

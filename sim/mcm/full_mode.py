@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from sim.records import ObserverBase
 import numpy as np
 from numpy.typing import NDArray
 
@@ -56,7 +57,7 @@ class SssTileProcessor:
         self.assembler.reset()
 
 
-class McmFullObserver:
+class McmFullObserver(ObserverBase):
     """Records what a full-mode run needs for mapping and scoring.
 
     Attributes:

@@ -32,7 +32,7 @@ DEFAULT_MLOS = ((80.0, 120.0), (160.0, 400.0), (250.0, 250.0), (370.0, 90.0), (4
 
 
 class McmSurveyConfig(StrictModel):
-    """The ``mcm_survey`` scenario (paper 003, Section V; REFERENCE.md section 7).
+    """The ``mcm_survey`` scenario (paper 003, Section V; [P003] in ``docs/references.md``).
 
     Objects: ``mine_like_ned`` fixed, ``n_other`` others re-drawn uniformly over the
     ``area_side_m`` square each run. Survey: ``n_lanes`` legs along north of ``area_side_m``,

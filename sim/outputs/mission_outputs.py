@@ -14,18 +14,20 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from sim.records import ObserverBase
 import numpy as np
 
 from autonomy.geodesy import GeodeticOrigin, ned_to_lat_lon_depth
 from scenarios.schema import Scenario
 from sim.outputs.map_plot import plot_map
 from sim.evaluation.detection_scoring import DetectionScorer
-from sim.perception import target_objects, world_model_metrics
 from sim.mission import Mission
 from sim.movers import BUBBLE_CLASS
 from sim.outputs.progress import MissionProgress
 from sim.outputs.run_dir import StagedOutput, check_output_dir
 from sim.outputs.trajectory_log import TrajectoryLog
+from sim.features import runs_to_duration
+from sim.records import ObserverBase
 
 METRICS_DECIMALS = 4
 
@@ -79,12 +81,14 @@ def with_geodetic(world_model: dict[str, Any], origin: GeodeticOrigin) -> dict[s
 def planned_length_s(mission: Mission) -> float:
     """Planned mission length, s: start delay plus the survey path at the survey speed.
 
-    Used as the 100 % of the progress display; capped by the scenario's duration (a buddy
-    mission, which flies no survey: the duration).
+    Used as the 100 % of the progress display; capped by the scenario's duration (a feature
+    may decide it instead: a buddy mission, which flies no survey, runs to the duration).
     """
     scn = mission.scenario
-    if scn.autonomy.guidance.buddy.enabled:  # no survey plan: the mission runs to duration_s
-        return float(scn.duration_s)
+    for feature in mission.features:
+        planned = feature.planned_length_s()
+        if planned is not None:
+            return planned
     survey = scn.autonomy.guidance.survey
     wps = np.asarray(mission.waypoints_ne, dtype=float).reshape(-1, 2)
     start = np.asarray(scn.vehicle.initial_pos_ned[:2], dtype=float)
@@ -113,9 +117,10 @@ def perception_counts(mission: Mission) -> dict[str, Any]:
     return out
 
 
-def collect_metrics(mission: Mission, log: TrajectoryLog, scorer: DetectionScorer | None = None) -> dict[str, Any]:
-    """The figures of a finished mission (navigation, detections as ``scorer`` counted them,
-    world model)."""
+def collect_metrics(mission: Mission, log: TrajectoryLog) -> dict[str, Any]:
+    """The figures of a finished mission: the core ones (navigation, the sonars' frames), then
+    each feature's (:meth:`sim.features.base.MissionFeature.add_metrics`: detections as the
+    scorer counted them, the world model, the link, tracking, ...), in feature order."""
     s = mission.summary()
     metrics: dict[str, Any] = {
         "scenario": mission.scenario.name,
@@ -130,41 +135,8 @@ def collect_metrics(mission: Mission, log: TrajectoryLog, scorer: DetectionScore
         "navigation": log.navigation_metrics(),
         "perception": perception_counts(mission),
     }
-    if mission.perception is not None:
-        if scorer is not None:
-            metrics["perception"].update(scorer.metrics())
-        wm = mission.perception.world_model_metrics()
-        n_all = len(mission.perception.world_objects())
-        n_targets = n_all - int(wm.get("objects_not_target", 0))
-        wm["world_model_json_objects"] = n_all
-        wm["note"] = (f"world_model.json holds all {n_all} objects the world model keeps; {n_targets} it classifies "
-                      f"as targets are scored against the true targets (objects, matched, missed, false); "
-                      f"{n_all - n_targets} it classifies as not targets (rocks, clutter) are listed there "
-                      "but not scored")
-        metrics["world_model"] = wm
-    others = log.other_paths_ned()
-    if others:
-        t_auv, p_auv, t_others = log.t_s, log.true_pos_ned, log.other_paths_t_s()
-        auv = np.column_stack([np.interp(t_others, t_auv, p_auv[:, k]) for k in range(3)])
-        metrics["vehicles"] = {
-            "contact_periods": {"-".join(pair): n for pair, n in mission.vehicle_contacts.items()},
-            "min_separation_m": {name: float(np.min(np.linalg.norm(path - auv, axis=1))) for name, path in others.items()},
-            "note": "contact periods: autonomy periods ending with hulls touching (every period checked); "
-                    "least separation of the body origins, sampled once a second",
-        }
-    if mission.link is not None:
-        metrics["link"] = mission.link.metrics()
-        nav = mission.nav_filter
-        if hasattr(nav, "n_late_fused"):
-            metrics["link"]["usbl_fixes_fused"] = nav.n_late_fused
-            metrics["link"]["usbl_fixes_refused"] = nav.n_late_gated + nav.n_late_too_old
-        surface = mission.link.surface_world_model
-        if surface is not None and mission.perception is not None:
-            sw = world_model_metrics(surface.world_model(), mission.perception.truth_targets)
-            sw["world_model_json_objects"] = len(surface.world_model())
-            sw["note"] = ("the world model on the surface vehicle, from the detections the acoustic link delivered "
-                          "(surface_world_model.json); scored as world_model")
-            metrics["surface_world_model"] = sw
+    for feature in mission.features:
+        feature.add_metrics(metrics, log)
     return metrics
 
 
@@ -179,57 +151,56 @@ def _outcome_suffix(metrics: dict[str, Any], runs_to_duration: bool = False) -> 
     return ""
 
 
-def map_layers(mission: Mission, tracking: Any, sim_time_s: float, overlay=None,
-               extent: np.ndarray | None = None) -> dict[str, Any]:
+def map_layers(mission: Mission, sim_time_s: float) -> dict[str, Any]:
     """The scene layers of ``map.png`` (keyword arguments of :func:`sim.outputs.map_plot.plot_map`):
-    ``waypoints_ne`` (None for a buddy mission, which does not fly the survey plan),
-    ``targets`` (fixed objects; movers are drawn as their true paths over ``sim_time_s`` with
-    the tracker's estimate, :mod:`sim.outputs.tracking_overlay`, and bubble scatterers not at
-    all), ``overlay`` (``overlay`` given, e.g. a scanning sonar's, then the movers') and
-    ``extent_points_ne``.
-
-    Args:
-        mission: the finished mission; tracking: its :class:`TrackingEvaluation` or None.
-    """
+    ``waypoints_ne``, ``targets`` (fixed objects; movers are drawn as their true paths over
+    ``sim_time_s``, :mod:`sim.outputs.tracking_overlay`, with a tracker's estimate where a
+    feature gives one, and bubble scatterers not at all), ``overlay`` (the features' overlays,
+    then the movers') and ``extent_points_ne``; each feature adds its layers
+    (:meth:`sim.features.base.MissionFeature.map_layers`)."""
     scenario = mission.scenario
     movers = {m.name for m in scenario.world.movers}
     objects = [(o.name, o.centroid_ned, o.is_target) for o in mission.world.objects
                if o.name not in movers and o.class_name != BUBBLE_CLASS]
-    draws, extents = [overlay] if overlay is not None else [], [extent] if extent is not None else []
+    layers: dict[str, Any] = {"waypoints_ne": mission.waypoints_ne, "targets": objects, "overlays": [], "extents": []}
+    for feature in mission.features:
+        feature.map_layers(layers)
+    draws, extents = layers.pop("overlays"), layers.pop("extents")
+    tracker = layers.pop("tracker_estimate_ned", None)
     if movers:
         from sim.outputs.tracking_overlay import extent_points_ne, mover_paths_ned, tracking_overlay
 
         paths = mover_paths_ned(mission.physics.movers, sim_time_s)
-        est = np.array(tracking.primary_est_ned, dtype=float).reshape(-1, 4)[:, 1:] if tracking is not None else None
-        draws.append(tracking_overlay(paths, est, f"tracker estimate ({scenario.autonomy.tracking.mode})"))
+        est, label = tracker if tracker is not None else (None, "tracker estimate")
+        draws.append(tracking_overlay(paths, est, label))
         extents.append(extent_points_ne(paths, est))
 
     def draw_all(ax) -> None:
         for draw in draws:
             draw(ax)
 
-    return {"waypoints_ne": None if scenario.autonomy.guidance.buddy.enabled else mission.waypoints_ne,
-            "targets": objects, "overlay": draw_all if draws else None,
-            "extent_points_ne": np.concatenate([np.asarray(e, dtype=float).reshape(-1, 2) for e in extents])
-            if extents else None}
+    layers["overlay"] = draw_all if draws else None
+    layers["extent_points_ne"] = (np.concatenate([np.asarray(e, dtype=float).reshape(-1, 2) for e in extents])
+                                  if extents else None)
+    return layers
 
 
-class _ProgressObserver:
+class _ProgressObserver(ObserverBase):
     """Feeds the mission's step records to a :class:`MissionProgress`; a buddy mission (whose
     survey state machine stays ``idle``) shows its behaviour instead (``buddy follow``)."""
 
     sonar_frames = False  # ignores the sonar's renders (the pipelined loop need not ship them)
     sonar_truth = False  # nor their ground truth (the sonar need not compute it)
 
-    def __init__(self, progress: MissionProgress, buddy: str | None = None) -> None:
+    def __init__(self, progress: MissionProgress, label: str | None = None) -> None:
         self.progress = progress
-        self.buddy = buddy
+        self.label = label
 
     def on_start(self, info: Any) -> None:
         self.progress.start()
 
     def on_step(self, record: Any) -> None:
-        self.progress.update(record.t_s, f"buddy {self.buddy}" if self.buddy else record.mode)
+        self.progress.update(record.t_s, self.label or record.mode)
 
     def on_message(self, name: str, msg: Any) -> None:
         pass
@@ -264,14 +235,15 @@ def run_mission(
     staged = StagedOutput(out_dir, kind="run")
     with staged as partial:
         log = TrajectoryLog()
-        observers: list[Any] = [log]
-        scorer = DetectionScorer("", scenario.autonomy.atr.detector) if score_detections else None
-        if scorer is not None:
-            observers.append(scorer)  # before the recorder, which colours detections by it
+        mission = Mission(scenario, nav_source=nav_source, observers=[log], workers=workers)
+        evaluations = [obs for feature in mission.features
+                       for obs in feature.observers({"score_detections": score_detections})]
+        mission.observers.extend(evaluations)  # before the recorders, which colour detections by the scorer
+        scorer = next((o for o in evaluations if isinstance(o, DetectionScorer)), None)
         if rerun:
             from sim.outputs.rerun_recording import RerunRecorder
 
-            observers.append(RerunRecorder(partial / "recording.rrd", scorer=scorer))
+            mission.observers.append(RerunRecorder(partial / "recording.rrd", scorer=scorer))
         if rosbag is None:
             rosbag = scenario.outputs.rosbag
         if rosbag_fls_every is None:
@@ -279,36 +251,10 @@ def run_mission(
         if rosbag:
             from sim.ros2bag.recorder import RosbagRecorder
 
-            observers.append(RosbagRecorder(partial / "rosbag", fls_every=rosbag_fls_every))
-        mission = Mission(scenario, nav_source=nav_source, observers=observers, workers=workers)
-        if scorer is not None:
-            if mission.perception is None:
-                mission.observers.remove(scorer)
-                scorer = None
-            else:
-                scorer.sonar_name = mission.fls.name
-        msis = next(iter(p for p in mission.parts.processors.values() if hasattr(p, "localizer")), None)
-        if msis is not None:
-            from sim.msis_evaluation import LocalizationErrorObserver
-
-            msis_obs = LocalizationErrorObserver(mission)
-            mission.observers.append(msis_obs)
-        buddy = scenario.autonomy.guidance.buddy
+            mission.observers.append(RosbagRecorder(partial / "rosbag", fls_every=rosbag_fls_every))
+        label = next((f.progress_label() for f in mission.features if f.progress_label() is not None), None)
         mission.observers.append(_ProgressObserver(MissionProgress(scenario.name, planned_length_s(mission),
-                                                                   enabled=progress),
-                                                   buddy=buddy.behaviour if buddy.enabled else None))
-        tracking = None
-        if mission.parts.tracking is not None:
-            from sim.evaluation.tracking_eval import evaluation_for
-
-            tracking = evaluation_for(mission)
-            mission.observers.append(tracking)
-        mcm_obs = None
-        if scenario.mcm.mode == "full":
-            from sim.mcm.full_mode import McmFullObserver
-
-            mcm_obs = McmFullObserver(scenario)
-            mission.observers.append(mcm_obs)
+                                                                   enabled=progress), label=label))
         try:  # reset starts the pipeline's workers: a Ctrl-C from then on stops them too
             mission.reset()
             if workers > 1 and not mission.pipelined:
@@ -318,56 +264,20 @@ def run_mission(
         finally:
             mission.close()
 
-        metrics = collect_metrics(mission, log, scorer)
-        overlay = extent = None
-        if msis is not None and msis_obs.err_fused_m:
-            from sim.outputs.msis_overlay import basin_outline_ne, msis_overlay
-
-            metrics["msis_localization"] = msis_obs.rms()
-            overlay = msis_overlay(msis_obs, scenario.world.basin, msis.localizer)
-            extent = basin_outline_ne(scenario.world.basin)
-        mcm_result = mcm_obs.results(mission.seed) if mcm_obs is not None and mcm_obs.tiles else None
-        if mcm_result is not None:
-            from sim.mcm.figures import confirmed_objects_overlay
-
-            overlay = confirmed_objects_overlay(mcm_result)
+        metrics = collect_metrics(mission, log)
         log.write_csv(partial / "trajectory.csv")
-        layers = map_layers(mission, tracking, metrics["sim_time_s"], overlay, extent)
-        estimates, rejected = [], []
-        origin = scenario.world.origin
-        surface_targets = []
-        if mission.perception is not None:
-            write_json(partial / "world_model.json", with_geodetic(mission.perception.world_model_json(), origin))
-            targets = mission.perception.target_objects()
-            estimates = [(f"{o.id}", o.pos_ned, o.cov_ned) for o in targets]
-            target_ids = {o.id for o in targets}
-            rejected = [o.pos_ned for o in mission.perception.world_objects() if o.id not in target_ids]
-        if mission.link is not None and mission.link.surface_world_model is not None:
-            surface = mission.link.surface_world_model
-            write_json(partial / "surface_world_model.json", with_geodetic(surface.to_json(), origin))
-            surface_targets = [o.pos_ned for o in target_objects(surface.world_model())]
+        layers = map_layers(mission, metrics["sim_time_s"])
+        title = f"{scenario.name} seed {mission.seed}"
+        for feature in mission.features:
+            feature.write_outputs(partial, metrics, title)
         plot_map(
             partial / "map.png",
-            true_pos_ned=log.true_pos_ned, est_pos_ned=log.est_pos_ned, estimates=estimates, rejected_ned=rejected,
-            title=(f"{scenario.name} seed {mission.seed} (nav: {nav_source})"
-                   + _outcome_suffix(metrics, runs_to_duration=tracking is not None)),
-            other_paths=list(log.other_paths_ned().items()), surface_estimates_ned=surface_targets,
+            true_pos_ned=log.true_pos_ned, est_pos_ned=log.est_pos_ned,
+            title=(f"{title} (nav: {nav_source})"
+                   + _outcome_suffix(metrics, runs_to_duration=runs_to_duration(scenario))),
+            other_paths=list(log.other_paths_ned().items()),
             **layers,
         )
-        if tracking is not None:
-            metrics["tracking"] = tracking.metrics()
-            tracking.plot(partial / "tracking_error.png", partial / "tracking_boxplot.png",
-                          title=f"{scenario.name} seed {mission.seed}")
-        if mcm_obs is not None and not mcm_obs.tiles:  # too short a run: its other outputs still count
-            from sim.mcm.full_mode import no_tile_message
-
-            metrics["mcm"] = {"tiles": 0, "note": no_tile_message(scenario)}
-        elif mcm_result is not None:
-            from sim.mcm.figures import summarise, write_figures
-
-            write_json(partial / "mcm.json", mcm_result)
-            write_figures(partial, [mcm_result], title=f"{scenario.name} seed {mission.seed}")
-            metrics["mcm"] = {**summarise([mcm_result]), "detector": mcm_result["detector"]}
         write_json(partial / "metrics.json", metrics, decimals=METRICS_DECIMALS)
         staged.commit()
     return metrics

@@ -50,7 +50,7 @@ from autonomy.sonar_geometry import FanGeometry
 from autonomy.tracking.onboard import TrackingFrameResult
 from autonomy.tracking.roi import PolarRoi
 from sim.outputs.rerun_columns import PoseColumn, ScalarColumn
-from sim.records import MissionInfo, MissionSummary, PerceptionResult, StepRecord
+from sim.records import MissionInfo, MissionSummary, ObserverBase, PerceptionResult, StepRecord
 from sim.sensors.fls import FlsRender
 from sim.sensors.msis import MsisRender
 from sim.sensors.msis_scan import ScanImage
@@ -107,7 +107,7 @@ class _GrowingPath:
             rec.log(f"{self.entity}/{self._k}", rr.LineStrips3D([np.asarray(self._points)], colors=[self.color]))
 
 
-class RerunRecorder:
+class RerunRecorder(ObserverBase):
     """Streams a mission into ``path`` (a rerun ``.rrd`` file).
 
     Args:

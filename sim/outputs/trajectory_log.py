@@ -13,7 +13,7 @@ from numpy.typing import NDArray
 from autonomy.frames import wrap_angle
 from typing import Any
 
-from sim.records import MissionInfo, MissionSummary, StepRecord
+from sim.records import MissionInfo, MissionSummary, ObserverBase, StepRecord
 
 COLUMNS = (
     ["t_s", "mode"]
@@ -28,7 +28,7 @@ COLUMNS = (
 #: Sampling of the extra vehicles' paths kept for the map, s.
 OTHERS_EVERY_S = 1.0
 
-class TrajectoryLog:
+class TrajectoryLog(ObserverBase):
     """Observer logging the trajectory at the autonomy rate, with memory flat over the mission.
 
     Each step is one float64 row (the numeric :data:`COLUMNS`, a mode code, the thruster

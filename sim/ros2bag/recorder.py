@@ -35,7 +35,7 @@ import numpy as np
 
 from autonomy.frames import R_FLU_FRD, enu_from_ned, flu_from_frd, rot_enu_flu, rot_from_euler
 from autonomy.navigation.dvl_geometry import janus_beam_dirs_body
-from sim.records import MissionInfo, MissionSummary, PerceptionResult, StepRecord
+from sim.records import MissionInfo, MissionSummary, ObserverBase, PerceptionResult, StepRecord
 from sim.ros2bag.ros_messages import RosConverter, altimeter_frame_in_flu, sonar_msg_frame_in_flu, stamp_ns
 from sim.ros2bag.typestore import make_typestore
 
@@ -43,7 +43,7 @@ MAP, ODOM, BASE, BASE_TRUTH, BASE_FRD = "map", "odom", "base_link", "base_link_t
 TARGET_CLASS = "target"
 
 
-class RosbagRecorder:
+class RosbagRecorder(ObserverBase):
     """Writes the mission into the rosbag2 folder ``path`` (must not exist yet).
 
     Args:

@@ -9,7 +9,17 @@ As dm_control's observables, the ideal value is kept apart from its corruption:
 ``ideal(truth, scene)`` computes what a perfect instrument would report (or the exact
 physical quantities the corruption needs), ``corrupt`` adds noise, biases and dropouts drawn
 from the sensor's own generator, and ``exact`` forms the noise-free message. ``measure(...,
-noise=False)`` therefore returns exact values and draws nothing.
+noise=False)`` therefore returns exact values and draws nothing. :meth:`Sensor.measure` is
+the template and no sensor overrides it: a sensor implements ``ideal`` (and ``corrupt`` /
+``exact`` where its noise-free output is not yet the message). Sensors whose noise enters
+mid-way through a rendering (the sonars: speckle on the noise-free echo intensities) return
+from ``ideal`` everything up to the first draw, so that ``corrupt`` draws in the order the
+whole render did.
+
+What a caller may ask of a sensor without probing its attributes is declared on its class:
+:attr:`Sensor.ground_truth_optional` (it can skip computing its ground truth: set
+:attr:`Sensor.render_truth`) and :attr:`Sensor.fixed_latency` (its delivery delay does not
+depend on the message).
 """
 
 from __future__ import annotations
@@ -65,11 +75,15 @@ class SceneView:
 
 @dataclass(frozen=True)
 class Mount:
-    """Where a sensor sits on the hull.
+    """Where a sensor sits on the hull: the one mount type of every sensor, sonars included.
 
     Attributes:
         pos_body_m: (3,) FRD offset of the sensor from the body origin, m.
-        rpy_rad: (3,) roll, pitch, yaw of the sensor frame w.r.t. the body frame, rad.
+        rpy_rad: (3,) roll, pitch, yaw of the sensor frame w.r.t. the body frame, rad: ZYX Euler
+            angles of the sensor -> body rotation :attr:`R_bs`, pitch positive nose *up*, as
+            the vehicle's own attitude. A sonar tilted down by ``t`` has pitch ``-t`` (the
+            sonars name that angle ``tilt_down_rad``; :mod:`autonomy.sonar_frame`'s
+            ``(roll, tilt, yaw)`` triple is their ``mount_roll_tilt_yaw_rad``).
         site: hull site it was read from (None: given as a position).
     """
 
@@ -126,7 +140,8 @@ class Sensor(ABC, Generic[MsgT]):
     """Base of every simulated sensor.
 
     Args:
-        cfg: the sensor's config entry (provides ``rate_hz`` and ``latency_s``).
+        cfg: the sensor's config entry (provides ``latency_s`` and ``rate_hz``, read by
+            :meth:`rate_of`).
         mount: a :class:`Mount`, or a (3,) FRD offset from the body origin (m) for a sensor
             aligned with the body.
         rng: the sensor's own generator (``sim.rng.component_rng(seed, name)``); sensors
@@ -136,12 +151,32 @@ class Sensor(ABC, Generic[MsgT]):
     Attributes:
         kind: registry key, set by :func:`sim.sensors.registry.register_sensor`.
         config_type: config class of this kind.
+        ground_truth_optional: class attribute, True when the sensor's messages carry ground
+            truth that costs work to compute and that :attr:`render_truth` can switch off
+            (the forward-looking sonar's object records and instance masks). False (the
+            default): whatever truth its messages carry is always computed and
+            :attr:`render_truth` has no effect.
+        fixed_latency: class attribute, True (the default) when :meth:`latency_s` is the
+            fixed ``cfg.latency_s`` whatever the message, so the delivery time is known at
+            capture, before the message is formed (what :class:`sim.sonar_pipeline.SonarPipeline`
+            needs to pipeline a sonar); False on a sensor whose :meth:`latency_s` depends on
+            the message (the USBL's two-way travel time).
+        render_truth: whether :meth:`measure` computes the optional ground truth (default
+            True). Honoured by sensors with ``ground_truth_optional`` (a mission sets it False
+            when none of its observers reads that truth; the message's data and the draws from
+            the noise stream are the same either way); ignored by the others.
         rate_hz: sampling rate, Hz.
-        mount: where it sits; ``mount_pos_body_m`` (3,) its FRD offset from the body origin, m.
+        mount: where it sits (the one sensor orientation: :attr:`Mount.rpy_rad`, the sensor
+            frame w.r.t. the body as roll, pitch, yaw); ``mount_pos_body_m`` (3,) its FRD
+            offset from the body origin, m.
+        rng: the noise stream (what :meth:`reset` took).
     """
 
     kind: ClassVar[str] = ""
     config_type: ClassVar[type[SensorConfig]]
+    ground_truth_optional: ClassVar[bool] = False
+    fixed_latency: ClassVar[bool] = True
+    render_truth: bool = True
 
     def __init__(self, cfg: SensorConfig, mount: Mount | ArrayLike, rng: np.random.Generator | None = None, *,
                  name: str | None = None) -> None:
@@ -149,7 +184,7 @@ class Sensor(ABC, Generic[MsgT]):
         self.name = name or cfg.kind
         self.mount = as_mount(mount)
         self.mount_pos_body_m: FloatArray = self.mount.pos_body_m
-        self.rate_hz = float(cfg.rate_hz)
+        self.rate_hz = self.rate_of(cfg)
         self._rng: np.random.Generator = rng if rng is not None else np.random.default_rng(0)
         self.reset(self._rng)
 
@@ -159,8 +194,20 @@ class Sensor(ABC, Generic[MsgT]):
         """The sensor of entry ``name`` (what the registry calls)."""
         return cls(cfg, mount, rng, name=name)
 
+    @classmethod
+    def rate_of(cls, cfg: SensorConfig) -> float:
+        """The sampling rate of a sensor of config ``cfg``, Hz (default ``cfg.rate_hz``; a sensor
+        whose rate follows from its device settings overrides it)."""
+        return float(cfg.rate_hz)
+
+    @property
+    def rng(self) -> np.random.Generator:
+        """The sensor's noise stream (what :meth:`reset` took)."""
+        return self._rng
+
     def latency_s(self, msg: MsgT) -> float:
-        """Sampling-to-delivery delay of ``msg``, s (fixed: ``cfg.latency_s``)."""
+        """Sampling-to-delivery delay of ``msg``, s (fixed: ``cfg.latency_s``). A sensor that
+        overrides it with a delay depending on the message declares ``fixed_latency = False``."""
         return float(self.cfg.latency_s)
 
     def reset(self, rng: np.random.Generator) -> None:

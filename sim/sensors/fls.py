@@ -27,10 +27,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from autonomy.guidance.lawnmower import fls_swath_width_m
 from autonomy.messages import FlsFrame
-from autonomy.sonar_frame import sonar_to_body_rotation
 from autonomy.sonar_geometry import FanGeometry
 from scenarios.config.fls import FlsConfig
-from sim.sensors.base import Mount, SceneView, Sensor
+from sim.sensors.base import Mount, SceneView, Sensor, as_mount
 from sim.sensors.fls_presets import FlsGeometry, resolve_geometry
 from sim.sensors.raycast import RayCaster
 from sim.sensors.sonar.beam_pattern import azimuth_kernel
@@ -70,41 +69,58 @@ class FlsRender:
     intensity: NDArray[np.float32]
 
 
+@dataclass(frozen=True, slots=True)
+class FlsEcho:
+    """The noise-free part of a frame (:meth:`FlsSensor.ideal`): everything up to the first
+    draw from the noise stream.
+
+    Attributes:
+        t_s: capture time, s.
+        mean_intensity: (n_beams, n_bins) float32 expected power before TVG.
+        truth: the frame's ground truth (objects and mask only when rendered with them).
+        clutter: (n_beams, n_bins) bins the K texture applies to (None unless ``speckle == "k"``).
+    """
+
+    t_s: float
+    mean_intensity: NDArray[np.float32]
+    truth: SonarGroundTruth
+    clutter: NDArray[np.bool_] | None
+
+
 @register_sensor(FlsConfig)
 class FlsSensor(Sensor[FlsRender]):
     """Forward-looking sonar on the hull.
 
     Args:
         cfg: the sonar config (preset + overrides).
-        mount_pos_body_m: (3,) FRD offset of the sonar head from the body origin.
-        mount_rpy_rad: (3,) sonar frame w.r.t. body: roll, tilt (pitch down > 0), yaw;
-            default ``(0, cfg.tilt_deg, 0)``.
+        mount: a :class:`Mount` (position, roll and yaw used; the tilt is ``cfg.tilt_deg``) or a
+            (3,) FRD offset of the sonar head from the body origin, m.
         rng: generator for speckle and noise (``sim.rng.component_rng(seed, name)``).
         name: the sensor's entry name (default ``fls``).
 
     Attributes:
+        mount: the head's mount; its ``rpy_rad`` is ``(roll, -tilt_down_rad, yaw)`` (pitch up > 0,
+            as every :class:`Mount`) and ``R_bs`` (also :attr:`R_bs`) the sonar -> body rotation.
+        tilt_down_rad: depression of the boresight below the body's x-y plane, rad (``cfg.tilt_deg``).
         render_truth: whether :meth:`render` (and so :meth:`measure`) computes the objects'
             ground truth and the instance mask when not told (default True;
-            :class:`sim.mission.Mission` sets it from its observers' ``sonar_truth``).
+            :class:`sim.mission.Mission` sets it from its observers' ``sonar_truth``). The
+            class declares ``ground_truth_optional``.
     """
 
+    ground_truth_optional = True
     render_truth: bool = True
 
-    def __init__(self, cfg: FlsConfig, mount_pos_body_m: ArrayLike = (0.0, 0.0, 0.0),
-                 mount_rpy_rad: ArrayLike | None = None, rng: np.random.Generator | None = None, *,
-                 name: str | None = None) -> None:
-        self.cfg = cfg
-        self.name = name or cfg.kind
+    def __init__(self, cfg: FlsConfig, mount: Mount | ArrayLike = (0.0, 0.0, 0.0),
+                 rng: np.random.Generator | None = None, *, name: str | None = None) -> None:
+        m = as_mount(mount)
+        self.tilt_down_rad = float(np.deg2rad(cfg.tilt_deg))
+        super().__init__(cfg, Mount(m.pos_body_m, np.array([m.rpy_rad[0], -self.tilt_down_rad, m.rpy_rad[2]]),
+                                    m.site), rng, name=name)
+        self.cfg: FlsConfig = cfg
+        self.R_bs = self.mount.R_bs
         self.geometry: FlsGeometry = resolve_geometry(cfg)
         g = self.geometry
-        self.rate_hz = float(cfg.rate_hz)
-        self.mount_pos_body_m = np.asarray(mount_pos_body_m, dtype=float).reshape(3)
-        rpy = (0.0, np.deg2rad(cfg.tilt_deg), 0.0) if mount_rpy_rad is None else mount_rpy_rad
-        self.mount_rpy_rad = np.asarray(rpy, dtype=float).reshape(3)
-        self.R_bs = sonar_to_body_rotation(self.mount_rpy_rad)
-        roll, tilt, yaw = self.mount_rpy_rad
-        self.mount = Mount(self.mount_pos_body_m, np.array([roll, -tilt, yaw]))  # R_bs as roll/pitch/yaw
-        self.reset(rng if rng is not None else np.random.default_rng(0))
 
         self.n_bins = g.n_bins
         self.rays = RayFan(g.column_azimuths_rad(), g.elevations_rad())
@@ -125,29 +141,32 @@ class FlsSensor(Sensor[FlsRender]):
         self._remap = FanRemap(self.fan_geometry, beam_az, g.window_near_m, g.range_resolution_m, self.n_bins)
 
     # -- sensor contract --------------------------------------------------------------------
-    @classmethod
-    def from_config(cls, name: str, cfg: FlsConfig, mount: Mount | ArrayLike,
-                    rng: np.random.Generator) -> "FlsSensor":
-        """Head at the mount's position; roll and yaw from the mount, tilt from ``cfg.tilt_deg``."""
-        m = mount if isinstance(mount, Mount) else Mount(np.asarray(mount, dtype=float))
-        rpy = np.array([m.rpy_rad[0], np.deg2rad(cfg.tilt_deg), m.rpy_rad[2]])
-        return cls(cfg, m.pos_body_m, rpy, rng, name=name)
+    def ideal(self, truth: VehicleTruth, scene: SceneView) -> FlsEcho:
+        """The noise-free frame from the true vehicle state (sonar head at the mount point)
+        among the scene's objects at capture time: expected intensities and ground truth.
 
-    def reset(self, rng: np.random.Generator) -> None:
-        """Take a new speckle and noise stream."""
-        self.rng = self._rng = rng
+        Raises:
+            ValueError: the scene has no ray caster.
+        """
+        return self.echo_at(truth.t_s, truth.point_ned(self.mount_pos_body_m), truth.R_nb,
+                            scene.require_caster("FlsSensor"), scene.objects)
 
-    def ideal(self, truth: VehicleTruth, scene: SceneView) -> FlsRender:
-        """The expected frame (no speckle, no receiver noise draws)."""
-        return self.measure(truth, scene, noise=False)
+    def exact(self, ideal: FlsEcho) -> FlsRender:
+        """The expected frame: intensity = mean + noise floor, nothing drawn."""
+        return self._frame(ideal, noise=False)
 
-    def measure(self, truth: VehicleTruth, scene: SceneView, *, noise: bool = True) -> FlsRender:
-        """Render from the true vehicle state (sonar head at the mount point) among the scene's
-        objects at capture time."""
-        return self.render(truth.t_s, truth.point_ned(self.mount_pos_body_m), truth.R_nb,
-                           scene.require_caster("FlsSensor"), scene.objects, noise=noise)
+    def corrupt(self, ideal: FlsEcho, truth: VehicleTruth) -> FlsRender:
+        """The frame with speckle and receiver noise drawn from the sensor's stream."""
+        return self._frame(ideal, noise=True)
 
     # -- public ---------------------------------------------------------------------------
+    @property
+    def mount_roll_tilt_yaw_rad(self) -> FloatArray:
+        """(3,) the mount as ``(roll, tilt down > 0, yaw)``, rad: the convention of
+        :mod:`autonomy.sonar_frame` (what the frames carry as ``FlsFrame.mount_rpy_rad`` and
+        the on-board geolocalisation takes)."""
+        return np.array([self.mount.rpy_rad[0], self.tilt_down_rad, self.mount.rpy_rad[2]])
+
     @property
     def n_rays(self) -> int:
         """Base rays per frame (edge refinement adds a few per discontinuity)."""
@@ -156,13 +175,13 @@ class FlsSensor(Sensor[FlsRender]):
     def swath_width_m(self, altitude_m: float) -> float:
         """Across-track width of flat seabed seen at ``altitude_m`` (level vehicle)."""
         g = self.geometry
-        return fls_swath_width_m(altitude_m, float(self.mount_rpy_rad[1]), g.fov_rad, g.vertical_beamwidth_rad,
+        return fls_swath_width_m(altitude_m, self.tilt_down_rad, g.fov_rad, g.vertical_beamwidth_rad,
                                  g.window_near_m, g.window_far_m)
 
     def render(self, t_s: float, pos_ned: ArrayLike, R_nb: ArrayLike, caster: RayCaster,
                objects: Sequence[SceneObjectLike] = (), *, noise: bool = True,
                truth: bool | None = None) -> FlsRender:
-        """Render one frame.
+        """Render one frame (:meth:`echo_at`, then the noise, the display and the fan image).
 
         Args:
             t_s: capture time.
@@ -178,6 +197,12 @@ class FlsSensor(Sensor[FlsRender]):
                 :class:`sim.sensors.sonar.ground_truth.SonarTruthNotComputedError`); the
                 frame, the intensities and the draws from the noise generator are the same.
         """
+        return self._frame(self.echo_at(t_s, pos_ned, R_nb, caster, objects, truth=truth), noise=noise)
+
+    def echo_at(self, t_s: float, pos_ned: ArrayLike, R_nb: ArrayLike, caster: RayCaster,
+                objects: Sequence[SceneObjectLike] = (), *, truth: bool | None = None) -> FlsEcho:
+        """The noise-free part of :meth:`render` (same arguments): the rays, the expected
+        intensities and the ground truth. Draws nothing."""
         if truth is None:
             truth = self.render_truth
         g, cfg = self.geometry, self.cfg
@@ -203,16 +228,20 @@ class FlsSensor(Sensor[FlsRender]):
             if mask is not None:
                 mask = mask[self._beam_col]
         clutter = (mask < 0) if self.echo.speckle == "k" else None  # only the K texture reads it
-        intensity = self.echo.realise(mean, self.rng, noise=noise, clutter=clutter)
-        polar_u8 = self.echo.display(intensity)
-        fan_u8 = self._remap.image(polar_u8)
-
         objs = self._objects_truth(objects, origin, R_ns, sampled, owner, extents, caster, spheres) if truth else None
-        frame = FlsFrame(t_s=float(t_s), polar=polar_u8, fan=fan_u8, geometry=self.fan_geometry,
-                         mount_pos_body_m=self.mount_pos_body_m.copy(), mount_rpy_rad=self.mount_rpy_rad.copy())
         record = SonarGroundTruth(t_s=float(t_s), mask_polar=mask if truth else None, objects=objs,
                                   pos_ned=origin.copy(), R_ns=R_ns, fan_remap=self._remap)
-        return FlsRender(frame=frame, truth=record, mean_intensity=mean, intensity=intensity)
+        return FlsEcho(t_s=float(t_s), mean_intensity=mean, truth=record, clutter=clutter)
+
+    def _frame(self, echo: FlsEcho, *, noise: bool) -> FlsRender:
+        """The frame of ``echo``: speckle and receiver noise (``noise``: drawn from the sensor's
+        stream; else the expected intensity), the dB display and the fan image."""
+        intensity = self.echo.realise(echo.mean_intensity, self._rng, noise=noise, clutter=echo.clutter)
+        polar_u8 = self.echo.display(intensity)
+        fan_u8 = self._remap.image(polar_u8)
+        frame = FlsFrame(t_s=echo.t_s, polar=polar_u8, fan=fan_u8, geometry=self.fan_geometry,
+                         mount_pos_body_m=self.mount_pos_body_m.copy(), mount_rpy_rad=self.mount_roll_tilt_yaw_rad)
+        return FlsRender(frame=frame, truth=echo.truth, mean_intensity=echo.mean_intensity, intensity=intensity)
 
     # -- internals --------------------------------------------------------------------------
     def _add_object_rays(self, base: RayTable, caster: RayCaster, origin: FloatArray, R_ns: FloatArray,

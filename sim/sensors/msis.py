@@ -28,7 +28,6 @@ from numpy.typing import ArrayLike, NDArray
 from autonomy.frames import rot_z
 from autonomy.messages import MsisPing
 from autonomy.msis.ping360 import grad_to_rad
-from autonomy.sonar_frame import sonar_to_body_rotation
 from scenarios.config.msis import MsisConfig
 from sim.sensors.base import Mount, SceneView, Sensor, as_mount
 from sim.sensors.msis_head import HeadSweep
@@ -81,40 +80,62 @@ class MsisRender:
         return self.ping.t_s
 
 
+@dataclass(frozen=True, slots=True)
+class MsisEcho:
+    """The noise-free part of a ping (:meth:`MsisSensor.ideal`): everything up to the first
+    draw from the noise stream.
+
+    Attributes:
+        truth: the ping's exact truth (angle, pose, labels, expected power).
+        mean_intensity: (1, n_samples) float32 expected power before TVG (``truth.mean_intensity``
+            as one line).
+        clutter: (1, n_samples) the bins the K texture applies to (seabed).
+    """
+
+    truth: MsisPingTruth
+    mean_intensity: NDArray[np.float32]
+    clutter: NDArray[np.bool_]
+
+
 @register_sensor(MsisConfig)
 class MsisSensor(Sensor[MsisRender]):
     """Ping360-class scanning sonar on the hull.
 
     Args:
         cfg: the sonar config.
-        mount: a :class:`Mount` (roll and yaw used; the tilt is ``cfg.tilt_deg``) or a (3,) FRD
-            offset of the head from the body origin, m.
+        mount: a :class:`Mount` (position, roll and yaw used; the tilt is ``cfg.tilt_deg``) or a
+            (3,) FRD offset of the head from the body origin, m.
         rng: speckle and noise stream (``sim.rng.component_rng(seed, name)``).
         name: the entry name (default ``msis``).
 
+    The head steps once per noisy ping: :meth:`ideal` looks at the angle the head takes next
+    (without stepping it, so that ``measure(..., noise=False)`` stays a query), :meth:`corrupt`
+    steps the head there as it draws the ping's noise.
+
     Attributes:
         rate_hz: ping rate, Hz: ``1 / cfg.ping_duration_s``.
+        mount: the head's mount; its ``rpy_rad`` is ``(roll, -tilt_down_rad, yaw)`` (pitch up > 0,
+            as every :class:`Mount`) and ``R_bs`` (also :attr:`R_bs`) the head frame at angle 0 ->
+            body rotation.
+        tilt_down_rad: depression of the head's rotation plane, rad (``cfg.tilt_deg``).
         n_samples, sample_spacing_m: the range axis.
         head: the head's sweep state.
     """
 
     def __init__(self, cfg: MsisConfig, mount: Mount | ArrayLike = (0.0, 0.0, 0.0),
                  rng: np.random.Generator | None = None, *, name: str | None = None) -> None:
-        self.cfg = cfg
-        self.name = name or cfg.kind
         m = as_mount(mount)
-        self.mount_pos_body_m = m.pos_body_m
-        self.mount_rpy_rad = np.array([m.rpy_rad[0], np.deg2rad(cfg.tilt_deg), m.rpy_rad[2]])
-        self.mount = Mount(self.mount_pos_body_m, np.array([m.rpy_rad[0], -self.mount_rpy_rad[1], m.rpy_rad[2]]),
-                           m.site)
-        self.R_bs = sonar_to_body_rotation(self.mount_rpy_rad)
-        self.rate_hz = 1.0 / cfg.ping_duration_s
+        self.tilt_down_rad = float(np.deg2rad(cfg.tilt_deg))
+        self.head = HeadSweep(cfg.step_grad, cfg.sector_width_grad, cfg.sector_centre_grad)
+        super().__init__(cfg, Mount(m.pos_body_m, np.array([m.rpy_rad[0], -self.tilt_down_rad, m.rpy_rad[2]]),
+                                    m.site), rng, name=name)
+        self.cfg: MsisConfig = cfg
+        self.R_bs = self.mount.R_bs
         self.sample_period_ticks = cfg.sample_period_ticks
         self.sample_spacing_m = cfg.sample_spacing_m
         self.n_samples = int(cfg.number_of_samples)
         self.range_m = self.n_samples * self.sample_spacing_m
         self.transmit_us = cfg.effective_transmit_us
-        self.head = HeadSweep(cfg.step_grad, cfg.sector_width_grad, cfg.sector_centre_grad)
         hbw = np.deg2rad(cfg.horizontal_beamwidth_deg)
         vbw = np.deg2rad(cfg.vertical_beamwidth_deg)
         self._vbw = float(vbw)
@@ -129,34 +150,48 @@ class MsisSensor(Sensor[MsisRender]):
                               cfg.absorption_db_per_m if cfg.tvg_absorption else 0.0, cfg.noise_floor_db, cfg.speckle,
                               cfg.k_shape, cfg.gain_db, cfg.dynamic_range_db)
         self._R_head: dict[float, FloatArray] = {}
-        self.reset(rng if rng is not None else np.random.default_rng(0))
 
     @classmethod
-    def from_config(cls, name: str, cfg: MsisConfig, mount: Mount | ArrayLike,
-                    rng: np.random.Generator) -> "MsisSensor":
-        return cls(cfg, mount, rng, name=name)
+    def rate_of(cls, cfg: MsisConfig) -> float:
+        """The ping rate, Hz: ``1 / cfg.ping_duration_s`` (the device timing)."""
+        return 1.0 / cfg.ping_duration_s
 
     def reset(self, rng: np.random.Generator) -> None:
         """New speckle and noise stream; the head back to its sector start."""
-        self.rng = self._rng = rng
-        if hasattr(self, "head"):
-            self.head.reset()
+        super().reset(rng)
+        self.head.reset()
 
     # -- sensor contract ------------------------------------------------------------------
-    def ideal(self, truth: VehicleTruth, scene: SceneView) -> MsisRender:
-        """The noise-free ping at the head's next angle (the head does not step)."""
-        return self.measure(truth, scene, noise=False)
+    def ideal(self, truth: VehicleTruth, scene: SceneView) -> MsisEcho:
+        """The noise-free ping from the true pose at ``truth.t_s`` at the angle the head takes
+        next (the head does not step).
 
-    def measure(self, truth: VehicleTruth, scene: SceneView, *, noise: bool = True) -> MsisRender:
-        """Step the head and ping from the true pose at ``truth.t_s``. ``noise=False`` returns
-        the exact ping at the angle the head would take next, drawing nothing and leaving the
-        head where it is (a query, as for every sensor); to sweep without noise, call
-        :meth:`render` with ``head.next_angle()``."""
-        angle = self.head.next_angle() if noise else self.head.peek_angle()
-        return self.render(truth.t_s, angle, truth.point_ned(self.mount_pos_body_m), truth.R_nb,
-                           scene.require_caster("MsisSensor"), noise=noise)
+        Raises:
+            ValueError: the scene has no ray caster.
+        """
+        return self.echo_at(truth.t_s, self.head.peek_angle(), truth.point_ned(self.mount_pos_body_m), truth.R_nb,
+                            scene.require_caster("MsisSensor"))
+
+    def exact(self, ideal: MsisEcho) -> MsisRender:
+        """The exact ping: the dB display of mean + noise floor; the head stays where it is and
+        nothing is drawn (to sweep without noise, call :meth:`render` with ``head.next_angle()``)."""
+        return self._ping(ideal, noise=False)
+
+    def corrupt(self, ideal: MsisEcho, truth: VehicleTruth) -> MsisRender:
+        """The ping with speckle and receiver noise; the head steps to the ping's angle."""
+        angle = self.head.next_angle()
+        if angle != ideal.truth.angle_grad:
+            raise ValueError(f"MsisSensor.corrupt: the head is at {angle} grad, the ideal ping at "
+                             f"{ideal.truth.angle_grad} (corrupt each ideal() once, in order)")
+        return self._ping(ideal, noise=True)
 
     # -- public -----------------------------------------------------------------------------
+    @property
+    def mount_roll_tilt_yaw_rad(self) -> FloatArray:
+        """(3,) the mount as ``(roll, tilt down > 0, yaw)``, rad: the convention of
+        :mod:`autonomy.sonar_frame` (what the pings carry as ``MsisPing.mount_rpy_rad``)."""
+        return np.array([self.mount.rpy_rad[0], self.tilt_down_rad, self.mount.rpy_rad[2]])
+
     def beam_to_body(self, angle_grad: float) -> FloatArray:
         """(3, 3) rotation of the beam frame at head angle ``angle_grad`` to the body frame:
         the head turns about its own z axis, ``R_bs Rz(angle)``."""
@@ -169,7 +204,14 @@ class MsisSensor(Sensor[MsisRender]):
     def render(self, t_s: float, angle_grad: float, pos_ned: ArrayLike, R_nb: ArrayLike, caster: RayCaster, *,
                noise: bool = True) -> MsisRender:
         """One ping at head angle ``angle_grad`` from the head at ``pos_ned`` (3,) with the
-        vehicle's body->NED rotation ``R_nb`` (3, 3)."""
+        vehicle's body->NED rotation ``R_nb`` (3, 3) (:meth:`echo_at`, then the noise and the
+        display); the head does not move."""
+        return self._ping(self.echo_at(t_s, angle_grad, pos_ned, R_nb, caster), noise=noise)
+
+    def echo_at(self, t_s: float, angle_grad: float, pos_ned: ArrayLike, R_nb: ArrayLike,
+                caster: RayCaster) -> MsisEcho:
+        """The noise-free part of :meth:`render` (same arguments): the exact truth of the ping.
+        Draws nothing."""
         cfg = self.cfg
         origin = np.asarray(pos_ned, dtype=float).reshape(3)
         R_ns = np.asarray(R_nb, dtype=float) @ self.beam_to_body(angle_grad)
@@ -185,16 +227,22 @@ class MsisSensor(Sensor[MsisRender]):
         cols = self.echo.mean_intensity(echoes.lines(n_cols, n, dtype=np.float32))
         mean = (self._col_weight @ cols)[None, :]
         labels = self._labels(echoes.line, echoes.u0, echoes.u1, echoes.energy, echoes.obj)
-        intensity = self.echo.realise(mean, self.rng, noise=noise, clutter=(labels == SEABED_ID)[None, :])
+        truth = MsisPingTruth(t_s=float(t_s), angle_grad=float(angle_grad), pos_ned=origin, R_ns=R_ns, labels=labels,
+                              mean_intensity=mean[0])
+        return MsisEcho(truth, mean, (labels == SEABED_ID)[None, :])
+
+    def _ping(self, echo: MsisEcho, *, noise: bool) -> MsisRender:
+        """The ping of ``echo``: speckle and receiver noise (``noise``: drawn from the sensor's
+        stream; else the expected intensity) and the dB display."""
+        cfg, tr = self.cfg, echo.truth
+        intensity = self.echo.realise(echo.mean_intensity, self._rng, noise=noise, clutter=echo.clutter)
         samples = self.echo.display(intensity)[0]
-        ping = MsisPing(t_s=float(t_s), angle_grad=float(angle_grad), step_grad=int(cfg.step_grad),
+        ping = MsisPing(t_s=tr.t_s, angle_grad=tr.angle_grad, step_grad=int(cfg.step_grad),
                         sample_period_ticks=int(self.sample_period_ticks),
                         sample_spacing_m=float(self.sample_spacing_m), transmit_duration_us=float(self.transmit_us),
                         speed_of_sound_mps=float(cfg.speed_of_sound_mps), intensity=samples,
-                        mount_pos_body_m=self.mount_pos_body_m.copy(), mount_rpy_rad=self.mount_rpy_rad.copy())
-        truth = MsisPingTruth(t_s=float(t_s), angle_grad=float(angle_grad), pos_ned=origin, R_ns=R_ns, labels=labels,
-                              mean_intensity=mean[0])
-        return MsisRender(ping, truth)
+                        mount_pos_body_m=self.mount_pos_body_m.copy(), mount_rpy_rad=self.mount_roll_tilt_yaw_rad)
+        return MsisRender(ping, tr)
 
     def _labels(self, line: NDArray[np.intp], u0: FloatArray, u1: FloatArray, energy: FloatArray,
                 code: NDArray[np.int64]) -> NDArray[np.int16]:

@@ -1,8 +1,12 @@
 """Sensor classes by kind, and building a scenario's sensors from its sensor table.
 
 A sensor class registers with ``@register_sensor(ConfigClass)``; the config class carries the
-kind (``scenarios.config.sensor``). Modules of :mod:`sim.sensors` are imported on the first
-lookup, so a new sensor needs no entry anywhere else.
+kind (``scenarios.config.sensor``). Lookups are lazy: :data:`BUILTIN_SENSORS` says, kind by
+kind, which module defines each built-in sensor, and a lookup imports that module only, so
+a process that builds its navigation sensors never imports the sonars (nor numba, which
+their compiled kernels need). A kind found neither registered nor in the table makes the
+registry import every module of :mod:`sim.sensors` once (a sensor module not yet listed
+still works; ``tests/sim/sensors/test_sensor_contract.py`` checks the table is complete).
 """
 
 from __future__ import annotations
@@ -20,6 +24,19 @@ from sim.rng import component_rng
 from sim.sensors.base import Mount, Sensor
 
 S = TypeVar("S", bound=type[Sensor])
+
+BUILTIN_SENSORS: dict[str, str] = {
+    "imu": "sim.sensors.imu:ImuSensor",
+    "dvl": "sim.sensors.dvl:DvlSensor",
+    "depth": "sim.sensors.depth:DepthSensor",
+    "altimeter": "sim.sensors.altimeter:AltimeterSensor",
+    "gps": "sim.sensors.gps:GpsSensor",
+    "usbl": "sim.sensors.usbl:UsblSensor",
+    "fls": "sim.sensors.fls:FlsSensor",
+    "msis": "sim.sensors.msis:MsisSensor",
+    "sss": "sim.sensors.sss:SssSensor",
+}
+"""Kind -> ``"module:Class"`` of every sensor shipped in :mod:`sim.sensors` (imported on lookup)."""
 
 _SENSORS: dict[str, type[Sensor]] = {}
 _DISCOVERED = False
@@ -46,6 +63,7 @@ def register_sensor(config_type: type[SensorConfig]) -> Callable[[S], S]:
 
 
 def _discover() -> None:
+    """Import every module of :mod:`sim.sensors` (once): each registers its sensors."""
     global _DISCOVERED
     if _DISCOVERED:
         return
@@ -56,15 +74,37 @@ def _discover() -> None:
         importlib.import_module(info.name)
 
 
+def _load_builtin(kind: str) -> type[Sensor] | None:
+    """Import the module :data:`BUILTIN_SENSORS` names for ``kind``; its class (None: not listed).
+
+    Raises:
+        TypeError: the module did not register that class for ``kind`` (a stale table entry).
+    """
+    where = BUILTIN_SENSORS.get(kind)
+    if where is None:
+        return None
+    module, _, name = where.partition(":")
+    cls = getattr(importlib.import_module(module), name)
+    if _SENSORS.get(kind) is not cls:
+        raise TypeError(f"sim.sensors.registry.BUILTIN_SENSORS[{kind!r}] = {where!r}, but that class is not "
+                        f"the one registered for {kind!r}")
+    return cls
+
+
 def sensor_classes() -> dict[str, type[Sensor]]:
-    """Registered kind -> sensor class."""
+    """Registered kind -> sensor class (every module of :mod:`sim.sensors` imported: the
+    sonars too; to build one kind, :func:`sensor_class` imports its module alone)."""
     _discover()
     return dict(_SENSORS)
 
 
 def sensor_class(kind: str) -> type[Sensor]:
-    """The class of ``kind``. Raises ``KeyError`` listing the known kinds."""
-    classes = sensor_classes()
+    """The class of ``kind``, importing only the module that defines it when it is a built-in
+    kind. Raises ``KeyError`` listing the known kinds."""
+    cls = _SENSORS.get(kind) or _load_builtin(kind)
+    if cls is not None:
+        return cls
+    classes = sensor_classes()  # not listed: perhaps a module of sim.sensors not in the table
     try:
         return classes[kind]
     except KeyError:

@@ -100,8 +100,29 @@ def ground_range_resample(lines: NDArray, altitude_m: float, bin_size_m: float, 
     return out.astype(lines.dtype)
 
 
+@dataclass(frozen=True, slots=True)
+class SssEcho:
+    """The noise-free part of a ping (:meth:`SssSensor.ideal`): everything up to the first draw
+    from the noise stream.
+
+    Attributes:
+        t_s: ping time, s.
+        mean_intensity: (2, n_bins) float32 expected received power before TVG (linear).
+        labels: (2, n_bins) int16 object id per side and slant-range bin.
+        altitude_m: the shorter range of the two vertical rays, m (nan if none).
+        pos_ned: (3,) transducer position, NED m; R_nb: (3, 3) body -> NED.
+    """
+
+    t_s: float
+    mean_intensity: NDArray[np.float32]
+    labels: NDArray[np.int16]
+    altitude_m: float
+    pos_ned: FloatArray
+    R_nb: FloatArray
+
+
 @register_sensor(SssConfig)
-class SideScanSonar(Sensor[SssRender]):
+class SssSensor(Sensor[SssRender]):
     """Port and starboard side-scan lines per ping, with per-bin object labels.
 
     Args:
@@ -114,6 +135,7 @@ class SideScanSonar(Sensor[SssRender]):
     Attributes:
         rate_hz: ping rate, Hz (``cfg.rate_hz``, by default the two-way travel-time limit).
         bin_size_m: slant-range bin size, m.
+        side_R_bs: per side (port, starboard) the (3, 3) transducer (sonar frame) -> body rotation.
     """
 
     def __init__(self, cfg: SssConfig, mount: Mount | ArrayLike = (0.0, 0.0, 0.0),
@@ -133,7 +155,7 @@ class SideScanSonar(Sensor[SssRender]):
         w = two_way_beam_power(az, atbw)
         self.column_weight = w / w.sum()
         self.fan = RayFan(az, el)
-        self.R_bs = [sonar_to_body_rotation((0.0, dep, yaw)) for yaw in SIDE_YAW_RAD]
+        self.side_R_bs = [sonar_to_body_rotation((0.0, dep, yaw)) for yaw in SIDE_YAW_RAD]
         bins = (np.arange(self.n_bins) + 0.5) * self.bin_size_m
         self.echo = EchoChain(bins, cfg.absorption_db_per_m, cfg.tvg_spreading_db_per_decade,
                               cfg.absorption_db_per_m if cfg.tvg_absorption else 0.0, cfg.noise_floor_db,
@@ -141,26 +163,30 @@ class SideScanSonar(Sensor[SssRender]):
 
     @classmethod
     def from_config(cls, name: str, cfg: SssConfig, mount: Mount | ArrayLike,
-                    rng: np.random.Generator) -> "SideScanSonar":
+                    rng: np.random.Generator) -> "SssSensor":
         m = as_mount(mount)
         if not m.is_aligned:
             raise ValueError(f"sensors.{name}: a side-scan mount has no attitude (use depression_deg)")
         return cls(cfg, m, rng, name=name)
 
     # -- sensor contract --------------------------------------------------------------------
-    def ideal(self, truth: VehicleTruth, scene: SceneView) -> SssRender:
-        return self.measure(truth, scene, noise=False)
-
-    def measure(self, truth: VehicleTruth, scene: SceneView | None = None, *, noise: bool = True) -> SssRender:
-        """One ping from the true vehicle state among the scene's objects at capture time.
+    def ideal(self, truth: VehicleTruth, scene: SceneView) -> SssEcho:
+        """The noise-free ping from the true vehicle state among the scene's objects at
+        capture time: expected power, labels and altitude.
 
         Raises:
             ValueError: the scene has no ray caster.
         """
-        if scene is None:
-            scene = SceneView(truth.t_s, None)
-        return self.render(truth.t_s, truth.point_ned(self.mount_pos_body_m), truth.R_nb,
-                           scene.require_caster("SideScanSonar"), scene.objects, noise=noise)
+        return self.echo_at(truth.t_s, truth.point_ned(self.mount_pos_body_m), truth.R_nb,
+                            scene.require_caster("SssSensor"), scene.objects)
+
+    def exact(self, ideal: SssEcho) -> SssRender:
+        """The expected ping: mean power plus the noise floor, nothing drawn."""
+        return self._ping(ideal, noise=False)
+
+    def corrupt(self, ideal: SssEcho, truth: VehicleTruth) -> SssRender:
+        """The ping with speckle and receiver noise drawn from the sensor's stream."""
+        return self._ping(ideal, noise=True)
 
     # -- rendering --------------------------------------------------------------------------
     def echo_intervals(self, origin_ned: FloatArray, R_nb: FloatArray, caster: RayCaster,
@@ -177,7 +203,7 @@ class SideScanSonar(Sensor[SssRender]):
         ``spheres``: object id -> bounding sphere (centre (3,) NED m, radius m), shared by both
         sides of a ping (default: asked of the caster)."""
         cfg, fan = self.cfg, self.fan
-        R_ns = np.stack([R_nb @ R_bs for R_bs in self.R_bs])
+        R_ns = np.stack([R_nb @ R_bs for R_bs in self.side_R_bs])
         rmax = float(cfg.range_max_m)
         tables, pairs_a, pairs_b, vertical = [], [], [], float("inf")
         n_rows = 0
@@ -208,7 +234,7 @@ class SideScanSonar(Sensor[SssRender]):
 
     def render(self, t_s: float, pos_ned: ArrayLike, R_nb: ArrayLike, caster: RayCaster,
                objects: Sequence[SceneObjectLike] = (), *, noise: bool = True) -> SssRender:
-        """Render one ping.
+        """Render one ping (:meth:`echo_at`, then the noise, the display and the ground-range lines).
 
         Args:
             t_s: ping time, s.
@@ -218,6 +244,12 @@ class SideScanSonar(Sensor[SssRender]):
             objects: scene objects to label (finer rays over each).
             noise: draw speckle and receiver noise (False: mean power plus the noise floor).
         """
+        return self._ping(self.echo_at(t_s, pos_ned, R_nb, caster, objects), noise=noise)
+
+    def echo_at(self, t_s: float, pos_ned: ArrayLike, R_nb: ArrayLike, caster: RayCaster,
+                objects: Sequence[SceneObjectLike] = ()) -> SssEcho:
+        """The noise-free part of :meth:`render` (same arguments): expected power, labels and
+        altitude. Draws nothing."""
         origin = np.asarray(pos_ned, dtype=float).reshape(3)
         R = np.asarray(R_nb, dtype=float).reshape(3, 3)
         spheres = None
@@ -232,16 +264,23 @@ class SideScanSonar(Sensor[SssRender]):
         altitude = altitude if np.isfinite(altitude) else float("nan")
         mean = self.echo.mean_intensity(seg.lines(2, self.n_bins, dtype=np.float32))
         labels, _ = label_bins(seg, 2, self.n_bins)
+        return SssEcho(t_s=float(t_s), mean_intensity=mean, labels=labels, altitude_m=altitude, pos_ned=origin, R_nb=R)
+
+    def _ping(self, echo: SssEcho, *, noise: bool) -> SssRender:
+        """The ping of ``echo``: speckle and receiver noise (``noise``: drawn from the sensor's
+        stream; else the expected intensity), the dB display and, with ``cfg.ground_range``,
+        the ground-range lines."""
+        mean, labels, altitude = echo.mean_intensity, echo.labels, echo.altitude_m
         intensity = self.echo.realise(mean, self._rng, noise=noise, clutter=labels < 0)
         lines_u8 = self.echo.display(intensity)
         ground_u8 = ground_labels = None
         if self.cfg.ground_range and np.isfinite(altitude):
             ground_u8 = ground_range_resample(lines_u8, altitude, self.bin_size_m)
             ground_labels = ground_range_resample(labels, altitude, self.bin_size_m, nearest=True)
-        ping = SssPing(t_s=float(t_s), lines_u8=lines_u8, bin_size_m=self.bin_size_m, altitude_m=altitude,
+        ping = SssPing(t_s=echo.t_s, lines_u8=lines_u8, bin_size_m=self.bin_size_m, altitude_m=altitude,
                        ground_lines_u8=ground_u8, mount_pos_body_m=self.mount_pos_body_m.copy())
         return SssRender(ping=ping, labels=labels, ground_labels=ground_labels, mean_intensity=mean,
-                         intensity=intensity, pos_ned=origin.copy(), R_nb=R.copy())
+                         intensity=intensity, pos_ned=echo.pos_ned.copy(), R_nb=echo.R_nb.copy())
 
 
 class Waterfall:

@@ -43,6 +43,7 @@ class UsblSensor(Sensor[UsblMsg]):
     """
 
     cfg: UsblConfig
+    fixed_latency = False  # latency_s adds the two-way travel time of the measured range
     _spherical = RangeBearingElevation()
 
     def transponder_ned(self, scene: SceneView) -> FloatArray:

@@ -1,4 +1,4 @@
-"""Target tracker measurement noise (issue 16): the sonar's near-side range offset, the
+"""Target tracker measurement noise: the sonar's near-side range offset, the
 target-extent noise correlated from frame to frame, checked against hand computations and a
 Monte Carlo of correlated detections."""
 

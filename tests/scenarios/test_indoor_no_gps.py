@@ -50,10 +50,10 @@ def test_the_pool_start_is_not_thrown_off_by_a_surface_fix():
     (1 m noise) threw the estimate about 1 m off before the first circle fix (4.5 s). Without
     one, 4 s of AHRS + speed-model dead reckoning from the known start stays within 0.2 m."""
     from sim.mission import Mission
-    from sim.msis_evaluation import LocalizationErrorObserver
+    from sim.features import MsisLocalizationFeature
 
     mission = Mission(load_scenario("pool_circular", ["duration_s=4"]))
-    obs = LocalizationErrorObserver(mission)
+    obs = mission.feature(MsisLocalizationFeature).error_observer()
     mission.observers.append(obs)
     mission.run(progress=False)
     assert "gps" not in mission.summary().messages_delivered

@@ -11,13 +11,13 @@ import pytest
 from scenarios import load_scenario
 from sim.cli import main
 from sim.mission import Mission
-from sim.records import MissionInfo, MissionSummary, PerceptionResult, StepRecord
+from sim.records import MissionInfo, MissionSummary, ObserverBase, PerceptionResult, StepRecord
 from sim.sensors.fls import FlsRender
 
 FAST = ["autonomy.atr.detector=classical"]
 
 
-class _Counter:
+class _Counter(ObserverBase):
     def __init__(self) -> None:
         self.steps: list[StepRecord] = []
         self.fls: list[FlsRender] = []

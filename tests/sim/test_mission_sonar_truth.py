@@ -10,7 +10,7 @@ from scenarios import load_scenario
 from sim.evaluation.detection_scoring import DetectionScorer
 from sim.mission import Mission
 from sim.outputs.trajectory_log import TrajectoryLog
-from sim.records import PerceptionResult
+from sim.records import ObserverBase, PerceptionResult
 from sim.sensors.fls import FlsRender
 
 # Dived 10 m short of OPI1 heading for it, survey started at once: frames with targets from t = 0.
@@ -18,7 +18,7 @@ OVER = ["autonomy.guidance.mission.start_delay_s=0", "vehicle.initial_pos_ned=[0
         "autonomy.atr.detector=classical"]
 
 
-class _Unknown:
+class _Unknown(ObserverBase):
     """Keeps the sonar's renders and the perception results; a user's observer that says
     nothing about the truth (so it may read it)."""
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from sim.records import ObserverBase
 import numpy as np
 import pytest
 
@@ -10,7 +11,7 @@ from autonomy.navigation import NavigationFilter
 from autonomy.navigation.config import NavigationConfig
 from scenarios import load_scenario
 from sim.mission import Mission
-from sim.msis_evaluation import LocalizationErrorObserver
+from sim.features import MsisLocalizationFeature
 from sim.sensors.nav_noise import nav_noise_model
 
 
@@ -30,10 +31,10 @@ def test_position_fix_is_the_kalman_update_of_the_horizontal_position():
 def test_pool_circle_fixes_reach_the_filter_and_lie_near_the_truth():
     scn = load_scenario("pool_circular", ["duration_s=40"])
     mission = Mission(scn)
-    obs = LocalizationErrorObserver(mission)
+    obs = mission.feature(MsisLocalizationFeature).error_observer()
     truth_at: dict[float, np.ndarray] = {}
 
-    class _Truth:
+    class _Truth(ObserverBase):
         def on_start(self, info): pass
         def on_message(self, name, msg): pass
         def on_end(self, summary): pass

@@ -18,7 +18,7 @@ from rosbags.rosbag2 import Reader  # noqa: E402
 from autonomy.messages import Detection, DvlMsg, ImuMsg  # noqa: E402
 from scenarios import load_scenario  # noqa: E402
 from sim.mission import Mission  # noqa: E402
-from sim.records import PerceptionResult  # noqa: E402
+from sim.records import ObserverBase, PerceptionResult  # noqa: E402
 from sim.ros2bag.recorder import RosbagRecorder  # noqa: E402
 from sim.ros2bag.ros_messages import RosConverter  # noqa: E402
 from sim.ros2bag.typestore import make_typestore  # noqa: E402
@@ -31,7 +31,7 @@ DURATION_S = 8.0
 ALT_POS_FRD_M, ALT_PITCH_DEG, DVL_POS_FRD_M = (0.30, -0.10, 0.20), 20.0, (-0.25, 0.05, 0.22)
 
 
-class _Capture:
+class _Capture(ObserverBase):
     def __init__(self) -> None:
         self.msgs: dict[str, list] = {}
 
@@ -279,7 +279,7 @@ def test_scenario_outputs_key_is_validated(tmp_path, capsys):
 def test_extra_vehicles_get_their_true_odometry_and_tf(tmp_path):
     """The sea trial's buoy: /auvsim/buoy/truth/odometry and map->buoy_truth are its true
     state at each autonomy step, in ENU."""
-    class _Steps:
+    class _Steps(ObserverBase):
         def __init__(self) -> None:
             self.buoy_ned: list = []
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 import os
 
+from sim.records import ObserverBase
 import numpy as np
 import pytest
 from scipy.linalg import expm
@@ -15,6 +16,7 @@ from autonomy.frames import rot_from_euler, skew, wrap_angle
 from autonomy.messages import ImuMsg
 from scenarios import ScenarioError, load_scenario
 from sim.cli import main
+from sim.features import TrackingFeature
 from sim.mission import Mission
 from sim.truth import VehicleTruth, interpolate_truth
 
@@ -25,7 +27,7 @@ NO_IMU_NOISE = [f"sensors.imu.{k}=0" for k in (
     "gyro_bias_dps", "accel_noise_mps2", "accel_bias_mps2")]
 
 
-class _Messages:
+class _Messages(ObserverBase):
     sonar_truth = False
     sonar_frames = False
 
@@ -141,7 +143,7 @@ def test_tracker_takes_the_first_usbl_fix():
     while not m.done:
         m.step()
     for mode in ("usbl", "fused"):
-        tracker = m.parts.tracking.trackers[mode]
+        tracker = m.feature(TrackingFeature).stack.trackers[mode]
         assert tracker.rejected == []
         assert tracker.used_counts()["usbl"] == 1  # the fix measured at t = 0
 

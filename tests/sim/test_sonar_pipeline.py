@@ -18,10 +18,11 @@ import pytest
 
 from scenarios import load_scenario
 from sim.evaluation.detection_scoring import DetectionScorer
+from sim.features import SurveyPerceptionFeature
 from sim.mission import Mission
 from sim.outputs.trajectory_log import TrajectoryLog
 from sim.perception import Perception
-from sim.records import PerceptionResult
+from sim.records import ObserverBase, PerceptionResult
 from sim.sensors.fls import FlsRender, FlsSensor
 from sim.sonar_pipeline import PipelineError, SonarPipeline
 
@@ -30,7 +31,7 @@ ROOT = Path(__file__).resolve().parents[2]
 OVER = ["autonomy.guidance.mission.start_delay_s=0", "vehicle.initial_pos_ned=[0.0,0.0,2.0]", "duration_s=3.0"]
 
 
-class _Messages:
+class _Messages(ObserverBase):
     def __init__(self) -> None:
         self.seen: list[tuple] = []
 
@@ -65,7 +66,7 @@ def _run(workers: int, tmp_path, detector: str, frames: bool = True):
     m = Mission(load_scenario("cssn_lawnmower", OVER + [f"autonomy.atr.detector={detector}"]),
                 observers=[log, msgs, scorer] if frames else [log], workers=workers)
     m.reset()
-    pids = m._pipeline.pids if m._pipeline is not None else []
+    pids = m.worker_pids
     assert (workers > 1) == bool(pids) and all(_alive(p) for p in pids)
     summary = m.run(progress=False)
     m.close()
@@ -96,7 +97,7 @@ def test_frames_stay_in_the_workers_when_no_observer_takes_them(tmp_path):
     m = Mission(load_scenario("cssn_lawnmower", OVER + ["autonomy.atr.detector=classical"]),
                 observers=[TrajectoryLog()], workers=2)
     m.reset()
-    assert m._pipeline.frames is False
+    assert m.feature(SurveyPerceptionFeature).pipeline.frames is False
     m.close()
     csv2, wm2, *_ = _run(2, tmp_path, "classical", frames=False)
     assert csv2 == csv1 and wm2 == wm1
@@ -107,7 +108,7 @@ def test_pipeline_is_off_where_perception_feeds_back_or_is_absent():
     scn = load_scenario("cssn_lawnmower", OVER + ["sensors.fls.enabled=false"])
     m = Mission(scn, workers=2)
     m.reset()
-    assert m._pipeline is None
+    assert not m.pipelined
     with pytest.raises(ValueError, match="workers"):
         Mission(scn, workers=0)
 
@@ -159,7 +160,7 @@ def test_a_worker_failure_is_raised_with_its_traceback_and_ends_the_workers():
     m.reset()
     failing = copy.copy(m.fls)
     failing.__class__ = _FailingFls
-    pipe = SonarPipeline(m.physics, failing, m.parts.perception, frames=False)
+    pipe = SonarPipeline(m.physics, failing, m.perception, frames=False)
     pids = pipe.pids
     with pytest.raises(PipelineError, match="render failed on purpose"):
         _feed(m, pipe)
@@ -170,7 +171,7 @@ def test_a_worker_failure_is_raised_with_its_traceback_and_ends_the_workers():
 def test_a_killed_worker_is_reported():
     m = Mission(load_scenario("cssn_lawnmower", OVER + ["autonomy.atr.detector=classical"]))
     m.reset()
-    pipe = SonarPipeline(m.physics, m.fls, m.parts.perception, frames=False)
+    pipe = SonarPipeline(m.physics, m.fls, m.perception, frames=False)
     os.kill(pipe.pids[1], signal.SIGKILL)  # the detection worker
     with pytest.raises(PipelineError, match="ended unexpectedly.*auvsim-detection -9"):
         _feed(m, pipe)
@@ -203,7 +204,7 @@ def test_a_killed_mission_process_leaves_no_worker_behind():
     code = ("import os, sys, time\nfrom scenarios import load_scenario\nfrom sim.mission import Mission\n"
             "if __name__ == '__main__':\n"
             f"    m = Mission(load_scenario('cssn_lawnmower', {OVER[:-1] + ['duration_s=600']!r}), workers=2)\n"
-            "    m.reset()\n    print(*m._pipeline.pids, flush=True)\n"
+            "    m.reset()\n    print(*m.worker_pids, flush=True)\n"
             "    for _ in range(3000):\n        m.step()\n")
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]))
     proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True, env=env)

@@ -35,6 +35,7 @@ def test_track_static_vehicle_run_writes_tracking_outputs(tmp_path):
 
 
 def test_nav_filter_takes_the_beacon_of_the_usbl_config():
+    from sim.features import TrackingFeature
     from sim.mission import Mission
 
     scn = load_scenario(str(SCENARIOS / "track_static_vehicle.yaml"),
@@ -45,5 +46,5 @@ def test_nav_filter_takes_the_beacon_of_the_usbl_config():
     m = Mission(scn, perception=False)
     np.testing.assert_array_equal(m.parts.usbl_beacon_pos_ned, [3.0, -2.0, 10.0])
     m.reset()
-    assert m.parts.tracking is None
+    assert m.feature(TrackingFeature) is None
     np.testing.assert_array_equal(m.nav_filter._beacon_ned, [3.0, -2.0, 10.0])

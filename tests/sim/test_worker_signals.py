@@ -69,7 +69,7 @@ def test_a_ctrl_c_held_back_by_sigint_blocked_is_raised_when_it_ends():
 def test_pipeline_workers_ignore_ctrl_c_and_a_ctrl_c_while_it_starts_leaves_nothing(monkeypatch):
     m = Mission(load_scenario("cssn_lawnmower", OVER + ["autonomy.atr.detector=classical"]))
     m.reset()
-    pipe = SonarPipeline(m.physics, m.fls, m.parts.perception, frames=False)
+    pipe = SonarPipeline(m.physics, m.fls, m.perception, frames=False)
     try:
         assert all(_sig_ign_bits(pid) & (1 << (signal.SIGINT - 1)) for pid in pipe.pids)
     finally:
@@ -95,7 +95,7 @@ def test_pipeline_workers_ignore_ctrl_c_and_a_ctrl_c_while_it_starts_leaves_noth
     monkeypatch.setattr(sonar_pipeline, "FrameRing", ring)
     monkeypatch.setattr(sonar_pipeline.pickle, "dumps", dumps_then_ctrl_c)
     with pytest.raises(KeyboardInterrupt):
-        SonarPipeline(m.physics, m.fls, m.parts.perception, frames=True)
+        SonarPipeline(m.physics, m.fls, m.perception, frames=True)
     assert len(rings) == 3
     for r in rings:
         with pytest.raises(FileNotFoundError):
@@ -109,7 +109,7 @@ def test_pipeline_workers_ignore_ctrl_c_and_a_ctrl_c_while_it_starts_leaves_noth
     monkeypatch.setattr(mp.process.BaseProcess, "start", start)
     monkeypatch.setattr(mp.connection.Connection, "send_bytes", send_then_ctrl_c)
     with pytest.raises(KeyboardInterrupt):
-        SonarPipeline(m.physics, m.fls, m.parts.perception, frames=False)
+        SonarPipeline(m.physics, m.fls, m.perception, frames=False)
     monkeypatch.undo()
     assert len(procs) == 2 and len(rings) == 2
     assert not any(_alive(p.pid) for p in procs)
@@ -126,7 +126,7 @@ def test_auvsim_run_stops_the_workers_on_a_ctrl_c_during_the_reset(tmp_path, mon
 
     def reset_then_ctrl_c(self):
         real_reset(self)
-        pids.extend(self._pipeline.pids)
+        pids.extend(self.worker_pids)
         raise KeyboardInterrupt  # as if Ctrl-C came while the observers start (the recording)
 
     monkeypatch.setattr(Mission, "reset", reset_then_ctrl_c)

@@ -1,7 +1,7 @@
 """Finer rays over objects that a sonar's base rays sample coarsely (pure numpy).
 
 Shared by every ray-cast sonar (:class:`sim.sensors.fls.FlsSensor`,
-:class:`sim.sensors.sss.SideScanSonar`): the caster's bounding sphere of each object in the
+:class:`sim.sensors.sss.SssSensor`): the caster's bounding sphere of each object in the
 range window is sampled by sub-columns (:meth:`sim.sensors.sonar.ray_fan.RayFan.strip_rays`),
 so an object between two base rays still echoes, is labelled and has its nearest range
 resolved.

@@ -1,9 +1,9 @@
 """The CNN detector's per-frame path (IO binding on reused buffers, one-gather decode) gives the
 same detections, bit for bit, as the straightforward path on real rendered FLS frames.
 
-The reference below is the detector's code before the closed-loop speed-ups (issue 18), kept
-verbatim: a plain ``session.run`` on a fresh input, decoding with per-channel fancy indexing,
-the fan-pixel conversion by column and NMS on every box.
+The reference below is the detector's code before the closed-loop speed-ups, kept verbatim: a
+plain ``session.run`` on a fresh input, decoding with per-channel fancy indexing, the fan-pixel
+conversion by column and NMS on every box.
 """
 
 from __future__ import annotations

@@ -167,7 +167,7 @@ def test_batched_points_equal_the_scalar_chain():
 
 def test_batched_rotations_bit_identical_to_stacked_form_and_equal_rot_from_euler():
     """``_rotations_zyx`` fills one (K, 3, 3) array; same bits as the stacked form it replaced
-    (issue 18: localisation outputs unchanged) and equal to ``rot_from_euler`` per row."""
+    (the speed-up left the localisation outputs unchanged) and equal to ``rot_from_euler`` per row."""
     from autonomy.localization.geolocate import _rotations_zyx
 
     rpy = np.random.default_rng(4).uniform(-np.pi, np.pi, (40, 3))

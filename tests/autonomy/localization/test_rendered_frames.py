@@ -29,7 +29,8 @@ def _errors(method: str, frames, scn, fls) -> np.ndarray:
                 continue
             r, a = box_reference_polar(obj.bbox_xyxy[None, :], render.frame.geometry)
             det = Detection(0.0, obj.class_name, 1.0, obj.bbox_xyxy, float(r[0]), float(a[0]))
-            loc = localize(det, nav, fls.mount_pos_body_m, fls.mount_rpy_rad, cfg, geometry=render.frame.geometry)
+            loc = localize(det, nav, fls.mount_pos_body_m, fls.mount_roll_tilt_yaw_rad, cfg,
+                           geometry=render.frame.geometry)
             errs.append(np.linalg.norm(loc.pos_ned[:2] - truth[obj.name][:2]))
     return np.asarray(errs)
 
@@ -39,7 +40,7 @@ def test_flat_seabed_fix_beats_planar_on_rendered_frames():
     world = build_world(scn)
     caster = MujocoRayCaster(world.model, world.data, world.geom_object_id, world.geom_reflectivity,
                              world.vehicle_body_id)
-    fls = FlsSensor(scn.sensors.fls, world.site_pos_body("fls"), None, np.random.default_rng(0))
+    fls = FlsSensor(scn.sensors.fls, world.site_pos_body("fls"), np.random.default_rng(0))
     frames = []
     for north, east, yaw_deg in [(8.0, 2.0, 90.0), (4.0, 30.0, -90.0), (0.0, 2.0, 90.0), (-4.0, 5.0, 90.0)]:
         pos_body = np.array([north, east, 2.0])

@@ -1,4 +1,4 @@
-"""Loopy BP association against REFERENCE.md section 7 and exact enumeration."""
+"""Loopy BP association against [P003] (section IV, ``docs/references.md``) and exact enumeration."""
 
 from __future__ import annotations
 

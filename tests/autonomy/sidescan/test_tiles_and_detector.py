@@ -15,7 +15,7 @@ from autonomy.sidescan.detector import SssHighlightShadowDetector
 from autonomy.sidescan.tile_assembler import SssTileAssembler
 from scenarios.config.sss import SssConfig
 from sim.sensors.analytic_caster import AnalyticBox, AnalyticCaster
-from sim.sensors.sss import SideScanSonar
+from sim.sensors.sss import SssSensor
 from tests.sim.sensors.test_sss_geometry import Obj
 
 
@@ -70,7 +70,7 @@ def fly(caster, objects, n_pings: int, seed: int):
     """Pings along north at SPEED from the origin, exact poses, into one tile."""
     cfg = SssConfig(range_max_m=40.0, n_bins=600, elevation_rays=32, ground_range=True, gain_db=-10.0,
                     rate_hz=RATE)
-    sonar = SideScanSonar(cfg, (0.0, 0.0, 0.0), np.random.default_rng(seed))
+    sonar = SssSensor(cfg, (0.0, 0.0, 0.0), np.random.default_rng(seed))
     asm = SssTileAssembler(n_pings / RATE)
     tile = None
     for k in range(1, n_pings + 2):
@@ -129,7 +129,7 @@ def test_a_2m_box_measures_the_same_length_with_the_filter_of_the_last_imu_messa
     det = SssHighlightShadowDetector(SssDetectorConfig())
     lengths = {}
     for how in ("exact", "last_imu"):
-        sonar = SideScanSonar(cfg, (0.0, 0.0, 0.0), np.random.default_rng(3))
+        sonar = SssSensor(cfg, (0.0, 0.0, 0.0), np.random.default_rng(3))
         n_pings = 300
         asm, tile = SssTileAssembler(n_pings / PING_HZ), None
         for k in range(1, n_pings + 2):

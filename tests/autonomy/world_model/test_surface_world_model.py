@@ -100,7 +100,8 @@ def test_surface_world_model_keeps_the_onboard_objects_from_the_same_detections(
 
 def _one_object_split_reports(n_frames: int = 300):
     """One OPI at (-8, 22, 4) m seen every frame (3 Hz) by the AUV, its reports alternating
-    0.2 m north and south of it (0.3 m sigma): what a twin of issue 20 fed on."""
+    0.2 m north and south of it (0.3 m sigma): what the twin objects (two anchors for one OPI)
+    fed on before a scan's own reports placed the fan."""
     truth = np.array([-8.0, 22.0, 4.0])
     reports = []
     for k in range(n_frames):

@@ -1,5 +1,5 @@
-"""The tracking benchmark reports wall-clock and thread-CPU tick times (README: the CPU
-figures are the tracker's own cost, the wall-clock p99 includes the scheduler's)."""
+"""The tracking benchmark reports wall-clock and thread-CPU tick times (docs/studies/tracking.md:
+the CPU figures are the tracker's own cost, the wall-clock p99 includes the scheduler's)."""
 
 from __future__ import annotations
 

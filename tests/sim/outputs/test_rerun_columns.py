@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from collections import defaultdict
 
+from sim.records import ObserverBase
 import numpy as np
 import pytest
 
@@ -21,7 +22,7 @@ from rerun.chunk import RrdReader  # noqa: E402
 SERIES = ("world/vehicle", "nav/horizontal_error_m", "nav/sigma_horizontal_m", "nav/depth_error_m")
 
 
-class _RowWise:
+class _RowWise(ObserverBase):
     """Logs the step series one ``rr.log`` per step (the row-wise reference)."""
 
     def __init__(self, path) -> None:

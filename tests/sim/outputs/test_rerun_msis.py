@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from collections import defaultdict
 
+from sim.records import ObserverBase
 import numpy as np
 import pytest
 
@@ -44,7 +45,7 @@ class _FakeStream:
         pass
 
 
-class _Pings:
+class _Pings(ObserverBase):
     def __init__(self) -> None:
         self.renders: list[MsisRender] = []
         self.fixes: list = []

@@ -3,6 +3,7 @@ whole path, each re-logged only while it grows (recording and memory linear in m
 
 from __future__ import annotations
 
+from sim.records import ObserverBase
 import numpy as np
 import pytest
 
@@ -14,7 +15,7 @@ from tests.sim.outputs.test_rerun_msis import _FakeStream, _strips
 pytest.importorskip("rerun")
 
 
-class _Path:
+class _Path(ObserverBase):
     def __init__(self) -> None:
         self.true: list[np.ndarray] = []
         self.est: list[np.ndarray] = []

@@ -4,6 +4,7 @@ fan image of the frame it gated (paper 004 section 4), and the clusters it weigh
 from __future__ import annotations
 
 import cv2
+from sim.records import ObserverBase
 import numpy as np
 import pytest
 
@@ -17,7 +18,7 @@ from tests.sim.outputs.test_rerun_msis import _FakeStream, _strips
 rr = pytest.importorskip("rerun")
 
 
-class _Frames:
+class _Frames(ObserverBase):
     def __init__(self) -> None:
         self.geometry = None
         self.results: list[TrackingFrameResult] = []

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from scenarios.load import load_scenario
-from sim.evaluation.tracking_eval import evaluation_for
+from sim.features import TrackingFeature
 from sim.mission import Mission
 from sim.outputs.map_plot import build_map_figure
 from sim.outputs.mission_outputs import map_layers, planned_length_s
@@ -16,7 +16,7 @@ from sim.outputs.tracking_overlay import mover_paths_ned
 
 def _short_mission(name: str, *overrides: str):
     mission = Mission(load_scenario(name, ["duration_s=3", *overrides]))
-    ev = evaluation_for(mission)
+    ev = mission.feature(TrackingFeature).observers({})[0]
     mission.observers.append(ev)
     mission.reset()
     mission.run(progress=False)

@@ -24,7 +24,7 @@ def test_cssn_targets_seen_where_they_are(physics):
     world = physics.world
     cfg = FlsConfig(range_window_m=(1.0, 30.0), edge_refine_iters=4)
     mount = world.site_pos_body("fls")
-    s = FlsSensor(cfg, mount, np.deg2rad([0.0, cfg.tilt_deg, 0.0]), np.random.default_rng(0))
+    s = FlsSensor(cfg, mount, np.random.default_rng(0))
     truth = VehicleTruth(t_s=1.0, pos_ned=np.array([-4.0, 3.0, 2.0]), R_nb=rot_from_euler(0, 0, np.pi / 2),
                          rpy_rad=np.array([0, 0, np.pi / 2]), nu=np.zeros(6), nu_dot=np.zeros(6),
                          current_ned=np.zeros(3))

@@ -82,7 +82,7 @@ def test_spheres_on_the_seabed_echo_where_geometry_says(shipped_fls, altitude_m,
     not; a sphere wholly inside the aperture peaks within one range bin of its nearest range."""
     s = shipped_fls
     g = s.geometry
-    tilt = float(s.mount_rpy_rad[1])
+    tilt = s.tilt_down_rad
     origin = np.array([0.0, 0.0, SEABED_DEPTH_M - altitude_m])
     dr = g.range_resolution_m
     n_seen = n_peak = 0

@@ -5,13 +5,21 @@ values (or says it is invalid) on the analytic caster, repeats itself bit for bi
 is exactly noise-free when asked (checked against values computed here from the truth, not
 by the sensor's code), and is fired by the scheduler at its rate and delivered after its
 latency. A test-only acoustic ranging sensor, registered here, checks a latency that
-depends on the message (two-way travel time).
+depends on the message (two-way travel time). No sensor overrides the template ``measure``;
+what a sensor declares on its class (``fixed_latency``, ``ground_truth_optional``) is what it
+does; the registry imports a sensor's module only when that kind is asked for.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import importlib
+import inspect
 import math
+import pkgutil
+import subprocess
+import sys
+from pathlib import Path
 from typing import Literal
 
 import numpy as np
@@ -25,10 +33,12 @@ from sim.rng import component_rng
 from sim.scheduler import SensorScheduler
 from sim.sensors.analytic_caster import AnalyticCaster, AnalyticSphere
 from sim.sensors.base import Mount, SceneView, Sensor
-from sim.sensors.registry import build_sensor, register_sensor, sensor_classes
+from sim.sensors import registry
+from sim.sensors.registry import BUILTIN_SENSORS, build_sensor, register_sensor, sensor_classes
 from sim.truth import VehicleTruth
 from tests.autonomy.navigation.test_kinematics import static_truth, wiggle_truth
 
+ROOT = Path(__file__).resolve().parents[3]
 SEABED_DEPTH_M = 6.0
 MOUNT = Mount(np.array([0.3, -0.1, 0.15]))
 SPHERE_CENTRE = np.array([12.0, 0.5, 5.2])
@@ -69,6 +79,8 @@ class _RangerConfig(SensorConfig):
 @register_sensor(_RangerConfig)
 class _Ranger(Sensor[RangeMsg]):
     """Range to a fixed beacon; the reply is late by its two-way travel time."""
+
+    fixed_latency = False
 
     def ideal(self, truth: VehicleTruth, scene: SceneView) -> RangeMsg:
         rel = np.asarray(self.cfg.beacon_ned) - truth.point_ned(self.mount.pos_body_m)
@@ -122,6 +134,144 @@ def test_every_scenario_kind_has_a_sensor_and_default_entries_are_typed_by_kind(
     assert type(table["fls_port"]) is type(table["fls"]) is sensor_classes()["fls"].config_type
     for name, cfg in table.items():
         assert type(cfg) is sensor_classes()[cfg.kind].config_type, name
+
+
+def test_the_builtin_table_names_every_sensor_module_and_class():
+    """:data:`BUILTIN_SENSORS` (what lazy lookups import) lists every sensor registered by a
+    module of ``sim.sensors``, each at its own module and class."""
+    import sim.sensors as pkg
+
+    for info in pkgutil.walk_packages(pkg.__path__, prefix=f"{pkg.__name__}."):
+        importlib.import_module(info.name)
+    shipped = {kind: f"{cls.__module__}:{cls.__qualname__}" for kind, cls in sensor_classes().items()
+               if cls.__module__.startswith("sim.sensors.")}
+    assert shipped == BUILTIN_SENSORS
+    for kind in BUILTIN_SENSORS:
+        assert registry.sensor_class(kind) is sensor_classes()[kind]
+    with pytest.raises(KeyError, match="no sensor of kind 'sonar9'; known: .*'fls'"):
+        registry.sensor_class("sonar9")
+
+
+def test_navigation_sensors_load_no_sonar_module_nor_numba_and_an_fls_does():
+    """A fresh process that builds and fires a scenario's navigation sensors through the
+    registry imports no sonar module (so no numba); building an FLS imports its module, and
+    its first frame the compiled kernels (numba)."""
+    code = """
+import sys
+import numpy as np
+from scenarios.load import load_scenario
+from sim.sensors.analytic_caster import AnalyticCaster
+from sim.sensors.base import SceneView
+from sim.sensors.nav_suite import NAV_SENSOR_NAMES, build_nav_sensors
+from sim.sensors.registry import build_sensor
+from tests.autonomy.navigation.test_kinematics import wiggle_truth
+
+def loaded():
+    sonar = ("sim.sensors.fls", "sim.sensors.msis", "sim.sensors.sss", "sim.sensors.sonar.compiled_kernels")
+    return "numba" in sys.modules, [m for m in sonar if m in sys.modules]
+
+scn = load_scenario("cssn_lawnmower")
+nav = build_nav_sensors(scn.sensors, {k: np.zeros(3) for k in NAV_SENSOR_NAMES}, 0)
+scene = SceneView(1.0, AnalyticCaster(6.0))
+for sensor in nav.values():
+    sensor.measure(wiggle_truth(1.0), scene)
+print(sorted(nav), *loaded())
+fls = build_sensor("fls", scn.sensors.fls, np.zeros(3), np.random.default_rng(0))
+print(*loaded())
+fls.measure(wiggle_truth(1.0), scene)
+print(*loaded())
+"""
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=300,
+                         check=True).stdout.strip().splitlines()
+    assert out == [f"{['altimeter', 'depth', 'dvl', 'gps', 'imu']} False []",
+                   "False ['sim.sensors.fls']",
+                   "True ['sim.sensors.fls', 'sim.sensors.sonar.compiled_kernels']"]
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_measure_is_the_template_and_declared_capabilities_hold(kind):
+    """``measure`` is the base's (``ideal`` then ``corrupt`` or ``exact``) for every sensor; a
+    sensor whose ``latency_s`` depends on the message says so (``fixed_latency = False``); one
+    that can skip its ground truth says so (``ground_truth_optional``)."""
+    cls = sensor_classes()[kind]
+    assert cls.measure is Sensor.measure and "measure" not in vars(cls), f"{cls.__name__} overrides measure"
+    assert cls.ideal is not Sensor.ideal and not inspect.isabstract(cls)
+    assert cls.fixed_latency == (cls.latency_s is Sensor.latency_s), cls.__name__
+    assert isinstance(cls.ground_truth_optional, bool)
+    sensor = _make(kind)
+    assert sensor.render_truth is True  # the default: compute whatever truth there is
+    assert sensor.rng is sensor._rng
+    if cls.fixed_latency:
+        truth = _truths()[0]
+        assert sensor.latency_s(sensor.measure(truth, _scene(truth.t_s))) == sensor.cfg.latency_s
+
+
+def test_the_fls_declares_optional_truth_and_the_usbl_a_varying_latency():
+    classes = sensor_classes()
+    assert [k for k in KINDS if classes[k].ground_truth_optional] == ["fls"]
+    assert [k for k in KINDS if not classes[k].fixed_latency] == ["test_ranger", "usbl"]
+
+
+@pytest.mark.parametrize("kind", [k for k in KINDS if sensor_classes()[k].ground_truth_optional])
+def test_optional_ground_truth_changes_no_data_and_no_draw(kind):
+    """``render_truth = False`` skips the optional truth only: the same message data and the same
+    draws from the noise stream."""
+    full, lean = _make(kind, 4), _make(kind, 4)
+    lean.render_truth = False
+    for truth in _truths():
+        a, b = full.measure(truth, _scene(truth.t_s)), lean.measure(truth, _scene(truth.t_s))
+        np.testing.assert_array_equal(_flatten(a.frame), _flatten(b.frame))
+        np.testing.assert_array_equal(a.intensity, b.intensity)
+        assert a.truth.objects_computed and not b.truth.objects_computed
+        assert full.rng.bit_generator.state == lean.rng.bit_generator.state
+
+
+@pytest.mark.parametrize("kind", ["fls", "msis", "sss"])
+def test_sonar_measure_is_its_render_from_the_mount(kind):
+    """A sonar's ``measure`` (the base's template) gives the bytes its ``render`` gives from the
+    head's pose and draws the same noise; ``noise=False`` draws nothing (and leaves the head)."""
+    a, b = _make(kind, 7), _make(kind, 7)
+    for truth in _truths():
+        scene = _scene(truth.t_s)
+        head = truth.point_ned(b.mount.pos_body_m)
+        if kind == "msis":
+            def render(noise):
+                angle = b.head.next_angle() if noise else b.head.peek_angle()
+                return b.render(truth.t_s, angle, head, truth.R_nb, scene.caster, noise=noise)
+        else:
+            def render(noise):
+                return b.render(truth.t_s, head, truth.R_nb, scene.caster, scene.objects, noise=noise)
+        exact = a.measure(truth, scene, noise=False)
+        assert _flatten(exact).tobytes() == _flatten(render(False)).tobytes()
+        assert a.rng.bit_generator.state == b.rng.bit_generator.state
+        msg = a.measure(truth, scene)
+        assert _flatten(msg).tobytes() == _flatten(render(True)).tobytes()
+        assert a.rng.bit_generator.state == b.rng.bit_generator.state
+        if kind == "msis":
+            assert exact.ping.angle_grad == msg.ping.angle_grad  # the exact query did not step the head
+
+
+@pytest.mark.parametrize("kind", ["fls", "msis"])
+def test_sonar_mount_is_one_orientation(kind):
+    """The mount's roll, pitch, yaw give the sonar -> body rotation; the tilt (down > 0) has its
+    own name, and the message carries the ``autonomy.sonar_frame`` triple (roll, tilt, yaw)."""
+    from autonomy.frames import rot_from_euler
+    from autonomy.sonar_frame import sonar_to_body_rotation
+
+    cfg = sensor_classes()[kind].config_type(tilt_deg=17.0)
+    roll, yaw = np.deg2rad(2.0), np.deg2rad(-5.0)
+    sensor = build_sensor(kind, cfg, Mount(np.array([0.3, -0.1, 0.15]), np.array([roll, 0.7, yaw])),
+                          component_rng(1, kind))  # the config's tilt replaces the mount's pitch
+    tilt = float(np.deg2rad(17.0))
+    assert sensor.tilt_down_rad == tilt
+    np.testing.assert_array_equal(sensor.mount.rpy_rad, [roll, -tilt, yaw])
+    np.testing.assert_array_equal(sensor.R_bs, rot_from_euler(*sensor.mount.rpy_rad))
+    np.testing.assert_array_equal(sensor.R_bs, sonar_to_body_rotation(sensor.mount_roll_tilt_yaw_rad))
+    assert sensor.R_bs[2, 0] == pytest.approx(np.sin(tilt), abs=1e-12)  # the boresight points down
+    truth = _truths()[0]
+    msg = sensor.measure(truth, _scene(truth.t_s))
+    carried = msg.frame.mount_rpy_rad if kind == "fls" else msg.ping.mount_rpy_rad
+    np.testing.assert_array_equal(carried, [roll, tilt, yaw])
 
 
 # ----------------------------------------------------------------------------- contract

@@ -13,7 +13,7 @@ from scenarios.config.sss import SssConfig
 from sim.sensors.analytic_caster import AnalyticBox, AnalyticCaster, AnalyticSphere
 from sim.sensors.raycast import BACKGROUND_ID
 from sim.sensors.registry import sensor_class
-from sim.sensors.sss import SideScanSonar, Waterfall, ground_range_resample
+from sim.sensors.sss import SssSensor, Waterfall, ground_range_resample
 
 SEABED_M = 30.0
 SONAR_DEPTH_M = 10.0
@@ -29,8 +29,8 @@ class Obj:
     centroid_ned: np.ndarray
 
 
-def sonar(**kw) -> SideScanSonar:
-    return SideScanSonar(SssConfig(speckle="none", **kw), (0.0, 0.0, 0.0), np.random.default_rng(1))
+def sonar(**kw) -> SssSensor:
+    return SssSensor(SssConfig(speckle="none", **kw), (0.0, 0.0, 0.0), np.random.default_rng(1))
 
 
 def render(s, caster, objects=(), yaw_rad=0.0, noise=False):
@@ -39,7 +39,7 @@ def render(s, caster, objects=(), yaw_rad=0.0, noise=False):
 
 
 def test_registered_and_ping_rate_from_range():
-    assert sensor_class("sss") is SideScanSonar
+    assert sensor_class("sss") is SssSensor
     assert SssConfig(range_max_m=75.0).rate_hz == pytest.approx(1500.0 / 150.0)
     assert SssConfig(range_max_m=150.0, sound_speed_mps=1480.0).rate_hz == pytest.approx(1480.0 / 300.0)
     with pytest.raises(ValidationError, match="two-way travel-time"):
@@ -107,7 +107,7 @@ def test_grazing_angle_backscatter_falls_with_range():
 
 
 def test_waterfall_and_noise_stream():
-    s = SideScanSonar(SssConfig(), (0.0, 0.0, 0.0), np.random.default_rng(3))
+    s = SssSensor(SssConfig(), (0.0, 0.0, 0.0), np.random.default_rng(3))
     caster = AnalyticCaster(SEABED_M)
     wf = Waterfall(s.n_bins)
     a = render(s, caster, noise=True)

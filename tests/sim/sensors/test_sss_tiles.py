@@ -9,13 +9,13 @@ import pytest
 
 from scenarios.config.sss import SssConfig
 from sim.sensors.analytic_caster import AnalyticCaster, AnalyticSphere
-from sim.sensors.sss import SideScanSonar, Waterfall
+from sim.sensors.sss import SssSensor, Waterfall
 from sim.sensors.sss_tiles import cut_tiles, pings_per_tile, write_tiles
 from tests.sim.sensors.test_sss_geometry import Obj
 
 
 def test_sphere_box_in_a_waterfall_tile(tmp_path):
-    s = SideScanSonar(SssConfig(speckle="none", range_max_m=60.0, n_bins=800), (0, 0, 0), np.random.default_rng(2))
+    s = SssSensor(SssConfig(speckle="none", range_max_m=60.0, n_bins=800), (0, 0, 0), np.random.default_rng(2))
     centre = np.array([10.0, -30.0, 29.0])  # 30 m to port, 10 m along track
     caster = AnalyticCaster(30.0, spheres=(AnalyticSphere(centre, 1.0, 4),))
     n = pings_per_tile(20.0, 1.5, s.rate_hz)  # 20 m tile

@@ -1,25 +1,26 @@
-"""The closed-loop mission: physics, sensors and autonomy at their own rates.
+"""The closed-loop mission: physics, sensors and autonomy at their own rates, in one fixed loop.
 
-:class:`Mission` runs the loop; :class:`sim.physics.Physics` owns the world and
-:func:`sim.mission_build.build_mission_parts` builds the sensors and the onboard stack.
-:meth:`Mission.step` advances one autonomy period: physics substeps, the sensors due in
-that time (each at its own time, the true state interpolated between the steps for a firing
-between them; every sensor first fires at t = 0, in :meth:`Mission.reset`), delivery of the
-messages whose latency has passed, one autonomy tick. Gym
-environments reuse this stepping API and may override guidance with their own setpoints.
+:class:`Mission` runs the loop; :class:`sim.physics.Physics` owns the world,
+:func:`sim.mission.parts.build_mission_parts` builds the sensors and the core onboard stack,
+and each study is a feature (:mod:`sim.features`, protocol :mod:`sim.features.base`) the
+loop calls at fixed points. :meth:`Mission.step` advances one autonomy period and never grows
+when a study is added ([dmcontrol2020]):
 
-Delivery dispatches on the message's type (the navigation filter's handlers, the state
-machine's bottom-lock flag) and on its source (perception runs on the frames of its sonar:
-ATR -> geolocalisation -> world model; or, when the scenario tracks a target, the tracking
-stack takes the USBL fixes and that sonar's frames, and the buddy observer may guide). Observers receive every delivered message and the
-perception results by sensor name, and immutable start and end summaries.
+1. physics substeps, each sensor due in that time fired at its own time (the true state
+   interpolated between the steps for a firing between them; every sensor first fires at
+   t = 0, in :meth:`Mission.reset`); a feature may take a sensor's firing (``captures``);
+2. the features' ``after_physics`` (extra vehicles);
+3. delivery of the messages whose latency has passed: by type to the navigation filter's
+   handlers and the features', by source to the onboard processing a feature registered; the
+   results to the features' result handlers, then to the observers;
+4. the features' ``before_nav`` (the acoustic link); the navigation filter predicts to now;
+   the features' ``after_nav`` (the trackers);
+5. guidance: a gym env's setpoint, else the feature that drives the guidance (buddy), else the
+   survey state machine; the autopilots and the thrust allocation;
+6. the step record to the observers; the features' ``end_of_step`` (pipelined perception).
 
-With extra vehicles (``scenario.vehicles``) each one's sensors and autonomy tick every
-period (:class:`sim.surface_runner.SurfaceVehicleRunner`); with ``comms.acoustic`` on, the
-acoustic link (:class:`sim.comms.vehicle_link.VehicleLink`) carries each frame's detections
-up to the surface world model and the surface vehicle's USBL fixes down to the AUV, whose
-navigation filter fuses them at their measurement time
-(:class:`autonomy.navigation.delayed.DelayedFixFilter`).
+Observers receive every delivered message and every result by sensor name, the step
+records, and immutable start and end summaries; they never take part in the loop's logic.
 """
 
 from __future__ import annotations
@@ -34,17 +35,16 @@ from typing import Any
 import numpy as np
 
 from autonomy.control.setpoint import Setpoint
-from autonomy.messages import DvlMsg, NavEstimate, UsblMsg, WrenchCmdMsg
-from autonomy.navigation.delayed import DelayedFixFilter
+from autonomy.messages import DvlMsg, NavEstimate, WrenchCmdMsg
 from scenarios.schema import Scenario
-from sim.mission_build import NAV_SOURCES, MissionParts, build_mission_parts
+from sim.features import build_features
+from sim.features.survey_perception import SurveyPerceptionFeature
+from sim.features.base import LoopPorts, MissionFeature
+from sim.mission.parts import NAV_SOURCES, MissionParts, build_mission_parts
 from sim.physics import Physics
-from sim.comms.vehicle_link import VehicleLink
-from sim.records import MissionInfo, MissionObserver, MissionSummary, PerceptionResult, StepRecord
-from sim.sensors.base import SceneView, Sensor
-from sim.sonar_pipeline import FrameTicket, SonarPipeline
+from sim.records import MissionInfo, MissionObserver, MissionSummary, StepRecord
+from sim.sensors.base import SceneView
 from sim.stage_timer import NULL_TIMER, StageTimer
-from sim.surface_runner import SurfaceVehicleRunner
 from sim.truth import VehicleTruth, interpolate_truth
 
 __all__ = ["NAV_SOURCES", "Mission", "MissionSummary"]
@@ -70,13 +70,20 @@ class Mission:
             and their ATR detection run in two worker processes (:mod:`sim.sonar_pipeline`) when
             nothing in the loop reads perception back (survey perception; not target tracking),
             with the serial loop's results bit for bit; observers get frames and perception
-            results once ready, in order (frames only if an observer takes them: one without
-            ``sonar_frames = False``). Call :meth:`close` when done (it ends the workers). The
+            results once ready, in order (frames only if an observer takes them: one with
+            ``sonar_frames = True``). Call :meth:`close` when done (it ends the workers). The
             workers start with ``spawn``: a script that builds the mission needs the
             ``if __name__ == "__main__":`` guard.
 
+        features: feature classes of the caller's own (:class:`sim.features.base.MissionFeature`),
+            built after the shipped ones (:data:`sim.features.FEATURES`) and called after them.
+
+    Attributes:
+        features: the mission's features (:mod:`sim.features`), in the order the loop calls them.
+
     Raises:
-        ValueError: unknown ``nav_source``; ``workers`` < 1; a sensor mount site missing on the hull.
+        ValueError: unknown ``nav_source``; ``workers`` < 1; a sensor mount site missing on the hull;
+            more than one feature drives the guidance.
         sim.sonar_pipeline.PipelineError: (from :meth:`reset`, :meth:`step`, :meth:`run`) a
             pipeline worker failed or ended, or the main script lacks the ``__main__`` guard.
     """
@@ -90,13 +97,14 @@ class Mission:
         perception: bool = True,
         timer: StageTimer | None = None,
         workers: int = 1,
+        features: Sequence[type[MissionFeature]] = (),
     ) -> None:
         if nav_source not in NAV_SOURCES:
             raise ValueError(f"nav_source must be one of {NAV_SOURCES}, got {nav_source!r}")
         if int(workers) < 1:
             raise ValueError(f"workers must be >= 1, got {workers}")
         self.workers = int(workers)
-        self._pipeline: SonarPipeline | None = None
+        self._extra_features = tuple(features)
         self.scenario = scenario
         self.nav_source = nav_source
         self.observers = list(observers)
@@ -106,17 +114,20 @@ class Mission:
         self.dt_s = self.physics.dt_s
         self.substeps = max(int(round(scenario.physics.rate_hz / scenario.autonomy.rate_hz)), 1)
         self.autonomy_dt_s = self.substeps * self.dt_s
+        self._started = False
         self._build(scenario.seed)
 
     def _build(self, seed: int) -> None:
         self.physics.reseed(seed)
-        self.parts: MissionParts = build_mission_parts(self.scenario, self.physics, seed, nav_source=self.nav_source,
-                                                       perception=self.perception_enabled)
-        #: The extra vehicles' sensors and autonomy (``scenario.vehicles``), ticked each period.
-        self.surface_vehicles: dict[str, SurfaceVehicleRunner] = {
-            name: SurfaceVehicleRunner(self.physics, name, cfg, seed) for name, cfg in self.scenario.vehicles.items()}
-        #: The acoustic link to the surface vehicle (None: ``comms.acoustic`` off), built by :meth:`reset`.
-        self.link: VehicleLink | None = None
+        self.parts: MissionParts = build_mission_parts(self.scenario, self.physics, seed)
+        self.features: tuple[MissionFeature, ...] = build_features(dict(
+            scenario=self.scenario, physics=self.physics, parts=self.parts, seed=int(seed), nav_source=self.nav_source,
+            perception=self.perception_enabled, workers=self.workers), self._extra_features)
+        self._driver = next((f for f in self.features if f.drives_guidance), None)
+
+    def feature(self, cls: type) -> Any:
+        """The mission's feature of class ``cls`` (:mod:`sim.features`), or None when it has none."""
+        return next((f for f in self.features if type(f) is cls), None)
 
     # -- read-only views ---------------------------------------------------------------
     @property
@@ -144,16 +155,22 @@ class Mission:
     def pipelined(self) -> bool:
         """Whether the sonar and its perception run in worker processes (``workers`` > 1 and a
         mission that allows it: FLS perception, no tracker); known after :meth:`reset`."""
-        return self._pipeline is not None
+        return any(f.captures for f in self.features)
+
+    @property
+    def worker_pids(self) -> list[int]:
+        """Process ids of the features' worker processes (the sonar pipeline's), after :meth:`reset`."""
+        return [pid for f in self.features for pid in f.worker_pids()]
 
     @property
     def perception(self):
-        """The perception chain (None without one); pipelined frames delivered so far are
-        finished first."""
+        """The survey perception chain (:class:`sim.perception.Perception`; None without one);
+        pipelined frames delivered so far are finished first."""
+        feature = self.feature(SurveyPerceptionFeature)
+        if feature is None:
+            return None
         self.flush()
-        if self._pipeline is not None:
-            self._pipeline.sync()
-        return self.parts.perception
+        return feature.results()
 
     @property
     def fsm(self):
@@ -200,60 +217,38 @@ class Mission:
         init_pos = np.asarray(scn.vehicle.initial_pos_ned, dtype=float)
         init_rpy = np.deg2rad(scn.vehicle.initial_rpy_deg)
         self.physics.reset(init_pos, init_rpy)
-        for runner in self.surface_vehicles.values():
-            runner.reset()
-        if scn.comms.acoustic.enabled:  # a fresh channel and surface world model
-            perception = self.parts.perception
-            self.link = VehicleLink(scn, self.surface_vehicles[scn.comms.surface.vehicle],
-                                    None if perception is None else perception.pmha,
-                                    None if perception is None else perception.region_ned,
-                                    () if perception is None else perception.class_names, self.parts.seed,
-                                    footprint=None if perception is None else perception.sonar_footprint())
         self.thruster_cmd = np.zeros(self.physics.params.n_thrusters)
         self.wrench_body = np.zeros(6)
         parts.scheduler.reset(0.0)
         self.nav_filter = parts.make_nav_filter(scn)
-        if self.link is not None and scn.comms.surface.usbl_fixes and scn.comms.surface.fuse_usbl_fixes:
-            self.nav_filter = DelayedFixFilter(self.nav_filter, snapshot_every_s=0.25,
-                                               gate_chi2=scn.autonomy.navigation.gps_gate_chi2)
+        for feature in self.features:
+            self.nav_filter = feature.wrap_nav_filter(self.nav_filter)
         self._by_type: dict[type, list[Callable[[Any], Any]]] = {}
         for msg_type, handler in self.nav_filter.message_handlers().items():
             self._by_type.setdefault(msg_type, []).append(handler)
         self._by_type.setdefault(DvlMsg, []).append(self._note_bottom_lock)
         self._by_source: dict[str, Callable[[Any, NavEstimate], Any]] = {}
-        if parts.perception is not None:
-            self._by_source[parts.sonar.name] = parts.perception.process
-        for name, process in parts.processors.items():
-            getattr(process, "reset", lambda: None)()
-            self._by_source[name] = process
-        if parts.tracking is not None:  # target tracking: USBL fixes by type, frames of its sonar
-            parts.tracking.reset()
-            self._by_type.setdefault(UsblMsg, []).append(parts.tracking.on_usbl)
-            self._by_source[parts.sonar.name] = lambda render, _nav: parts.tracking.on_frame(render.frame)
+        self._result_handlers: dict[type, list[Callable[[str, Any], None]]] = {}
+        self._consumers: dict[type, Callable[[str, Any], None]] = {}
+        self._events: dict[str, tuple[Callable[[VehicleTruth], None], str]] = {}
         parts.guidance.start(init_pos[:2], float(init_rpy[2]))
         parts.fsm.reset()
         parts.autopilot.reset()
-        if parts.perception is not None:
-            parts.perception.reset()
         #: Whether the sonars render their objects' ground truth and instance masks: some
-        #: observer reads them (one without ``sonar_truth = False``; decided here, at reset).
-        self.sonar_truth = any(getattr(o, "sonar_truth", True) for o in self.observers)
+        #: observer reads them (one with ``sonar_truth = True``; decided here, at reset).
+        self.sonar_truth = any(o.sonar_truth for o in self.observers)
         for sensor in parts.sensors.values():
-            if hasattr(sensor, "render_truth"):  # the forward-looking sonars (the pipeline's copy too)
+            if sensor.ground_truth_optional:  # the forward-looking sonars (a pipeline's copy too)
                 sensor.render_truth = self.sonar_truth
-        # pipelined only where perception is a sink and the sonar's latency is fixed (the
-        # scheduler gets a ticket, not the frame, to time the delivery by)
-        if (self.workers > 1 and parts.perception is not None and parts.tracking is None
-                and type(parts.sonar).latency_s is Sensor.latency_s):
-            self._pipeline = SonarPipeline(self.physics, parts.sonar, parts.perception,
-                                           frames=any(getattr(o, "sonar_frames", True) for o in self.observers))
+        ports = LoopPorts(self)
+        for feature in self.features:
+            feature.reset(ports)
+        self._capture = {name: f for f in self.features for name in f.captures}
         self.last_dvl_lock = True
         self._setpoint: Setpoint | None = None
         self._wall_start = time.perf_counter()
         self._wall_s = 0.0
         self._delivered: Counter[str] = Counter()
-        #: (vehicle, vehicle) -> autonomy periods that ended with their hulls touching.
-        self.vehicle_contacts: Counter[tuple[str, str]] = Counter()
         self._started = True
         info = self.info()
         for obs in self.observers:
@@ -261,20 +256,15 @@ class Mission:
         self._truth = self.physics.truth()
         # t = 0: every sensor's first firing (delivered, as every message, at the first
         # autonomy tick at or after its delivery time: the autonomy first runs one period
-        # on, so the estimate here is still the prior), the extra vehicles' first tick and,
-        # when tracking, the first vehicle pose (the prior: the start of the pose history,
-        # so that fixes measured before the first autonomy period find a pose)
+        # on, so the estimate here is still the prior), then the features' start (the extra
+        # vehicles' first tick, the trackers' first pose)
         due = parts.scheduler.take_due(0.0)
         if due:
             self._fire_all(due, self._truth)
-        for runner in self.surface_vehicles.values():
-            runner.tick(self._truth.pos_ned, auv_truth=self._truth)
-        self._others = self._other_truths()
         nav = self.nav_filter.estimate()
-        if parts.tracking is not None:
-            for res in parts.tracking.on_nav(nav):
-                for obs in self.observers:
-                    obs.on_message(parts.sonar.name, res)
+        for feature in self.features:
+            feature.start(self._truth, nav)
+        self._others = self._other_truths()
         return self._record(self._truth, nav, "idle")
 
     @property
@@ -283,70 +273,32 @@ class Mission:
 
     def step(self, setpoint: Setpoint | None = None) -> StepRecord:
         """Advance one autonomy period. ``setpoint`` overrides guidance (gym envs)."""
-        physics, scheduler, timer = self.physics, self.parts.scheduler, self.timer
-        truth = self._truth
+        physics, timer, features = self.physics, self.timer, self.features
         with timer.stage("physics"):
-            physics_step, take_due, cmd = physics.step, scheduler.take_due, self.thruster_cmd
-            dt, eps = physics.dt_s, scheduler.eps_s
-            for _ in range(self.substeps):
-                t_end = (physics.n_steps + 1) * dt
-                if scheduler.next_fire_s < t_end - eps and truth.t_s != physics.t_s:
-                    with timer.stage("truth"):  # a firing inside this step: the state at its start
-                        truth = physics.truth()
-                before = truth
-                physics_step(cmd)
-                due = take_due(physics.t_s)
-                if due:
-                    truth = self._fire_all(due, before)
-        if truth.t_s != physics.t_s:  # not already taken for a sensor on the last substep
-            with timer.stage("truth"):
-                truth = physics.truth()
+            truth = self._advance(self._truth)
         self._truth = truth
-        if self.surface_vehicles:
-            with timer.stage("surface_vehicles"):
-                for runner in self.surface_vehicles.values():
-                    # a vessel with a USBL follows its own fixes of the AUV, else the AUV's true position
-                    runner.tick(truth.pos_ned, auv_truth=truth)
-                self._others = self._other_truths()
-                for pair in physics.vehicles_in_contact():
-                    self.vehicle_contacts[pair] += 1
-        for name, msg in scheduler.pop_ready(physics.t_s):
+        t_s = physics.t_s
+        for feature in features:
+            feature.after_physics(t_s, truth)
+        if physics.extras:
+            self._others = self._other_truths()
+        for name, msg in self.parts.scheduler.pop_ready(t_s):
             self._deliver(name, msg)
-        if self.link is not None and self._pipeline is not None and self._pipeline.busy:
-            # the link queues detections at the time they are handed over: take this step's
-            # frames now, as the serial loop does (rendering still overlaps; same results)
-            with timer.stage("pipeline_wait"):
-                self._to_observers(self._pipeline.ready(wait=True))
-        if self.link is not None:
-            with timer.stage("link"):
-                fixes = self.link.tick(physics.t_s, truth, self._others[self.link.node], timer)
-            if isinstance(self.nav_filter, DelayedFixFilter):
-                with timer.stage("nav_late_fix"):  # the re-processing is the link's cost
-                    for fix in fixes:
-                        self.nav_filter.on_late_fix(fix)
-            with timer.stage("observers"):
-                for fix in fixes:
-                    for obs in self.observers:
-                        obs.on_message(fix.source, fix)
-        parts = self.parts
+        for feature in features:
+            feature.before_nav(t_s, truth)
         with timer.stage("nav_filter"):
-            self.nav_filter.predict(physics.t_s)
+            self.nav_filter.predict(t_s)
             nav = self.nav_filter.estimate()
-        if parts.tracking is not None:
-            with timer.stage("tracking"):
-                results = parts.tracking.on_nav(nav)  # frames that waited for this pose
-            with timer.stage("observers"):
-                for res in results:
-                    for obs in self.observers:
-                        obs.on_message(parts.sonar.name, res)
+        for feature in features:
+            feature.after_nav(t_s, nav)
+        parts = self.parts
         with timer.stage("guidance"):
             if setpoint is not None:
                 sp = setpoint
-            elif parts.buddy is not None:
-                est = parts.tracking.primary.estimate(physics.t_s)
-                sp = parts.buddy.update(nav, None if est is None else est[0][:3])
+            elif self._driver is not None:
+                sp = self._driver.setpoint(t_s, nav)
             else:
-                sp = parts.fsm.update(physics.t_s, nav, self.last_dvl_lock)
+                sp = parts.fsm.update(t_s, nav, self.last_dvl_lock)
         self._setpoint = sp
         with timer.stage("control"):
             self.wrench_body = np.zeros(6) if sp is None else parts.autopilot.update(nav, sp, self.autonomy_dt_s)
@@ -354,37 +306,34 @@ class Mission:
         wrench_handlers = self._by_type.get(WrenchCmdMsg)
         if wrench_handlers:  # the speed model of a DVL-free filter; no message built for others
             with timer.stage("nav_filter"):
-                cmd = WrenchCmdMsg(physics.t_s, self.wrench_body.copy())
+                cmd = WrenchCmdMsg(t_s, self.wrench_body.copy())
                 for handler in wrench_handlers:
                     handler(cmd)
         rec = self._record(truth, nav, parts.fsm.mode)
-        if self._pipeline is not None and self._pipeline.busy:
-            with timer.stage("perception"):  # this process's part: geolocalisation, world model
-                ready = list(self._pipeline.ready())
-            self._to_observers(ready)
+        for feature in features:
+            feature.end_of_step()
         self._wall_s = time.perf_counter() - self._wall_start
         return rec
 
     def flush(self) -> None:
-        """Wait for the pipelined sonar frames delivered so far and hand them to the observers
-        (nothing to do in the serial loop)."""
-        if self._pipeline is not None and self._pipeline.busy:
-            with self.timer.stage("pipeline_wait"):
-                self._to_observers(self._pipeline.ready(wait=True))
+        """Wait for the results still being made (pipelined sonar frames delivered so far) and
+        hand them to the observers (nothing to do in the serial loop)."""
+        for feature in self.features:
+            feature.flush()
+        if self._started:
             self._wall_s = time.perf_counter() - self._wall_start
 
     def close(self) -> None:
-        """Stop the pipeline's worker processes, if any, after copying their state back (frames
+        """End the features' worker processes, if any, after copying their state back (results
         delivered but not yet handed to the observers are dropped; :meth:`flush` first)."""
-        if self._pipeline is not None:
-            self._pipeline.close()
-            self._pipeline = None
+        for feature in self.features:
+            feature.close()
 
     def run(self, progress: bool = True) -> MissionSummary:
         """Run until the mission ends or the scenario's duration is reached."""
         from tqdm import tqdm
 
-        if not getattr(self, "_started", False):
+        if not self._started:
             self.reset()
         total = self.scenario.duration_s
         with tqdm(total=round(total), unit="sim s", disable=not progress, desc=self.scenario.name, mininterval=1.0,
@@ -397,8 +346,8 @@ class Mission:
                     bar.set_postfix_str(self.fsm.mode)
                     last = self.t_s
         self.flush()
-        if self.link is not None:
-            self.link.finish(self.t_s)
+        for feature in self.features:
+            feature.finish(self.t_s)
         summary = self.summary()
         for obs in self.observers:
             obs.on_end(summary)
@@ -410,6 +359,27 @@ class Mission:
                               fsm.abort_reason or "", fsm.mode, MappingProxyType(dict(self._delivered)))
 
     # -- internals -------------------------------------------------------------------
+    def _advance(self, truth: VehicleTruth) -> VehicleTruth:
+        """The physics substeps of one autonomy period, each sensor firing due in them at its
+        own time; the true state at the period's end."""
+        physics, scheduler, timer = self.physics, self.parts.scheduler, self.timer
+        physics_step, take_due, cmd = physics.step, scheduler.take_due, self.thruster_cmd
+        dt, eps = physics.dt_s, scheduler.eps_s
+        for _ in range(self.substeps):
+            t_end = (physics.n_steps + 1) * dt
+            if scheduler.next_fire_s < t_end - eps and truth.t_s != physics.t_s:
+                with timer.stage("truth"):  # a firing inside this step: the state at its start
+                    truth = physics.truth()
+            before = truth
+            physics_step(cmd)
+            due = take_due(physics.t_s)
+            if due:
+                truth = self._fire_all(due, before)
+        if truth.t_s != physics.t_s:  # not already taken for a sensor on the last substep
+            with timer.stage("truth"):
+                truth = physics.truth()
+        return truth
+
     def _fire_all(self, due: list[tuple[float, str]], before: VehicleTruth) -> VehicleTruth:
         """Fire the sensors of ``due`` (``(firing time, name)`` in time order, all within the
         step just taken, from ``before.t_s`` to now), each with the true state and the scene
@@ -427,23 +397,29 @@ class Mission:
                 truth = interpolate_truth(before, now, t_fire)
                 scene = physics.scene(t_fire)
             while k < len(inside) and inside[k][0] == t_fire:
-                with timer.stage(f"sensor:{inside[k][1]}"):
-                    self._fire(inside[k][1], truth, scene)
+                self._fire(inside[k][1], truth, scene)
                 k += 1
         if at_now:
-            with timer.stage("truth"):
-                scene = physics.scene()
+            scene = None
             for name in at_now:
-                with timer.stage(f"sensor:{name}"):
-                    self._fire(name, now, scene)
+                if scene is None and name not in self._events:
+                    with timer.stage("truth"):
+                        scene = physics.scene()
+                self._fire(name, now, scene)
         return now
 
-    def _fire(self, name: str, truth: VehicleTruth, scene: SceneView) -> None:
-        pipeline = self._pipeline
-        if pipeline is not None and name == self.parts.sonar.name:
-            msg = pipeline.capture(truth)  # rendered on a worker from a copy of the scene now
-        else:
-            msg = self.parts.sensors[name].measure(truth, scene)
+    def _fire(self, name: str, truth: VehicleTruth, scene: SceneView | None) -> None:
+        event = self._events.get(name)
+        if event is not None:  # a declared periodic event (at the autonomy ticks: the state now)
+            with self.timer.stage(event[1]):
+                event[0](truth)
+            return
+        with self.timer.stage(f"sensor:{name}"):
+            self._measure(name, truth, scene)
+
+    def _measure(self, name: str, truth: VehicleTruth, scene: SceneView) -> None:
+        taker = self._capture.get(name)
+        msg = taker.capture(name, truth) if taker is not None else self.parts.sensors[name].measure(truth, scene)
         self.parts.scheduler.push(name, truth.t_s, msg)
 
     def _note_bottom_lock(self, msg: DvlMsg) -> None:
@@ -452,8 +428,9 @@ class Mission:
     def _deliver(self, name: str, msg: Any) -> None:
         self._delivered[name] += 1
         timer = self.timer
-        if isinstance(msg, FrameTicket):  # pipelined: perception with the estimate of now (moved to the capture time)
-            self._pipeline.deliver(name, msg, self.nav_filter.estimate())
+        consumer = self._consumers.get(type(msg))
+        if consumer is not None:  # a pipeline's ticket: the feature takes it from here
+            consumer(name, msg)
             return
         with timer.stage("nav_filter"):
             for handler in self._by_type.get(type(msg), ()):
@@ -473,15 +450,13 @@ class Mission:
         self._to_observers(((name, msg, result),))
 
     def _to_observers(self, ready) -> None:
-        """Hand ``(name, message, result or None)`` triples to every observer, in order; with
-        the acoustic link, perception results' detections go to the AUV's modem first."""
+        """Hand ``(name, message, result or None)`` triples to the features' result handlers
+        (:meth:`sim.features.base.LoopPorts.on_result`), then to every observer, in order."""
         ready = list(ready)
-        link = self.link
-        if link is not None and (self.parts.fsm.mode != "idle" or self.scenario.comms.surface.send_while_idle):
-            with self.timer.stage("link"):
-                for _, _, result in ready:
-                    if isinstance(result, PerceptionResult):
-                        link.send_detections(self.physics.t_s, result.localized)
+        if self._result_handlers:
+            for name, _, result in ready:
+                for handler in self._result_handlers.get(type(result), ()) if result is not None else ():
+                    handler(name, result)
         with self.timer.stage("observers"):
             for name, msg, result in ready:
                 for obs in self.observers:
@@ -491,7 +466,7 @@ class Mission:
                         obs.on_message(name, result)
 
     def _other_truths(self) -> Mapping[str, VehicleTruth]:
-        return MappingProxyType({name: self.physics.truth(name) for name in self.surface_vehicles})
+        return MappingProxyType({name: self.physics.truth(name) for name in self.physics.extras})
 
     def _record(self, truth: VehicleTruth, nav: NavEstimate, mode: str) -> StepRecord:
         sp = self._setpoint
