@@ -177,7 +177,7 @@ def bathymetry_problems(scenario) -> list[str]:
     else:
         from scipy.interpolate import RegularGridInterpolator
 
-        from scenarios.placement import vehicle_half_height_m
+        from scenarios.vehicle_presets import vehicle_half_height_m
 
         bed = float(RegularGridInterpolator((grid.n_m, grid.e_m), grid.depth_m)([[n, e]])[0])
         half_h = vehicle_half_height_m(scenario.vehicle.model)

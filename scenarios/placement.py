@@ -13,12 +13,11 @@ down); the seabed depth is the plane (or slope) through ``seabed.depth_m`` at
 from __future__ import annotations
 
 import math
-from importlib import resources
 
 import numpy as np
-import yaml
 
 from scenarios.schema import Scenario
+from scenarios.vehicle_presets import surface_hull_span_m, vehicle_envelope_m, vehicle_half_height_m  # noqa: F401
 
 # Relief allowed around the mean plane of a rough seabed, in rms heights (a Gaussian field
 # exceeds 4 sigma on about 6e-5 of its area).
@@ -103,29 +102,6 @@ def _inside_patch(scenario: Scenario, n_m: float, e_m: float) -> bool:
     return abs(n_m - c.center_ne_m[0]) <= half and abs(e_m - c.center_ne_m[1]) <= half
 
 
-def vehicle_envelope_m(model: str) -> tuple[float, float, float]:
-    """Envelope (length, width, height) of a vehicle preset, m (from its ``params.yaml``;
-    zeros when unreadable, which only weakens the checks)."""
-    try:
-        text = (resources.files("sim") / "assets" / model / "params.yaml").read_text()
-        env = yaml.safe_load(text)["envelope_m"]
-        return float(env[0]), float(env[1]), float(env[2])
-    except (OSError, KeyError, TypeError, ValueError, IndexError, yaml.YAMLError):
-        return 0.0, 0.0, 0.0
-
-
-def surface_hull_span_m(preset: str) -> tuple[float, float, float]:
-    """(horizontal half-diagonal, top depth, bottom depth) of a ``surface_3dof`` preset's hull
-    afloat, m (NED z of its top and keel; from its ``params.yaml``, zeros when unreadable)."""
-    try:
-        data = yaml.safe_load((resources.files("sim") / "assets" / preset / "params.yaml").read_text())
-        size = [float(x) for x in data["hull"]["size_m"]]
-        centre_z = float(data.get("waterline_depth_m", 0.0)) + float(data["hull"].get("center_body_m", [0, 0, 0])[2])
-        return 0.5 * math.hypot(size[0], size[1]), centre_z - 0.5 * size[2], centre_z + 0.5 * size[2]
-    except (OSError, KeyError, TypeError, ValueError, IndexError, AttributeError, yaml.YAMLError):
-        return 0.0, 0.0, 0.0
-
-
 def _extra_vehicle_problems(scenario: Scenario, relief_m: float) -> list[str]:
     """Each extra vehicle (``vehicles.<name>``) starts inside the patch and the walls, afloat
     over water deeper than its keel, clear of the AUV, of every target and of the others."""
@@ -161,11 +137,6 @@ def _extra_vehicle_problems(scenario: Scenario, relief_m: float) -> list[str]:
                 problems.append(f"{key}: overlaps vehicles.{other}")
         placed.append((name, n, e, r))
     return problems
-
-
-def vehicle_half_height_m(model: str) -> float:
-    """Half the vertical envelope of a vehicle preset, m."""
-    return 0.5 * vehicle_envelope_m(model)[2]
 
 
 def survey_corners_ne(scenario: Scenario) -> np.ndarray:

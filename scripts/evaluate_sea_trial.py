@@ -25,7 +25,7 @@ sys.path.insert(0, str(ROOT))
 from scenarios.load import load_scenario  # noqa: E402
 from sim.cli.app import run_script, script_parser  # noqa: E402
 from sim.cli.errors import CliError  # noqa: E402
-from sim.outputs.mission_outputs import standard_json  # noqa: E402
+from sim.outputs.json_files import standard_json  # noqa: E402
 from sim.sweep.runner import run_jobs  # noqa: E402
 
 #: Stages counted as the cost of the link and of the second vehicle.

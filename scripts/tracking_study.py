@@ -36,7 +36,7 @@ from sim.evaluation.binomial_interval import proportion_ci95  # noqa: E402
 from sim.evaluation.tracking_eval import ERROR_SETS, error_boxplot_png  # noqa: E402
 from sim.features import TrackingFeature  # noqa: E402
 from sim.mission import Mission  # noqa: E402
-from sim.outputs.mission_outputs import standard_json  # noqa: E402
+from sim.outputs.json_files import standard_json  # noqa: E402
 
 
 def run_one(scenario: str, seed: int, duration_s: float | None,

@@ -37,7 +37,8 @@ from sim.dataset.coco_io import (ANNOTATIONS_FILE, IMAGES_DIR, LABELS_DIR, write
 from sim.dataset.errors import DatasetError
 from sim.dataset.sss_generate import SssRandomization, SssSettings
 from sim.dataset.randomization import (HELDOUT_RANDOMIZATION, TRAIN_RANDOMIZATION, WIDE_RANDOMIZATION,
-                                      Randomization, SceneSpec, draw_world_seed_and_seabed_kind, sample_scene)
+                                      CLASS_NAMES, Randomization, SceneSpec, draw_world_seed_and_seabed_kind,
+                                      sample_scene, seabed_depth_fn)
 from sim.outputs.run_dir import check_output_dir, write_marker
 from sim.rng import component_rng
 from sim.spawn_guard import exit_if_spawn_reimport, main_guard_missing
@@ -46,7 +47,6 @@ from sim.worker_signals import ignore_sigint, sigint_blocked
 GENERATOR_VERSION = "1.3.0"
 MANIFEST_FILE = "manifest.json"
 PARTS_DIR = "parts"
-CLASS_NAMES = ("opi", "rock", "debris")
 RANDOMIZATION_PRESETS = {"train": TRAIN_RANDOMIZATION, "wide": WIDE_RANDOMIZATION, "heldout": HELDOUT_RANDOMIZATION}
 RAY_HINT = "--ray needs Ray: pip install 'auvsim[scale]' (or pip install ray)"
 
@@ -66,16 +66,9 @@ class RenderSettings:
     min_area_px: int = 12
 
 
-def _seabed_depth_fn(seabed_cfg, world_seed: int):
-    from sim.seabed import make_seabed
-
-    bed = make_seabed(seabed_cfg, component_rng(world_seed, "seabed"))
-    return bed.depth_at
-
-
 def scene_spec(seed: int, index: int, rz: Randomization) -> SceneSpec:
     """The scene ``index`` of a dataset with root ``seed`` (depends on nothing else)."""
-    return sample_scene(index, component_rng(seed, f"dataset/scene/{index}"), rz, _seabed_depth_fn)
+    return sample_scene(index, component_rng(seed, f"dataset/scene/{index}"), rz, seabed_depth_fn)
 
 
 def fls_config(spec: SceneSpec, settings: RenderSettings) -> FlsConfig:

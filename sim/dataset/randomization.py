@@ -12,6 +12,17 @@ from pydantic import Field, model_validator
 from autonomy.frames import rot_from_euler
 from scenarios.config.base import StrictModel
 from scenarios.config.world import BasinConfig, SeabedConfig, TargetConfig
+from sim.rng import component_rng
+from sim.seabed import make_seabed
+
+#: The labelled classes of the FLS datasets, in COCO category order (id = index + 1).
+CLASS_NAMES = ("opi", "rock", "debris")
+
+
+def seabed_depth_fn(seabed_cfg: SeabedConfig, world_seed: int):
+    """``depth_at(n_m, e_m)`` of the seabed ``seabed_cfg`` drawn from ``world_seed`` (m, NED)."""
+    bed = make_seabed(seabed_cfg, component_rng(world_seed, "seabed"))
+    return bed.depth_at
 
 Range = tuple[float, float]
 TARGET_CLASS = "opi"

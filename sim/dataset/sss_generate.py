@@ -27,7 +27,7 @@ from pydantic import model_validator
 from scenarios.config.world import SeabedConfig, TargetConfig
 from sim.dataset.coco_io import IMAGES_DIR, write_png_atomic
 from sim.dataset.errors import DatasetError
-from sim.dataset.randomization import Range, Randomization, SceneRanges, _object, _u
+from sim.dataset.randomization import CLASS_NAMES, Range, Randomization, SceneRanges, _object, _u, seabed_depth_fn
 from sim.rng import component_rng
 
 #: Side-scan altitude over the seabed as a fraction of the slant range per side: the usual
@@ -215,10 +215,9 @@ def sss_scene_spec(seed: int, index: int, rz: Randomization | SssRandomization,
                    settings: SssSettings) -> SssSceneSpec:
     """The scene ``index`` of a side-scan dataset with root ``seed`` and ranges
     :func:`sss_randomization` ``(rz, settings)`` (depends on nothing else)."""
-    from sim.dataset.generate import _seabed_depth_fn
 
     return sample_sss_scene(index, component_rng(seed, f"dataset/sss_scene/{index}"),
-                            sss_randomization(rz, settings), settings, _seabed_depth_fn)
+                            sss_randomization(rz, settings), settings, seabed_depth_fn)
 
 
 def sss_config(spec: SssSceneSpec, settings: SssSettings):
@@ -241,7 +240,6 @@ def render_sss_scene(spec: SssSceneSpec, seed: int, settings: SssSettings, tile_
     from autonomy.frames import rot_from_euler
     from scenarios.config.world import WorldConfig
     from scenarios.schema import Scenario
-    from sim.dataset.generate import CLASS_NAMES
     from sim.sensors.raycast import MujocoRayCaster
     from sim.sensors.sss import SssSensor, Waterfall
     from sim.sensors.sss_tiles import cut_tiles

@@ -76,7 +76,7 @@ class McmFullFeature(MissionFeature):
     def write_outputs(self, out_dir: Path, metrics: dict[str, Any], title: str) -> None:
         if self.result is not None:
             from sim.mcm.figures import write_figures
-            from sim.outputs.mission_outputs import write_json
+            from sim.outputs.json_files import write_json
 
             write_json(out_dir / "mcm.json", self.result)
             write_figures(out_dir, [self.result], title=title)

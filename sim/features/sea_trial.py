@@ -155,7 +155,7 @@ class SeaTrialFeature(MissionFeature):
 
     def write_outputs(self, out_dir: Path, metrics: dict[str, Any], title: str) -> None:
         if self.link is not None and self.link.surface_world_model is not None:
-            from sim.outputs.mission_outputs import with_geodetic, write_json
+            from sim.outputs.json_files import with_geodetic, write_json
 
             write_json(out_dir / "surface_world_model.json",
                        with_geodetic(self.link.surface_world_model.to_json(), self.ctx.scenario.world.origin))

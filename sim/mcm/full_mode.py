@@ -173,24 +173,3 @@ class McmFullObserver(ObserverBase):
                                  self._true_at(np.array([0.0]))[0, :5], th, mcm.gospa_cutoff_m, mcm.correct_within_m))
         out["detector"] = self.detector_score()
         return out
-
-
-def run_full(scenario: Scenario, run_index: int = 0, *, progress: bool = False) -> dict:
-    """One full-mode run of ``scenario`` at seed ``scenario.seed + run_index`` (headless; the
-    sweep's job). Returns :meth:`McmFullObserver.results` with ``wall_s``."""
-    import time
-
-    from sim.mission import Mission
-
-    seed = int(scenario.seed) + int(run_index)
-    obs = McmFullObserver(scenario)
-    t0 = time.perf_counter()
-    mission = Mission(scenario.model_copy(update={"seed": seed}), observers=[obs])
-    mission.reset()
-    try:
-        mission.run(progress=progress)
-    finally:
-        mission.close()
-    out = obs.results(seed, run_index)
-    out["wall_s"] = time.perf_counter() - t0
-    return out

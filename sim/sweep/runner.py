@@ -278,7 +278,6 @@ def sweepable_names() -> list[str]:
 
 def _mcm_full_job(args: tuple[dict, int]) -> dict:
     from scenarios.schema import Scenario
-    from sim.mcm.full_mode import run_full
 
     scenario_json, i = args
     return run_full(Scenario.model_validate(scenario_json), i)
@@ -485,3 +484,25 @@ def _describe(spec_json: dict) -> str:
     """A sweep's arguments as a command line: ``mcm_survey --runs 3 --seed 0 --set n_particles=50``."""
     sets = "".join(f" --set {k}={json.dumps(v)}" for k, v in (spec_json.get("overrides") or {}).items())
     return f"{spec_json.get('scenario')} --runs {spec_json.get('runs')} --seed {spec_json.get('seed')}{sets}"
+
+
+def run_full(scenario: Scenario, run_index: int = 0, *, progress: bool = False) -> dict:
+    """One full-mode run of ``scenario`` at seed ``scenario.seed + run_index`` (headless; the
+    sweep's job). Returns :meth:`sim.mcm.full_mode.McmFullObserver.results` with ``wall_s``."""
+    import time
+
+    from sim.mcm.full_mode import McmFullObserver
+    from sim.mission import Mission
+
+    seed = int(scenario.seed) + int(run_index)
+    obs = McmFullObserver(scenario)
+    t0 = time.perf_counter()
+    mission = Mission(scenario.model_copy(update={"seed": seed}), observers=[obs])
+    mission.reset()
+    try:
+        mission.run(progress=progress)
+    finally:
+        mission.close()
+    out = obs.results(seed, run_index)
+    out["wall_s"] = time.perf_counter() - t0
+    return out

@@ -78,8 +78,8 @@ def test_truth_is_computed_iff_an_observer_reads_it():
     assert _frame_bytes(scored) == _frame_bytes(lean)
     assert [repr(r.detections) for r in scored.results] == [repr(r.detections) for r in lean.results]
 
-    unknown = _Unknown()
-    assert not hasattr(unknown, "sonar_truth")
+    unknown = _Unknown()  # declares nothing of its own: the base's default, reads the truth
+    assert "sonar_truth" not in vars(_Unknown) and unknown.sonar_truth
     m = _fly([TrajectoryLog(), unknown])
     assert m.sonar_truth and all(r.truth.objects_computed for r in unknown.renders)
 

@@ -25,7 +25,7 @@ def _short_mission(name: str, *overrides: str):
 
 def test_buddy_mission_map_layers():
     mission, ev = _short_mission("track_static_vehicle")
-    layers = map_layers(mission, ev, 3.0)
+    layers = map_layers(mission, 3.0)
     assert layers["waypoints_ne"] is None  # hover: the default survey plan is not flown
     assert layers["targets"] == []  # the diver is a path, its bubbles are not drawn at their parking spot
     traj = mission.physics.movers.trajectories["diver"]
@@ -44,5 +44,5 @@ def test_buddy_mission_map_layers():
 
 def test_survey_with_tracking_keeps_its_waypoints():
     mission, ev = _short_mission("track_moving_vehicle")
-    layers = map_layers(mission, ev, 3.0)
+    layers = map_layers(mission, 3.0)
     assert layers["waypoints_ne"] is not None and len(layers["waypoints_ne"]) > 2
