@@ -371,7 +371,7 @@ def _sensor_problems(scenario: Scenario) -> list[str]:
     for name, cfg in scenario.sensors.root.items():
         if getattr(cfg, "kind", None) != "fls" or not cfg.enabled:
             continue
-        from sim.sensors.fls_presets import resolve_geometry
+        from scenarios.fls_presets import resolve_geometry
 
         try:
             resolve_geometry(cfg)
@@ -411,7 +411,7 @@ def _atr_model_problems(scenario: Scenario) -> list[str]:
     if isinstance(fan_hw, str):
         return [f"autonomy.atr.model_path: {fan_hw}"]
     from scenarios.sensor_links import atr_sonar_name
-    from sim.sensors.fls_presets import PRESETS, resolve_geometry
+    from scenarios.fls_presets import PRESETS, resolve_geometry
 
     name = atr_sonar_name(scenario)
     if scenario.autonomy.tracking.enabled or name is None or atr.accept_any_fan_size:

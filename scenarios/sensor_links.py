@@ -19,7 +19,7 @@ TRACKING_USBL_KIND = "usbl"
 def _hull_sites(scenario: Scenario) -> set[str] | None:
     """Names of the AUV hull's sites (sensor mounts and ``thruster_<name>``); None when the
     preset cannot be read (its own check reports that)."""
-    from sim.vehicle_params import SENSOR_NAMES, load_vehicle_params
+    from scenarios.vehicle_params import SENSOR_NAMES, load_vehicle_params
 
     try:
         params = load_vehicle_params(scenario.vehicle)

@@ -66,7 +66,7 @@ def main() -> int:
     from scenarios.load import load_scenario
     from sim.sensors.fls import FlsSensor
     from sim.sensors.raycast import BACKGROUND_ID, MujocoRayCaster
-    from sim.world import build_world
+    from sim.scene.world import build_world
 
     scenario = load_scenario(args.scenario, [])
     world = build_world(scenario)

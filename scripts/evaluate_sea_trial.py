@@ -64,8 +64,8 @@ def run_seed(seed: int, scenario: str, overrides: tuple[str, ...]) -> dict:
     from sim.features import SeaTrialFeature
     from sim.mission import Mission
     from sim.outputs.trajectory_log import TrajectoryLog
-    from sim.perception import world_model_metrics
-    from sim.stage_timer import StageTimer
+    from sim.features.perception import world_model_metrics
+    from sim.events.stage_timer import StageTimer
 
     scn = load_scenario(scenario, [*overrides, f"seed={seed}"])
     timer = StageTimer()

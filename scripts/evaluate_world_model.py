@@ -29,7 +29,7 @@ CONFIGS = {
 
 def _run_one(job: tuple[str, int, str, str, tuple[str, ...]]) -> tuple[str, int, dict]:
     from scenarios import load_scenario
-    from sim.outputs.mission_outputs import run_mission
+    from sim.mission.run import run_mission
 
     name, seed, scenario_name, out, extra = job
     nav, overrides = CONFIGS[name]

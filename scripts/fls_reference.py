@@ -3,8 +3,8 @@
 The reference (``tests/data/fls_reference/``: ``labels.json`` and ``images.npz``, read by
 ``tests/sim/sensors/test_fls_frames_pinned.py`` and ``tests/sim/dataset/test_frames_pinned.py``)
 holds the labels, image summaries and exact digests of the renders of
-:data:`sim.sensors.fls_reference.CASES`; labels must match exactly, images within the tolerance
-of :mod:`sim.sensors.fls_reference`.
+:data:`sim.bench.fls_reference.CASES`; labels must match exactly, images within the tolerance
+of :mod:`sim.bench.fls_reference`.
 
     python scripts/fls_reference.py            # measure: per case the differences and the verdict
     python scripts/fls_reference.py --write    # regenerate after a deliberate change to the renderer
@@ -41,8 +41,7 @@ def main(argv: list[str] | None = None) -> int:
 def reference(args) -> int:
     """Measure or write the reference :func:`main` parsed ``args`` ask for."""
     from sim.cli.errors import CliError
-    from sim.sensors import fls_reference as fr
-
+    from sim.bench import fls_reference as fr
     if not args.write and not (args.dir / fr.LABELS_FILE).is_file():
         raise CliError(f"--dir {args.dir}: no {fr.LABELS_FILE} there (write one with --write)")
     got = {case: fr.render_case(case) for case in fr.CASES}

@@ -15,8 +15,8 @@ import numpy as np
 import trimesh
 
 from scenarios.config.vehicle import VehicleConfig
-from sim.hull import write_mjcf
-from sim.vehicle_params import load_vehicle_params
+from sim.dynamics.hull import write_mjcf
+from scenarios.vehicle_params import load_vehicle_params
 
 ASSET_DIR = Path(__file__).resolve().parents[1] / "sim" / "assets" / "feelhippo"
 

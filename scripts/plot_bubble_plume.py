@@ -20,8 +20,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from scenarios.config.movers import BubbleConfig, MoverConfig  # noqa: E402
-from sim.movers import DIVER_HALF_LENGTH_M, DIVER_RADIUS_M  # noqa: E402
-from sim.target_motion import BubblePlumes, ManoeuvreTrajectory, WaterDrift  # noqa: E402
+from sim.scene.movers import DIVER_HALF_LENGTH_M, DIVER_RADIUS_M  # noqa: E402
+from sim.scene.target_motion import BubblePlumes, ManoeuvreTrajectory, WaterDrift  # noqa: E402
 
 
 def main() -> int:

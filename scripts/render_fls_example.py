@@ -20,7 +20,7 @@ from sim.cli.app import run_script, script_parser
 from sim.rng import component_rng
 from sim.sensors.fls import FlsSensor
 from sim.sensors.raycast import MujocoRayCaster
-from sim.world import build_world
+from sim.scene.world import build_world
 
 
 def render(args) -> int:

@@ -20,7 +20,7 @@ from scenarios.schema import Scenario
 from sim.rng import component_rng
 from sim.sensors.fls import FlsSensor
 from sim.sensors.raycast import MujocoRayCaster
-from sim.world import build_world
+from sim.scene.world import build_world
 
 IDENTITY_FRAMES = 10  # frames rendered again, untimed, with and without the truth to compare
 

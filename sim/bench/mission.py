@@ -2,12 +2,12 @@
 
 Runs the scenario (sensors at their scenario rates, perception included unless ``sonar`` is
 off) for a fixed simulated time after a warm-up: once plain for the real-time factor, once with
-a :class:`sim.stage_timer.StageTimer` for the exclusive wall time of each loop stage. The loop is
+a :class:`sim.events.stage_timer.StageTimer` for the exclusive wall time of each loop stage. The loop is
 that of ``auvsim run --no-scoring --no-rerun``: its one observer is the trajectory log, so the
 sonar renders no ground truth of the objects (nothing reads it; :class:`sim.mission.Mission`).
 
 With ``workers`` > 1 a second mission of the same scenario and seed runs the pipelined loop
-(:mod:`sim.sonar_pipeline`); the serial and the pipelined loop are timed in alternating
+(:mod:`sim.process.sonar_pipeline`); the serial and the pipelined loop are timed in alternating
 segments of the same run, so a busy machine slows both alike, and the figure to read is their
 ratio (``workers_speedup``). CPU time is reported beside wall time (``cpu_real_time_factor``:
 simulated seconds per CPU second of this process, all its threads; for the pipelined loop, of
@@ -67,7 +67,7 @@ def run(scenario: Scenario, sim_time_s: float = 120.0, warmup_s: float = 30.0, *
     """
     from sim.mission import Mission
     from sim.outputs.trajectory_log import TrajectoryLog
-    from sim.stage_timer import NULL_TIMER, StageTimer
+    from sim.events.stage_timer import NULL_TIMER, StageTimer
 
     if workers < 1:
         raise ValueError(f"workers must be >= 1, got {workers}")

@@ -20,7 +20,7 @@ from scenarios.schema import Scenario
 from sim.rng import component_rng
 from sim.sensors.msis import MsisSensor
 from sim.sensors.raycast import MujocoRayCaster
-from sim.world import build_world
+from sim.scene.world import build_world
 
 
 def run(scenario: Scenario, n_turns: int = 3) -> dict:

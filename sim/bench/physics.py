@@ -1,6 +1,6 @@
 """Physics benchmark: hull + Fossen hydrodynamics + thrusters at the scenario's physics rate.
 
-Builds the scenario's world (:class:`sim.physics.Physics`: seabed, walls, targets, hull,
+Builds the scenario's world (:class:`sim.scene.physics.Physics`: seabed, walls, targets, hull,
 current), then runs ``sim_time_s`` of simulated time on one thread: every step the thrusters
 and the hydrodynamic wrench are updated, MuJoCo steps and the current evolves
 (:meth:`Physics.advance`).
@@ -19,7 +19,7 @@ import mujoco
 import numpy as np
 
 from scenarios.schema import Scenario
-from sim.physics import Physics
+from sim.scene.physics import Physics
 
 CONTROL_RATE_HZ = 10.0
 

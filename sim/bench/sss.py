@@ -18,7 +18,7 @@ from sim.bench.fls import _TimedCaster
 from sim.rng import component_rng
 from sim.sensors.raycast import MujocoRayCaster
 from sim.sensors.sss import SssSensor
-from sim.world import build_world
+from sim.scene.world import build_world
 
 
 def run(scenario: Scenario, n_pings: int = 400, n_bins: int = 1000, range_max_m: float = 30.0,

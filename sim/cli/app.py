@@ -25,7 +25,7 @@ from collections.abc import Callable, Sequence
 from sim.cli import bench_cmd, dataset_cmd, eval_atr_cmd, run_cmd, scenario_cmds, sweep_cmd, train_cmd
 from sim.cli.errors import (EXIT_INTERNAL_ERROR, EXIT_INTERRUPTED, EXIT_OK, EXIT_TERMINATED, EXIT_USAGE,
                             user_error_types)
-from sim.gc_policy import set_loop_thresholds
+from sim.process.gc_policy import set_loop_thresholds
 
 DEBUG_ENV = "AUVSIM_DEBUG"
 

@@ -27,7 +27,7 @@ def print_summary(metrics: dict, out: str) -> None:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from sim.outputs.mission_outputs import run_mission
+    from sim.mission.run import run_mission
 
     overrides = list(args.overrides)
     if args.seed is not None:

@@ -8,7 +8,7 @@ boxes (:meth:`autonomy.world_model.PMHA.cluster_scan`), are encoded as detection
 depth from the AUV's navigation, covariance summary, class and reliability) and queued at
 the AUV's modem; what arrives feeds the surface world model
 (:class:`autonomy.world_model.surface.SurfaceWorldModel`). Down: the surface vehicle's
-newest USBL fix of the AUV (:class:`sim.surface_runner.SurfaceVehicleRunner`) is encoded as
+newest USBL fix of the AUV (:class:`sim.features.surface_runner.SurfaceVehicleRunner`) is encoded as
 a USBL-fix report and sent in its slot; what arrives becomes a
 :class:`autonomy.messages.PositionFixMsg` stamped with the measurement time, for the AUV's
 navigation filter to fuse at that time (:class:`autonomy.navigation.delayed.DelayedFixFilter`).
@@ -23,7 +23,7 @@ guard covers the difference (0.05 s is 75 m).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -43,9 +43,11 @@ from autonomy.world_model import PMHA
 from autonomy.world_model.surface import FixTrack, SonarFootprint, SurfaceWorldModel
 from scenarios.schema import Scenario
 from sim.comms.acoustic_link import AcousticLink
-from sim.stage_timer import NULL_TIMER, StageTimer
-from sim.surface_runner import SurfaceVehicleRunner
-from sim.truth import VehicleTruth
+from sim.events.stage_timer import NULL_TIMER, StageTimer
+from sim.dynamics.truth import VehicleTruth
+
+if TYPE_CHECKING:  # the link reads the runner's fixes; the runner lives with the sea-trial feature
+    from sim.features.surface_runner import SurfaceVehicleRunner
 
 AUV_NODE = "auv"
 #: Link-level source name of the fixes handed to the navigation filter.

@@ -41,8 +41,8 @@ from sim.dataset.randomization import (HELDOUT_RANDOMIZATION, TRAIN_RANDOMIZATIO
                                       sample_scene, seabed_depth_fn)
 from sim.outputs.run_dir import check_output_dir, write_marker
 from sim.rng import component_rng
-from sim.spawn_guard import exit_if_spawn_reimport, main_guard_missing
-from sim.worker_signals import ignore_sigint, sigint_blocked
+from sim.process.spawn_guard import exit_if_spawn_reimport, main_guard_missing
+from sim.process.worker_signals import ignore_sigint, sigint_blocked
 
 GENERATOR_VERSION = "1.3.0"
 MANIFEST_FILE = "manifest.json"
@@ -196,7 +196,7 @@ def generate_dataset(out_dir: str | Path, n_frames: int, seed: int = 0, workers:
         DatasetError: ``n_frames`` < 1, side-scan settings out of range (a tile longer than
             the line), ``out_dir`` holds a dataset made with other parameters, or (where workers
             are spawned: macOS, Windows) ``workers`` > 1 from a main script without the
-            ``if __name__ == "__main__":`` guard (:mod:`sim.spawn_guard`).
+            ``if __name__ == "__main__":`` guard (:mod:`sim.process.spawn_guard`).
         OutputDirError: ``out_dir`` is protected, a file, not creatable, or holds files
             that are not an auvsim dataset.
         ImportError: ``use_ray`` without Ray installed (message :data:`RAY_HINT`), before
@@ -258,10 +258,10 @@ def generate_dataset(out_dir: str | Path, n_frames: int, seed: int = 0, workers:
 
 def worker_modules(settings: RenderSettings | SssSettings) -> tuple[str, ...]:
     """Modules a scene job imports beyond this one (lazily: a process that renders nothing skips them)."""
-    shared = ("cv2", "scenarios.schema", "sim.sensors.raycast", "sim.world", "sim.seabed",
-              "sim.target_meshes")
+    shared = ("cv2", "scenarios.schema", "sim.sensors.raycast", "sim.scene.world", "sim.scene.seabed",
+              "sim.scene.target_meshes")
     if isinstance(settings, SssSettings):
-        return shared + ("scenarios.config.sss", "sim.dataset.sss_generate", "sim.sensors.sss", "sim.sensors.sss_tiles")
+        return shared + ("scenarios.config.sss", "sim.dataset.sss_generate", "sim.sensors.sss", "sim.dataset.sss_tiles")
     return shared + ("sim.dataset.scene_render", "sim.sensors.fls")
 
 
@@ -271,7 +271,7 @@ def _worker_init() -> None:
     the terminal sends SIGINT to the whole process group, and the parent, which handles it,
     ends the pool (a worker raising ``KeyboardInterrupt`` would print a traceback). SIGINT
     stays blocked from before the fork (:func:`_worker_pool`) until it is ignored here
-    (:mod:`sim.worker_signals`), so no Ctrl-C lands in between."""
+    (:mod:`sim.process.worker_signals`), so no Ctrl-C lands in between."""
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     ignore_sigint()
 

@@ -1,5 +1,5 @@
 """Domain-randomisation ranges and the sampling of one dataset scene (numpy; object meshes
-from :mod:`sim.target_meshes` to rest each object on the seabed)."""
+from :mod:`sim.scene.target_meshes` to rest each object on the seabed)."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from autonomy.frames import rot_from_euler
 from scenarios.config.base import StrictModel
 from scenarios.config.world import BasinConfig, SeabedConfig, TargetConfig
 from sim.rng import component_rng
-from sim.seabed import make_seabed
+from sim.scene.seabed import make_seabed
 
 #: The labelled classes of the FLS datasets, in COCO category order (id = index + 1).
 CLASS_NAMES = ("opi", "rock", "debris")
@@ -227,7 +227,7 @@ def resting_depth(target: TargetConfig, seabed_depth) -> float:
         base at depth 0: a lying cylinder's axis ends up one radius above a flat bed, a tilted
         rock's lowest corner on it.
     """
-    from sim.target_meshes import target_mesh
+    from sim.scene.target_meshes import target_mesh
 
     R = rot_from_euler(*np.deg2rad(target.rpy_deg))
     v = target_mesh(target).vertices @ R.T

@@ -48,7 +48,7 @@ def render_frames(spec: SceneSpec, fls_cfg: FlsConfig, rng: np.random.Generator,
     from scenarios.schema import Scenario
     from sim.sensors.fls import FlsSensor
     from sim.sensors.raycast import MujocoRayCaster
-    from sim.world import build_world
+    from sim.scene.world import build_world
 
     scenario = Scenario(name=f"dataset_scene_{spec.index}", seed=spec.world_seed,
                         world=WorldConfig(seabed=spec.seabed, basin=spec.basin, targets=spec.targets))

@@ -242,8 +242,8 @@ def render_sss_scene(spec: SssSceneSpec, seed: int, settings: SssSettings, tile_
     from scenarios.schema import Scenario
     from sim.sensors.raycast import MujocoRayCaster
     from sim.sensors.sss import SssSensor, Waterfall
-    from sim.sensors.sss_tiles import cut_tiles
-    from sim.world import build_world
+    from sim.dataset.sss_tiles import cut_tiles
+    from sim.scene.world import build_world
 
     scenario = Scenario(name=f"dataset_sss_scene_{spec.index}", seed=spec.world_seed,
                         world=WorldConfig(seabed=spec.seabed, targets=spec.targets))

@@ -48,7 +48,7 @@ def survey_area(scenario: Scenario, margin_m: float) -> OperatingArea:
     survey = scenario.autonomy.guidance.survey
     swath = None
     if survey.leg_spacing_m == "from_swath":
-        from sim.sensors.fls_presets import resolve_geometry
+        from scenarios.fls_presets import resolve_geometry
 
         g = resolve_geometry(scenario.sensors.fls)
         swath = fls_swath_width_m(survey.altitude_m, np.deg2rad(scenario.sensors.fls.tilt_deg), g.fov_rad,

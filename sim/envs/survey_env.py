@@ -19,7 +19,7 @@ from scenarios.schema import Scenario
 from sim.envs.coverage import CoverageGrid
 from sim.envs.survey_task import NAV_FEATURES, SurveyEnvOptions, SurveyRewardWeights, SurveyTask
 from sim.mission import Mission
-from sim.seabed import Seabed
+from sim.scene.seabed import Seabed
 
 __all__ = ["NAV_FEATURES", "SurveyEnv", "SurveyEnvOptions", "SurveyRewardWeights", "SurveyTask"]
 

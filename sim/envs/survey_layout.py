@@ -20,8 +20,8 @@ from autonomy.guidance.lawnmower import fls_swath_width_m
 from scenarios.schema import Scenario
 from sim.envs.area import OperatingArea
 from sim.rng import component_rng
-from sim.seabed import Seabed, make_seabed
-from sim.sensors.fls_presets import resolve_geometry
+from sim.scene.seabed import Seabed, make_seabed
+from scenarios.fls_presets import resolve_geometry
 
 FloatArray = NDArray[np.float64]
 START_INSET_M = 1.0  # start this far inside the south-west corner

@@ -46,11 +46,11 @@ from sim.envs.scenario_arg import resolve_scenario
 from sim.envs.survey_layout import SurveyLayout, episode_scenario, episode_seabed, make_layout
 from sim.envs.world_model_obs import anchor_bounds, anchor_table, match_new_targets
 from sim.mission import Mission
-from sim.records import MissionInfo, MissionSummary, ObserverBase
-from sim.seabed import Seabed
+from sim.events.records import MissionInfo, MissionSummary, ObserverBase
+from sim.scene.seabed import Seabed
 from sim.sensors.base import Mount
 from sim.sensors.fls import FlsRender
-from sim.sensors.fls_presets import resolve_geometry
+from scenarios.fls_presets import resolve_geometry
 
 
 NAV_FEATURES = ("n_m", "e_m", "depth_m", "altitude_m", "altitude_valid", "roll_rad", "pitch_rad", "sin_yaw",

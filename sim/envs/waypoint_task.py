@@ -4,7 +4,7 @@ One implementation behind both interfaces: the gymnasium env ``auvsim/Waypoint-v
 (:mod:`sim.envs.waypoint_env`) and the dm_env one (:mod:`sim.envs.dm`).
 
 A light loop without sonar, sensors or navigation filter, for fast RL baselines: MuJoCo
-physics with the Fossen wrench (:class:`sim.vehicle.VehicleDynamics`) and thruster
+physics with the Fossen wrench (:class:`sim.dynamics.vehicle.VehicleDynamics`) and thruster
 dynamics, driven either by a body-wrench action through the thrust allocation or by
 speed/yaw-rate/depth setpoints through the autopilots. Observations come from the true
 vehicle state (no sensor noise).
@@ -32,7 +32,7 @@ from scenarios.config.world import CurrentConfig
 from scenarios.schema import Scenario
 from sim.envs.area import OperatingArea, survey_area
 from sim.envs.scenario_arg import resolve_scenario
-from sim.physics import Physics
+from sim.scene.physics import Physics
 
 ACTION_MODES = ("wrench", "setpoint")
 
@@ -139,7 +139,7 @@ class WaypointTask:
     Action (shape ``(n_act,)``, in [-1, 1]): see :class:`WaypointEnvOptions.action_mode`.
 
     No episode ends by leaving the water: the hull cannot. Near the surface its buoyancy is
-    scaled by its submerged fraction (:func:`sim.hydrodynamics.submerged_fraction`), so a
+    scaled by its submerged fraction (:func:`sim.dynamics.hydrodynamics.submerged_fraction`), so a
     positively buoyant hull floats with its origin below the surface; lifting the origin out
     needs an upward thrust above ``W - B f0`` (``f0`` the submerged fraction with the origin
     at the surface): about 170 N for FeelHippo, 65 N for the BlueROV2 Heavy. The heave, in

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from sim.evaluation.detection_matching import MISSION_DETECTION_MATCH_IOU, match_frame
-from sim.records import MissionInfo, ObserverBase, PerceptionResult
+from sim.events.records import MissionInfo, ObserverBase, PerceptionResult
 
 
 class DetectionScorer(ObserverBase):

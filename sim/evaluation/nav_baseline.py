@@ -16,7 +16,7 @@ import numpy as np
 
 from autonomy.messages import PositionFixMsg
 from sim.comms.vehicle_link import FIX_SOURCE
-from sim.records import MissionInfo, ObserverBase, StepRecord
+from sim.events.records import MissionInfo, ObserverBase, StepRecord
 
 
 class DvlOnlyBaseline(ObserverBase):

@@ -29,13 +29,13 @@ import math
 from pathlib import Path
 from typing import Any
 
-from sim.records import ObserverBase
+from sim.events.records import ObserverBase
 import numpy as np
 from numpy.typing import NDArray
 from scipy.stats import chi2
 
 from autonomy.tracking.onboard import MODES, TrackingStack
-from sim.movers import DIVER_HALF_LENGTH_M, DIVER_RADIUS_M, VEHICLE_HALF_SIZE_M
+from sim.scene.movers import DIVER_HALF_LENGTH_M, DIVER_RADIUS_M, VEHICLE_HALF_SIZE_M
 from sim.evaluation.nees import horizontal_nees  # noqa: F401 (also imported from here)
 
 FloatArray = NDArray[np.float64]
@@ -346,7 +346,7 @@ def evaluation_for(stack: TrackingStack | None, movers: Any, sonar: Any, warmup_
 
     Args:
         stack: the mission's tracking stack (:attr:`sim.features.tracking.TrackingFeature.stack`).
-        movers: the world's movers (:attr:`sim.physics.Physics.movers`).
+        movers: the world's movers (:attr:`sim.scene.physics.Physics.movers`).
         sonar: the sonar the tracker reads (its mount and geometry).
 
     Raises:

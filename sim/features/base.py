@@ -37,7 +37,7 @@ hook                        when
 ``close``                   the mission is closed (worker processes end)
 ==========================  ===================================================================
 
-For a run's outputs (:func:`sim.outputs.mission_outputs.run_mission`) a feature may add
+For a run's outputs (:func:`sim.mission.run.run_mission`) a feature may add
 observers (:meth:`MissionFeature.observers`), metrics (:meth:`MissionFeature.add_metrics`),
 map layers, files (:meth:`MissionFeature.write_outputs`) and lines of the console summary
 (:meth:`MissionFeature.summary_lines`, from ``metrics.json`` alone).
@@ -53,14 +53,14 @@ from typing import TYPE_CHECKING, Any, ClassVar
 from autonomy.control.setpoint import Setpoint
 from autonomy.messages import NavEstimate
 from scenarios.schema import Scenario
-from sim.records import MissionObserver
-from sim.truth import VehicleTruth
+from sim.events.records import MissionObserver
+from sim.dynamics.truth import VehicleTruth
 
 if TYPE_CHECKING:
     from sim.mission.parts import MissionParts
     from sim.outputs.trajectory_log import TrajectoryLog
-    from sim.physics import Physics
-    from sim.stage_timer import StageTimer
+    from sim.scene.physics import Physics
+    from sim.events.stage_timer import StageTimer
 
 
 @dataclass(frozen=True)

@@ -15,7 +15,7 @@ from typing import Any
 
 from sim.features.base import FeatureContext, LoopPorts, MissionFeature
 from sim.features.base import fmt_or_na as _fmt
-from sim.records import MissionObserver
+from sim.events.records import MissionObserver
 
 
 class McmFullFeature(MissionFeature):

@@ -3,7 +3,7 @@ localiser takes each ping (never its truth) and may return a position fix, which
 navigation filter fuses.
 
 Files: this module, :mod:`autonomy.msis.localization` (the onboard localiser),
-:mod:`sim.msis_evaluation` (errors against dead reckoning of the same run),
+:mod:`sim.evaluation.msis_localization` (errors against dead reckoning of the same run),
 :mod:`sim.outputs.msis_overlay` (the map). Config: ``autonomy.msis_localization``, the
 ``msis`` sensor, ``world.basin``.
 """
@@ -16,7 +16,7 @@ from typing import Any
 from autonomy.msis.localization import MsisLocalizer
 from sim.features.base import FeatureContext, LoopPorts, MissionFeature
 from sim.features.base import fmt_or_na as _fmt
-from sim.records import MissionObserver
+from sim.events.records import MissionObserver
 from sim.rng import component_rng
 
 
@@ -26,7 +26,7 @@ class MsisLocalizationFeature(MissionFeature):
     Attributes:
         sensor: the scanning sonar's entry name.
         localizer: the :class:`autonomy.msis.localization.MsisLocalizer`.
-        evaluation: the run's :class:`sim.msis_evaluation.LocalizationErrorObserver` (None
+        evaluation: the run's :class:`sim.evaluation.msis_localization.LocalizationErrorObserver` (None
             outside a run's outputs).
     """
 
@@ -54,8 +54,8 @@ class MsisLocalizationFeature(MissionFeature):
 
     # -- a run's outputs -------------------------------------------------------------------
     def error_observer(self) -> MissionObserver:
-        """A fresh :class:`sim.msis_evaluation.LocalizationErrorObserver` of this mission."""
-        from sim.msis_evaluation import LocalizationErrorObserver
+        """A fresh :class:`sim.evaluation.msis_localization.LocalizationErrorObserver` of this mission."""
+        from sim.evaluation.msis_localization import LocalizationErrorObserver
 
         return LocalizationErrorObserver(self.ctx.parts.make_nav_filter, self.localizer, self.ctx.scenario.world.basin)
 

@@ -2,7 +2,7 @@
 autonomy, and the acoustic link carrying detections up to the surface world model and the
 surface vehicle's USBL fixes down to the AUV's navigation filter ([P000] section VII).
 
-Files: this module, :mod:`sim.surface_runner` (an extra vehicle's sensors and autonomy),
+Files: this module, :mod:`sim.features.surface_runner` (an extra vehicle's sensors and autonomy),
 :mod:`sim.comms.vehicle_link` (the link and the surface world model),
 :mod:`autonomy.navigation.delayed` (late fixes). Config: ``vehicles``, ``comms``.
 """
@@ -20,9 +20,9 @@ from autonomy.navigation.delayed import DelayedFixFilter
 from sim.comms.vehicle_link import VehicleLink
 from sim.features.base import FeatureContext, LoopPorts, MissionFeature
 from sim.features.base import fmt_or_na as _fmt
-from sim.records import PerceptionResult
-from sim.surface_runner import SurfaceVehicleRunner
-from sim.truth import VehicleTruth
+from sim.events.records import PerceptionResult
+from sim.features.surface_runner import SurfaceVehicleRunner
+from sim.dynamics.truth import VehicleTruth
 
 
 class SeaTrialFeature(MissionFeature):
@@ -31,7 +31,7 @@ class SeaTrialFeature(MissionFeature):
     messages of the period are delivered).
 
     Attributes:
-        surface_vehicles: name -> :class:`sim.surface_runner.SurfaceVehicleRunner`.
+        surface_vehicles: name -> :class:`sim.features.surface_runner.SurfaceVehicleRunner`.
         link: the acoustic link (None: ``comms.acoustic`` off), made at each reset.
         vehicle_contacts: (vehicle, vehicle) -> autonomy periods that ended with their hulls touching.
         nav_filter: the AUV's filter wrapped to fuse late USBL fixes (None: not wrapped).
@@ -138,7 +138,7 @@ class SeaTrialFeature(MissionFeature):
         surface = self.link.surface_world_model
         perception = self._perception_feature.results() if self._perception_feature is not None else None
         if surface is not None and perception is not None:
-            from sim.perception import world_model_metrics
+            from sim.features.perception import world_model_metrics
 
             sw = world_model_metrics(surface.world_model(), perception.truth_targets)
             sw["world_model_json_objects"] = len(surface.world_model())
@@ -148,7 +148,7 @@ class SeaTrialFeature(MissionFeature):
 
     def map_layers(self, layers: dict[str, Any]) -> None:
         if self.link is not None and self.link.surface_world_model is not None:
-            from sim.perception import target_objects
+            from sim.features.perception import target_objects
 
             layers["surface_estimates_ned"] = [o.pos_ned for o in
                                                target_objects(self.link.surface_world_model.world_model())]

@@ -1,8 +1,8 @@
 """Survey perception as a mission feature: ATR -> geolocalisation -> world model on the frames
 of the processed forward-looking sonar, pipelined in worker processes when the loop may use them.
 
-Files: this module (the loop's side and a run's outputs), :mod:`sim.perception` (the onboard
-chain), :mod:`sim.sonar_pipeline` (the workers), :mod:`sim.evaluation.detection_scoring`
+Files: this module (the loop's side and a run's outputs), :mod:`sim.features.perception` (the onboard
+chain), :mod:`sim.process.sonar_pipeline` (the workers), :mod:`sim.evaluation.detection_scoring`
 (the scoring observer). Config: ``autonomy.atr``, ``autonomy.localization``,
 ``autonomy.world_model``.
 """
@@ -15,10 +15,10 @@ from typing import Any
 
 from sim.features.base import FeatureContext, LoopPorts, MissionFeature
 from sim.features.base import fmt_or_na as _fmt
-from sim.perception import Perception
-from sim.records import MissionObserver, PerceptionResult
-from sim.sonar_pipeline import FrameTicket, SonarPipeline
-from sim.truth import VehicleTruth
+from sim.features.perception import Perception
+from sim.events.records import MissionObserver, PerceptionResult
+from sim.process.sonar_pipeline import FrameTicket, SonarPipeline
+from sim.dynamics.truth import VehicleTruth
 
 
 class SurveyPerceptionFeature(MissionFeature):
@@ -26,11 +26,11 @@ class SurveyPerceptionFeature(MissionFeature):
 
     Built when the mission has a processed forward-looking sonar, perception is asked for
     and no tracker reads that sonar. With ``workers`` > 1 and a sonar of fixed latency the
-    frames and their detection run in worker processes (:class:`sim.sonar_pipeline.SonarPipeline`),
+    frames and their detection run in worker processes (:class:`sim.process.sonar_pipeline.SonarPipeline`),
     with the serial loop's results bit for bit.
 
     Attributes:
-        perception: the :class:`sim.perception.Perception` chain.
+        perception: the :class:`sim.features.perception.Perception` chain.
         sonar: the sensor whose frames it reads.
         scorer: the detection scorer of a run (None: not scored, or no run outputs).
     """

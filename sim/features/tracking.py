@@ -21,8 +21,8 @@ from autonomy.guidance.buddy import BuddyObserver
 from autonomy.messages import NavEstimate, UsblMsg
 from sim.features.base import FeatureContext, LoopPorts, MissionFeature
 from sim.features.base import fmt_or_na as _fmt
-from sim.records import MissionObserver
-from sim.truth import VehicleTruth
+from sim.events.records import MissionObserver
+from sim.dynamics.truth import VehicleTruth
 
 
 class TrackingFeature(MissionFeature):

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from sim.records import ObserverBase
+from sim.events.records import ObserverBase
 import numpy as np
 from numpy.typing import NDArray
 

@@ -4,6 +4,6 @@ it is built from (:mod:`sim.mission.parts`) and the protocol studies plug in wit
 
 from sim.mission.loop import Mission
 from sim.mission.parts import NAV_SOURCES
-from sim.records import MissionSummary
+from sim.events.records import MissionSummary
 
 __all__ = ["NAV_SOURCES", "Mission", "MissionSummary"]

@@ -1,6 +1,6 @@
 """The closed-loop mission: physics, sensors and autonomy at their own rates, in one fixed loop.
 
-:class:`Mission` runs the loop; :class:`sim.physics.Physics` owns the world,
+:class:`Mission` runs the loop; :class:`sim.scene.physics.Physics` owns the world,
 :func:`sim.mission.parts.build_mission_parts` builds the sensors and the core onboard stack,
 and each study is a feature (:mod:`sim.features`, protocol :mod:`sim.features.base`) the
 loop calls at fixed points. :meth:`Mission.step` advances one autonomy period and never grows
@@ -41,11 +41,11 @@ from sim.features import build_features
 from sim.features.survey_perception import SurveyPerceptionFeature
 from sim.features.base import LoopPorts, MissionFeature
 from sim.mission.parts import NAV_SOURCES, MissionParts, build_mission_parts
-from sim.physics import Physics
-from sim.records import MissionInfo, MissionObserver, MissionSummary, StepRecord
+from sim.scene.physics import Physics
+from sim.events.records import MissionInfo, MissionObserver, MissionSummary, StepRecord
 from sim.sensors.base import SceneView
-from sim.stage_timer import NULL_TIMER, StageTimer
-from sim.truth import VehicleTruth, interpolate_truth
+from sim.events.stage_timer import NULL_TIMER, StageTimer
+from sim.dynamics.truth import VehicleTruth, interpolate_truth
 
 __all__ = ["NAV_SOURCES", "Mission", "MissionSummary"]
 
@@ -60,14 +60,14 @@ class Mission:
         observers: readers of the mission's outputs (logs, plots, recordings). The forward-looking
             sonars compute their objects' ground truth and instance masks only when one of the
             observers present at :meth:`reset` reads them (one without ``sonar_truth = False``;
-            see :class:`sim.records.MissionObserver`); otherwise the frames' truth holds the
+            see :class:`sim.events.records.MissionObserver`); otherwise the frames' truth holds the
             sonar pose only (the images are the same bytes).
         perception: run ATR/localisation/world model on the sonar's frames (False: frames
             are still rendered at their rate when the sonar is enabled, but not processed).
-        timer: a :class:`sim.stage_timer.StageTimer` to time the loop's stages (benchmarks);
+        timer: a :class:`sim.events.stage_timer.StageTimer` to time the loop's stages (benchmarks);
             default: none.
         workers: processes the loop may use. 1: the serial loop. 2 or more: the sonar's frames
-            and their ATR detection run in two worker processes (:mod:`sim.sonar_pipeline`) when
+            and their ATR detection run in two worker processes (:mod:`sim.process.sonar_pipeline`) when
             nothing in the loop reads perception back (survey perception; not target tracking),
             with the serial loop's results bit for bit; observers get frames and perception
             results once ready, in order (frames only if an observer takes them: one with
@@ -84,7 +84,7 @@ class Mission:
     Raises:
         ValueError: unknown ``nav_source``; ``workers`` < 1; a sensor mount site missing on the hull;
             more than one feature drives the guidance.
-        sim.sonar_pipeline.PipelineError: (from :meth:`reset`, :meth:`step`, :meth:`run`) a
+        sim.process.sonar_pipeline.PipelineError: (from :meth:`reset`, :meth:`step`, :meth:`run`) a
             pipeline worker failed or ended, or the main script lacks the ``__main__`` guard.
     """
 
@@ -164,7 +164,7 @@ class Mission:
 
     @property
     def perception(self):
-        """The survey perception chain (:class:`sim.perception.Perception`; None without one);
+        """The survey perception chain (:class:`sim.features.perception.Perception`; None without one);
         pipelined frames delivered so far are finished first."""
         feature = self.feature(SurveyPerceptionFeature)
         if feature is None:
@@ -384,7 +384,7 @@ class Mission:
         """Fire the sensors of ``due`` (``(firing time, name)`` in time order, all within the
         step just taken, from ``before.t_s`` to now), each with the true state and the scene
         at its own time: the state now for a firing now, else the state interpolated between
-        ``before`` and now (:func:`sim.truth.interpolate_truth`). Returns the state now."""
+        ``before`` and now (:func:`sim.dynamics.truth.interpolate_truth`). Returns the state now."""
         physics, timer, eps = self.physics, self.timer, self.parts.scheduler.eps_s
         with timer.stage("truth"):
             now = physics.truth()

@@ -24,8 +24,8 @@ from autonomy.guidance.survey import SurveyGuidance
 from autonomy.navigation import NavigationFilter, NavNoiseModel
 from scenarios.schema import Scenario
 from scenarios.sensor_links import atr_sonar_name
-from sim.physics import Physics
-from sim.scheduler import SensorScheduler
+from sim.scene.physics import Physics
+from sim.events.scheduler import SensorScheduler
 from sim.sensors.base import Sensor
 from sim.sensors.nav_noise import nav_noise_model
 from sim.sensors.registry import build_sensors

@@ -4,9 +4,12 @@ the dead-reckoned path of the same run and the sonar position fixes."""
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
-from sim.msis_evaluation import LocalizationErrorObserver
+if TYPE_CHECKING:  # drawn from its recorded path and fixes
+    from sim.evaluation.msis_localization import LocalizationErrorObserver
 
 
 def basin_outline_ne(basin) -> np.ndarray | None:

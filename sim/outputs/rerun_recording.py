@@ -50,11 +50,11 @@ from autonomy.sonar_geometry import FanGeometry
 from autonomy.tracking.onboard import TrackingFrameResult
 from autonomy.tracking.roi import PolarRoi
 from sim.outputs.rerun_columns import PoseColumn, ScalarColumn
-from sim.records import MissionInfo, MissionSummary, ObserverBase, PerceptionResult, StepRecord
+from sim.events.records import MissionInfo, MissionSummary, ObserverBase, PerceptionResult, StepRecord
 from sim.sensors.fls import FlsRender
 from sim.sensors.msis import MsisRender
 from sim.sensors.msis_scan import ScanImage
-from sim.target_meshes import target_mesh
+from sim.scene.target_meshes import target_mesh
 
 
 # The stream's batcher holds every logged row until it cuts a chunk per entity at a flush

@@ -15,7 +15,7 @@ def mover_paths_ned(movers, duration_s: float, step_s: float = PATH_STEP_S) -> d
     """name -> (n, 3) true NED path of each mover over ``[0, duration_s]``, m.
 
     Args:
-        movers: :class:`sim.movers.MovingBodies` (its ``trajectories``).
+        movers: :class:`sim.scene.movers.MovingBodies` (its ``trajectories``).
         duration_s: how long the run lasted, s.
         step_s: sample spacing, s.
     """

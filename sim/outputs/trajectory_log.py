@@ -13,7 +13,7 @@ from numpy.typing import NDArray
 from autonomy.frames import wrap_angle
 from typing import Any
 
-from sim.records import MissionInfo, MissionSummary, ObserverBase, StepRecord
+from sim.events.records import MissionInfo, MissionSummary, ObserverBase, StepRecord
 
 COLUMNS = (
     ["t_s", "mode"]

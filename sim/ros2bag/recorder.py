@@ -35,7 +35,7 @@ import numpy as np
 
 from autonomy.frames import R_FLU_FRD, enu_from_ned, flu_from_frd, rot_enu_flu, rot_from_euler
 from autonomy.navigation.dvl_geometry import janus_beam_dirs_body
-from sim.records import MissionInfo, MissionSummary, ObserverBase, PerceptionResult, StepRecord
+from sim.events.records import MissionInfo, MissionSummary, ObserverBase, PerceptionResult, StepRecord
 from sim.ros2bag.ros_messages import RosConverter, altimeter_frame_in_flu, sonar_msg_frame_in_flu, stamp_ns
 from sim.ros2bag.typestore import make_typestore
 
@@ -84,7 +84,7 @@ class RosbagRecorder(ObserverBase):
 
     # -- observer protocol -------------------------------------------------------------
     def on_start(self, info: MissionInfo) -> None:
-        from sim.vehicle_params import load_vehicle_params
+        from scenarios.vehicle_params import load_vehicle_params
 
         self._writer.open()
         scn, c = info.scenario, self.conv
@@ -119,7 +119,7 @@ class RosbagRecorder(ObserverBase):
                 self._handlers[name] = lambda m, t=topic, d=dirs, f=frame: self._write(
                     t, "marine_acoustic_msgs/msg/Dvl", m.t_s, c.dvl(m, f, d))
             elif kind == "fls":
-                from sim.sensors.fls_presets import resolve_geometry
+                from scenarios.fls_presets import resolve_geometry
 
                 geo = resolve_geometry(cfg)
                 self._handlers[name] = self._sonar_handler(name, geo)
@@ -127,7 +127,7 @@ class RosbagRecorder(ObserverBase):
 
     def _sonar_handler(self, name: str, geo: Any):
         """Writer of one FLS's images (ping info from its resolved preset ``geo``:
-        :class:`sim.sensors.fls_presets.FlsGeometry`) and perception results."""
+        :class:`scenarios.fls_presets.FlsGeometry`) and perception results."""
         c, frame = self.conv, f"{name}_link"
         azimuths_rad, bins_m = geo.beam_azimuths_rad(), geo.bin_centres_m()
         ping = dict(frequency_hz=geo.frequency_hz, sound_speed_mps=geo.sound_speed_mps,

@@ -10,7 +10,7 @@ from scenarios.config.nav_sensors import AltimeterConfig
 from sim.sensors.base import Mount, SceneView, Sensor
 from sim.sensors.noise import dropped
 from sim.sensors.registry import register_sensor
-from sim.truth import VehicleTruth
+from sim.dynamics.truth import VehicleTruth
 
 
 @register_sensor(AltimeterConfig)

@@ -35,14 +35,14 @@ from numpy.typing import ArrayLike, NDArray
 from autonomy.frames import rot_from_euler
 from scenarios.config.sensor import SensorConfig
 from sim.sensors.raycast import RayCaster
-from sim.truth import VehicleTruth
+from sim.dynamics.truth import VehicleTruth
 
 FloatArray = NDArray[np.float64]
 MsgT = TypeVar("MsgT")
 
 
 class SceneObjectLike(Protocol):
-    """A labelled scene object as sensors see it (``sim.world.SceneObject`` fits)."""
+    """A labelled scene object as sensors see it (``sim.scene.world.SceneObject`` fits)."""
 
     id: int
     name: str
@@ -158,7 +158,7 @@ class Sensor(ABC, Generic[MsgT]):
             :attr:`render_truth` has no effect.
         fixed_latency: class attribute, True (the default) when :meth:`latency_s` is the
             fixed ``cfg.latency_s`` whatever the message, so the delivery time is known at
-            capture, before the message is formed (what :class:`sim.sonar_pipeline.SonarPipeline`
+            capture, before the message is formed (what :class:`sim.process.sonar_pipeline.SonarPipeline`
             needs to pipeline a sonar); False on a sensor whose :meth:`latency_s` depends on
             the message (the USBL's two-way travel time).
         render_truth: whether :meth:`measure` computes the optional ground truth (default

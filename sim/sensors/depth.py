@@ -6,7 +6,7 @@ from autonomy.messages import DepthMsg
 from scenarios.config.nav_sensors import DepthConfig
 from sim.sensors.base import SceneView, Sensor
 from sim.sensors.registry import register_sensor
-from sim.truth import VehicleTruth
+from sim.dynamics.truth import VehicleTruth
 
 
 @register_sensor(DepthConfig)

@@ -14,7 +14,7 @@ from scenarios.config.nav_sensors import DvlConfig
 from sim.sensors.base import Mount, SceneView, Sensor
 from sim.sensors.noise import dropped, white_noise
 from sim.sensors.registry import register_sensor
-from sim.truth import VehicleTruth
+from sim.dynamics.truth import VehicleTruth
 
 FloatArray = NDArray[np.float64]
 

@@ -30,7 +30,7 @@ from autonomy.messages import FlsFrame
 from autonomy.sonar_geometry import FanGeometry
 from scenarios.config.fls import FlsConfig
 from sim.sensors.base import Mount, SceneView, Sensor, as_mount
-from sim.sensors.fls_presets import FlsGeometry, resolve_geometry
+from scenarios.fls_presets import FlsGeometry, resolve_geometry
 from sim.sensors.raycast import RayCaster
 from sim.sensors.sonar.beam_pattern import azimuth_kernel
 from sim.sensors.sonar.display import FanRemap
@@ -47,7 +47,7 @@ from sim.sensors.sonar.ground_truth import (
 from sim.sensors.registry import register_sensor
 from sim.sensors.sonar.object_rays import add_object_rays
 from sim.sensors.sonar.ray_fan import RayFan, RayTable
-from sim.truth import VehicleTruth
+from sim.dynamics.truth import VehicleTruth
 
 FloatArray = NDArray[np.float64]
 OBJECT_RAYS_ACROSS = 8  # rays across an object (each way) where the base rays are sparser

@@ -5,7 +5,7 @@ and polar images, the polar and fan label masks, the mean and realised intensiti
 each object's truth record (floats by ``repr``, arrays by their bytes) and the state of the
 noise generator after the frame (so the next frame's noise is covered too). Used by
 ``scripts/fls_frame_digest.py`` (A/B between two versions of the code on one machine) and
-:mod:`sim.sensors.fls_reference` (the digests of the pinned reference). The bytes of the
+:mod:`sim.bench.fls_reference` (the digests of the pinned reference). The bytes of the
 floating-point parts depend on the machine's numerics (CPU kernels, library versions), so a
 digest compares renders of one machine and one set of versions only.
 """

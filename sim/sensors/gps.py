@@ -9,7 +9,7 @@ from scenarios.config.nav_sensors import GpsConfig
 from sim.sensors.base import SceneView, Sensor
 from sim.sensors.noise import dropped, white_noise
 from sim.sensors.registry import register_sensor
-from sim.truth import VehicleTruth
+from sim.dynamics.truth import VehicleTruth
 
 
 @register_sensor(GpsConfig)

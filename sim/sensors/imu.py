@@ -13,7 +13,7 @@ from scenarios.config.nav_sensors import ImuConfig
 from sim.sensors.base import Mount, SceneView, Sensor
 from sim.sensors.noise import RandomWalkBias, white_noise
 from sim.sensors.registry import register_sensor
-from sim.truth import VehicleTruth
+from sim.dynamics.truth import VehicleTruth
 
 GRAVITY_MPS2 = 9.81
 GRAVITY_NED_MPS2 = np.array([0.0, 0.0, GRAVITY_MPS2])  # NED z is down

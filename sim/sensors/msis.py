@@ -37,7 +37,7 @@ from sim.sensors.sonar.beam_pattern import SINC_3DB, two_way_beam_power
 from sim.sensors.sonar.echo_chain import EchoChain
 from sim.sensors.sonar.echo_lines import echo_segments, ray_strength, spread_segments
 from sim.sensors.sonar.ray_fan import RayFan
-from sim.truth import VehicleTruth
+from sim.dynamics.truth import VehicleTruth
 
 FloatArray = NDArray[np.float64]
 SEABED_ID = BACKGROUND_ID  #: -1: seabed (background surface facing up)

@@ -58,7 +58,7 @@ def benchmark_nav_suite(duration_s: float = 120.0, seed: int = 0) -> dict[str, f
     from sim.sensors.analytic_caster import AnalyticCaster
     from sim.sensors.base import SceneView
     from sim.sensors.nav_noise import nav_noise_model
-    from sim.truth import VehicleTruth
+    from sim.dynamics.truth import VehicleTruth
 
     cfg = SensorsConfig()
     mounts = {k: np.zeros(3) for k in NAV_SENSOR_NAMES}

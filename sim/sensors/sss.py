@@ -36,7 +36,7 @@ from sim.sensors.sonar.echo_lines import EchoSegments, echo_segments, ray_streng
 from sim.sensors.sonar.ground_truth import SceneObjectLike, label_bins
 from sim.sensors.sonar.object_rays import add_object_rays, sphere_in_window
 from sim.sensors.sonar.ray_fan import RayFan, RayTable
-from sim.truth import VehicleTruth
+from sim.dynamics.truth import VehicleTruth
 
 FloatArray = NDArray[np.float64]
 OBJECT_RAYS_ACROSS = 8

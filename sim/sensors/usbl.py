@@ -21,7 +21,7 @@ from scenarios.config.usbl import UsblConfig
 from sim.sensors.base import SceneView, Sensor
 from sim.sensors.noise import dropped
 from sim.sensors.registry import register_sensor
-from sim.truth import VehicleTruth
+from sim.dynamics.truth import VehicleTruth
 
 FloatArray = NDArray[np.float64]
 

@@ -21,11 +21,14 @@ import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import yaml
 
 from sim.outputs.run_dir import OutputDirError, check_output_dir, is_output_of, write_marker
+
+if TYPE_CHECKING:
+    from scenarios.schema import Scenario
 
 RAY_HINT = "--ray needs Ray: pip install 'auvsim[scale]' (or pip install ray)"
 SWEEP_KIND = "sweep"

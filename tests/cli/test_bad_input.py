@@ -99,7 +99,7 @@ def test_overwrite_replaces_only_an_earlier_run_and_only_when_complete(sandbox, 
 def test_a_failed_run_keeps_the_earlier_one(sandbox, capsys, monkeypatch):
     assert main(["run", "--out", "runs/a", *SHORT_RUN]) == 0
     before = _snapshot(sandbox)
-    import sim.outputs.mission_outputs as mo
+    import sim.mission.run as mo
 
     def broken(*a, **k):
         raise RuntimeError("plot failed")
@@ -362,7 +362,7 @@ def test_contradictions_and_limits(sandbox, capsys, argv, named):
 def test_a_full_disk_is_reported_as_such_not_as_a_bug(sandbox, capsys, monkeypatch):
     import errno
 
-    import sim.outputs.mission_outputs as mo
+    import sim.mission.run as mo
 
     def full(*a, **k):
         raise OSError(errno.ENOSPC, "No space left on device", "runs/f/.partial/trajectory.csv")

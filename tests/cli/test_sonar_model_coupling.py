@@ -86,7 +86,7 @@ def test_the_detector_resizes_another_fan_like_the_trained_one_when_told():
 
 
 def test_a_preset_brings_its_own_defaults_and_an_explicit_key_still_wins():
-    from sim.sensors.fls_presets import resolve_geometry
+    from scenarios.fls_presets import resolve_geometry
 
     notes: list[str] = []
     scn = load_scenario("cssn_lawnmower", ["sensors.fls.preset=aris3000_lf", "autonomy.atr.detector=classical"],

@@ -17,7 +17,7 @@ from scenarios import load_scenario  # noqa: E402
 from scenarios.bathymetry import BathymetryError, read_depth_grid  # noqa: E402
 from scenarios.config.world import BathymetryFileConfig, SeabedConfig  # noqa: E402
 from scenarios.load import ScenarioError, scenarios_dir  # noqa: E402
-from sim.seabed import make_seabed  # noqa: E402
+from sim.scene.seabed import make_seabed  # noqa: E402
 
 E0, N0 = 600000.0, 5100000.0  # projected coordinates of the south-west node
 SPACING = 2.0

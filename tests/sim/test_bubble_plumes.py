@@ -13,9 +13,9 @@ import pytest
 from scenarios.config.movers import BubbleConfig, MoverConfig
 from scenarios.config.world import CurrentConfig
 from scenarios.schema import Scenario
-from sim.current import OceanCurrent
-from sim.physics import Physics
-from sim.target_motion import BubblePlumes, ManoeuvreTrajectory, WaterDrift
+from sim.dynamics.current import OceanCurrent
+from sim.scene.physics import Physics
+from sim.scene.target_motion import BubblePlumes, ManoeuvreTrajectory, WaterDrift
 
 U_MPS, START = 0.3, np.array([0.0, 0.0, 8.0])
 HOVERING_DIVER = dict(name="diver", kind="diver", initial_pos_ned=(6.0, 0.0, 5.0), surge_mps=0.0, surge_sigma_mps=0.0,

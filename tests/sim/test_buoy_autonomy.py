@@ -12,9 +12,9 @@ import pytest
 from scenarios.load import load_scenario
 from sim.features import SeaTrialFeature
 from sim.mission import Mission
-from sim.physics import Physics
-from sim.scheduler import SensorScheduler
-from sim.surface_runner import SurfaceVehicleRunner
+from sim.scene.physics import Physics
+from sim.events.scheduler import SensorScheduler
+from sim.features.surface_runner import SurfaceVehicleRunner
 
 STATION = np.array([3.0, 8.0])
 

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from sim.frame_transport import OUT_OF_BAND_MIN_BYTES, FrameRing, shared_objects
+from sim.process.frame_transport import OUT_OF_BAND_MIN_BYTES, FrameRing, shared_objects
 
 
 @dataclass

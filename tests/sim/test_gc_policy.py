@@ -1,11 +1,11 @@
-"""The garbage-collector thresholds the simulator runs with (sim.gc_policy)."""
+"""The garbage-collector thresholds the simulator runs with (sim.process.gc_policy)."""
 
 import gc
 import subprocess
 import sys
 
 import sim.cli.app as app
-from sim.gc_policy import LOOP_GC_THRESHOLDS
+from sim.process.gc_policy import LOOP_GC_THRESHOLDS
 
 
 def test_cli_runs_commands_with_loop_thresholds_and_restores_the_callers(monkeypatch):
@@ -19,7 +19,7 @@ def test_cli_runs_commands_with_loop_thresholds_and_restores_the_callers(monkeyp
 
 
 def test_pipeline_worker_processes_start_with_loop_thresholds():
-    code = ("import gc; from sim.sonar_workers import _worker_start; _worker_start(); "
+    code = ("import gc; from sim.process.sonar_workers import _worker_start; _worker_start(); "
             "print(tuple(gc.get_threshold()))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120)
     assert out.stdout.strip() == repr(tuple(LOOP_GC_THRESHOLDS))

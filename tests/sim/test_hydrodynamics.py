@@ -9,8 +9,8 @@ import pytest
 
 from autonomy.frames import quat_from_euler, rot_from_euler, rot_from_quat
 from scenarios.config.vehicle import VehicleConfig
-from sim import hydrodynamics as hd
-from sim.vehicle_params import load_vehicle_params
+from sim.dynamics import hydrodynamics as hd
+from scenarios.vehicle_params import load_vehicle_params
 
 
 def _full_matrix_params(munk_moments: bool = True):

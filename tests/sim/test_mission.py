@@ -11,7 +11,7 @@ import pytest
 from scenarios import load_scenario
 from sim.cli import main
 from sim.mission import Mission
-from sim.records import MissionInfo, MissionSummary, ObserverBase, PerceptionResult, StepRecord
+from sim.events.records import MissionInfo, MissionSummary, ObserverBase, PerceptionResult, StepRecord
 from sim.sensors.fls import FlsRender
 
 FAST = ["autonomy.atr.detector=classical"]

@@ -10,7 +10,7 @@ from scenarios import load_scenario
 from sim.evaluation.detection_scoring import DetectionScorer
 from sim.mission import Mission
 from sim.outputs.trajectory_log import TrajectoryLog
-from sim.records import ObserverBase, PerceptionResult
+from sim.events.records import ObserverBase, PerceptionResult
 from sim.sensors.fls import FlsRender
 
 # Dived 10 m short of OPI1 heading for it, survey started at once: frames with targets from t = 0.

@@ -10,10 +10,10 @@ import pytest
 
 from scenarios.config.movers import BubbleConfig, MoverConfig
 from scenarios.schema import Scenario
-from sim.physics import Physics
+from sim.scene.physics import Physics
 from sim.sensors.fls import FlsSensor
 from sim.sensors.registry import build_sensors
-from sim.target_motion import BubblePlumes, ManoeuvreTrajectory
+from sim.scene.target_motion import BubblePlumes, ManoeuvreTrajectory
 
 
 def test_trajectory_integrates_its_own_kinematics():

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from sim.records import ObserverBase
+from sim.events.records import ObserverBase
 import numpy as np
 import pytest
 

@@ -9,7 +9,7 @@ from autonomy.frames import rot_from_euler
 from autonomy.messages import NavEstimate
 from scenarios import load_scenario
 from sim.mission import Mission
-from sim.perception import Perception
+from sim.features.perception import Perception
 
 # dived 10 m short of OPI1 heading for it (east): targets in view from the first frames
 OVER = ["autonomy.guidance.mission.start_delay_s=0", "vehicle.initial_pos_ned=[0.0,0.0,2.0]", "duration_s=3.0",

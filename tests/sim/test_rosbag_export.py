@@ -18,12 +18,12 @@ from rosbags.rosbag2 import Reader  # noqa: E402
 from autonomy.messages import Detection, DvlMsg, ImuMsg  # noqa: E402
 from scenarios import load_scenario  # noqa: E402
 from sim.mission import Mission  # noqa: E402
-from sim.records import ObserverBase, PerceptionResult  # noqa: E402
+from sim.events.records import ObserverBase, PerceptionResult  # noqa: E402
 from sim.ros2bag.recorder import RosbagRecorder  # noqa: E402
 from sim.ros2bag.ros_messages import RosConverter  # noqa: E402
 from sim.ros2bag.typestore import make_typestore  # noqa: E402
 from sim.sensors.fls import FlsRender  # noqa: E402
-from sim.sensors.fls_presets import resolve_geometry  # noqa: E402
+from scenarios.fls_presets import resolve_geometry  # noqa: E402
 from sim.outputs.trajectory_log import TrajectoryLog  # noqa: E402
 
 DURATION_S = 8.0
@@ -256,7 +256,7 @@ def test_cli_rosbag_flag(tmp_path, capsys):
 
 
 def test_scenario_outputs_key_writes_a_thinned_bag(tmp_path):
-    from sim.outputs.mission_outputs import run_mission
+    from sim.mission.run import run_mission
 
     scn = load_scenario("cssn_lawnmower", ["duration_s=3", "autonomy.atr.detector=none", "outputs.rosbag=true",
                                            "outputs.rosbag_fls_every=2"])

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from scenarios import list_scenarios, load_scenario
-from sim.physics import Physics
-from sim.vehicle_params import load_params_file
+from sim.scene.physics import Physics
+from scenarios.vehicle_params import load_params_file
 
 PRESETS = sorted(p.parent.name for p in (Path(__file__).parents[2] / "sim" / "assets").glob("*/params.yaml")
                  if load_params_file(p).motion == "free_6dof")

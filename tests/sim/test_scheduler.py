@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sim.scheduler import SensorScheduler
+from sim.events.scheduler import SensorScheduler
 
 
 def test_rates_and_latency_on_physics_clock():

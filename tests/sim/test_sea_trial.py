@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from scenarios.load import ScenarioError, load_scenario
-from sim.outputs.mission_outputs import run_mission
+from sim.mission.run import run_mission
 
 
 @pytest.fixture(scope="module")

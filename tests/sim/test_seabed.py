@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from scenarios import load_scenario
-from sim.seabed import make_seabed
-from sim.world import build_world
+from sim.scene.seabed import make_seabed
+from sim.scene.world import build_world
 
 
 @pytest.mark.parametrize("az_deg", [0.0, 60.0, 200.0])

@@ -9,7 +9,7 @@ import trimesh
 
 from sim.dataset.generate import TRAIN_RANDOMIZATION, WIDE_RANDOMIZATION, scene_spec
 from sim.rng import component_rng
-from sim.seabed import make_seabed
+from sim.scene.seabed import make_seabed
 
 
 def _mesh_beds():
@@ -40,7 +40,7 @@ def test_seabed_asset_compiles_to_the_mesh_of_its_arrays(bed):
     """The ``.msh`` asset path gives MuJoCo the same mesh as ``uservert`` / ``userface``."""
     import mujoco
 
-    from sim.world import _add_msh_asset
+    from sim.scene.world import _add_msh_asset
 
     mesh = bed.terrain_mesh()
     models = []
@@ -64,7 +64,7 @@ def test_build_world_leaves_mujocos_mesh_cache_empty():
 
     from scenarios.config.world import WorldConfig
     from scenarios.schema import Scenario
-    from sim.world import build_world
+    from sim.scene.world import build_world
 
     spec = scene_spec(0, 3, WIDE_RANDOMIZATION)  # a rippled (mesh) seabed
     assert spec.seabed.kind != "slope"

@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 import os
 
-from sim.records import ObserverBase
+from sim.events.records import ObserverBase
 import numpy as np
 import pytest
 from scipy.linalg import expm
@@ -18,7 +18,7 @@ from scenarios import ScenarioError, load_scenario
 from sim.cli import main
 from sim.features import TrackingFeature
 from sim.mission import Mission
-from sim.truth import VehicleTruth, interpolate_truth
+from sim.dynamics.truth import VehicleTruth, interpolate_truth
 
 SCENARIOS = os.path.join(os.path.dirname(__file__), "..", "..", "scenarios")
 NO_IMU_NOISE = [f"sensors.imu.{k}=0" for k in (

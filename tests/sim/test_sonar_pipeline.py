@@ -21,10 +21,10 @@ from sim.evaluation.detection_scoring import DetectionScorer
 from sim.features import SurveyPerceptionFeature
 from sim.mission import Mission
 from sim.outputs.trajectory_log import TrajectoryLog
-from sim.perception import Perception
-from sim.records import ObserverBase, PerceptionResult
+from sim.features.perception import Perception
+from sim.events.records import ObserverBase, PerceptionResult
 from sim.sensors.fls import FlsRender, FlsSensor
-from sim.sonar_pipeline import PipelineError, SonarPipeline
+from sim.process.sonar_pipeline import PipelineError, SonarPipeline
 
 # Dived 10 m short of OPI1 heading for it, survey started at once: frames with targets from t = 0.
 ROOT = Path(__file__).resolve().parents[2]

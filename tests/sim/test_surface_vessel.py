@@ -14,11 +14,11 @@ from scipy.integrate import solve_ivp
 from autonomy.control.allocation import command_to_thrust, thrust_to_command
 from autonomy.frames import rot_from_euler
 from scenarios.config.world import CurrentConfig
-from sim.current import OceanCurrent
-from sim.hull import build_standalone_spec, build_hull_spec, VEHICLE_BODY
-from sim.hydrodynamics import acceleration
-from sim.surface_vessel import SurfaceVesselDynamics, horizontal_acceleration, horizontal_coefficients
-from sim.vehicle_params import load_params_file, params_path
+from sim.dynamics.current import OceanCurrent
+from sim.dynamics.hull import build_standalone_spec, build_hull_spec, VEHICLE_BODY
+from sim.dynamics.hydrodynamics import acceleration
+from sim.dynamics.surface_vessel import SurfaceVesselDynamics, horizontal_acceleration, horizontal_coefficients
+from scenarios.vehicle_params import load_params_file, params_path
 
 DT = 0.005
 
@@ -48,7 +48,7 @@ def test_preset_matches_paper_000_table_v(params):
 
 
 def test_three_dof_model_is_the_six_dof_model_in_the_plane(params):
-    """Rows u, v, r of Fossen's 6-DOF reference (sim.hydrodynamics, matrix form) at w = p = q = 0,
+    """Rows u, v, r of Fossen's 6-DOF reference (sim.dynamics.hydrodynamics, matrix form) at w = p = q = 0,
     level, deep water: the 3-DOF equations must give the same accelerations."""
     rng = np.random.default_rng(4)
     for _ in range(20):

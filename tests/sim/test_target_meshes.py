@@ -8,9 +8,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from sim import target_meshes as tm
-
-
+from sim.scene import target_meshes as tm
 def _trimesh_revolved(profile, sections=32) -> trimesh.Trimesh:
     mesh = trimesh.creation.revolve(profile, sections=sections)
     if mesh.volume < 0.0:

@@ -15,8 +15,8 @@ from autonomy.control.allocation import (
     thrust_to_command,
 )
 from scenarios.config.vehicle import ThrusterOverrides, VehicleConfig
-from sim.thrusters import ThrusterArray
-from sim.vehicle_params import load_vehicle_params
+from sim.dynamics.thrusters import ThrusterArray
+from scenarios.vehicle_params import load_vehicle_params
 
 
 @pytest.fixture(scope="module")

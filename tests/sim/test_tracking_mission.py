@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from scenarios.load import load_scenario
-from sim.outputs.mission_outputs import run_mission
+from sim.mission.run import run_mission
 from sim.outputs.run_dir import RUN_FILES
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"

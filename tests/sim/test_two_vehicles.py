@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from scenarios.load import ScenarioError, load_scenario
-from sim.physics import Physics
+from sim.scene.physics import Physics
 from sim.sensors.raycast import NO_HIT_ID
 
 BUOY_AT = "vehicles.buoy.initial_pos_ne_m=[3,0]"
@@ -107,8 +107,8 @@ def test_held_buoy_forces_match_per_step_forces():
     1 % of the distance it made good (turning) of the same hull updated every step."""
     import mujoco
 
-    from sim.hull import VEHICLE_BODY, build_hull_spec
-    from sim.surface_vessel import SurfaceVesselDynamics
+    from sim.dynamics.hull import VEHICLE_BODY, build_hull_spec
+    from sim.dynamics.surface_vessel import SurfaceVesselDynamics
 
     phys, _ = _physics(BUOY_AT, "physics.rate_hz=200", "world.current.velocity_ned_mps=[0.1,-0.1,0]")
     assert phys._extra_every == 4

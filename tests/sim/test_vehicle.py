@@ -13,10 +13,10 @@ from scipy.integrate import solve_ivp
 from autonomy.control.allocation import thrust_to_command
 from scenarios.config.vehicle import ThrusterOverrides, VehicleConfig
 from scenarios.config.world import CurrentConfig
-from sim.current import OceanCurrent
-from sim.hull import build_standalone_spec
-from sim.vehicle import VehicleDynamics
-from sim.vehicle_params import VehicleParams, load_vehicle_params
+from sim.dynamics.current import OceanCurrent
+from sim.dynamics.hull import build_standalone_spec
+from sim.dynamics.vehicle import VehicleDynamics
+from scenarios.vehicle_params import VehicleParams, load_vehicle_params
 
 DT = 0.005
 INSTANT = ThrusterOverrides(time_constant_s=0.0, dead_zone=0.0)

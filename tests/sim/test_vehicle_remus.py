@@ -24,9 +24,9 @@ import mujoco
 import pytest
 
 from scenarios.config.vehicle import ThrusterOverrides, VehicleConfig
-from sim.hull import build_standalone_spec
-from sim.vehicle import VehicleDynamics
-from sim.vehicle_params import load_vehicle_params
+from sim.dynamics.hull import build_standalone_spec
+from sim.dynamics.vehicle import VehicleDynamics
+from scenarios.vehicle_params import load_vehicle_params
 
 RHO, D_PROP, T_DED = 1026.0, 0.14, 0.1
 KT0, KT_MAX, J_MAX, WAKE = 0.4566, 0.1798, 0.6632, 0.944

@@ -10,11 +10,11 @@ import pytest
 
 from scenarios.config.vehicle import ThrusterOverrides, VehicleConfig
 from scenarios.config.world import CurrentConfig
-from sim.current import OceanCurrent
-from sim.hull import build_hull_spec, build_standalone_spec
+from sim.dynamics.current import OceanCurrent
+from sim.dynamics.hull import build_hull_spec, build_standalone_spec
 from sim.rng import component_rng
-from sim.vehicle import VehicleDynamics
-from sim.vehicle_params import (
+from sim.dynamics.vehicle import VehicleDynamics
+from scenarios.vehicle_params import (
     SENSOR_NAMES,
     VehicleParamsError,
     load_params_file,

@@ -1,4 +1,4 @@
-"""Ctrl-C and the worker processes (:mod:`sim.worker_signals`): a worker started under
+"""Ctrl-C and the worker processes (:mod:`sim.process.worker_signals`): a worker started under
 ``sigint_blocked`` holds SIGINT blocked from its first instruction (fork and spawn alike) until
 ``ignore_sigint``; the sonar pipeline's workers ignore Ctrl-C; a Ctrl-C while the pipeline starts,
 or while ``auvsim run`` resets the mission after starting it, leaves no worker or shared memory
@@ -15,10 +15,10 @@ from multiprocessing.shared_memory import SharedMemory
 import pytest
 
 from scenarios import load_scenario
-from sim import sonar_pipeline
+from sim.process import sonar_pipeline
 from sim.mission import Mission
-from sim.sonar_pipeline import SonarPipeline
-from sim.worker_signals import ignore_sigint, sigint_blocked
+from sim.process.sonar_pipeline import SonarPipeline
+from sim.process.worker_signals import ignore_sigint, sigint_blocked
 from tests.sim.test_sonar_pipeline import OVER, _alive
 
 pytestmark = pytest.mark.skipif(not hasattr(signal, "pthread_sigmask"), reason="POSIX signal masks")
@@ -119,8 +119,7 @@ def test_pipeline_workers_ignore_ctrl_c_and_a_ctrl_c_while_it_starts_leaves_noth
 
 
 def test_auvsim_run_stops_the_workers_on_a_ctrl_c_during_the_reset(tmp_path, monkeypatch):
-    from sim.outputs import mission_outputs
-
+    from sim.mission import run as mission_outputs
     pids = []
     real_reset = Mission.reset
 

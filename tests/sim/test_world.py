@@ -8,7 +8,7 @@ import pytest
 
 from scenarios import load_scenario
 from sim.sensors.raycast import BACKGROUND_ID
-from sim.world import build_world
+from sim.scene.world import build_world
 
 
 def _cast(world, origin, dirs):

@@ -117,7 +117,7 @@ class SonarGroundTruth:
             raise SonarTruthNotComputedError(
                 f"sonar frame at t = {self.t_s:.3f} s was rendered without its objects' ground truth, so it has no "
                 f"{what}: render with truth=True, or, in a mission, give the observer that reads it "
-                f"`sonar_truth = True` (see sim.records.MissionObserver)")
+                f"`sonar_truth = True` (see sim.events.records.MissionObserver)")
 
     @property
     def mask_polar(self) -> NDArray[np.int16]:

@@ -1,7 +1,7 @@
 """Closed-loop checks: autopilots + thrust allocation + thrusters + Fossen model.
 
 The vehicle is the FeelHippo preset integrated with the pure-numpy Fossen model
-(``sim.hydrodynamics.FossenModel``) and the thruster model (``sim.thrusters``) in a
+(``sim.dynamics.hydrodynamics.FossenModel``) and the thruster model (``sim.dynamics.thrusters``) in a
 fixed-step loop (semi-implicit Euler, 50 Hz, attitude by the exact rotation of each step);
 the autonomy runs at 10 Hz on perfect navigation. No MuJoCo.
 """
@@ -23,9 +23,9 @@ from autonomy.guidance.survey import SurveyGuidance
 from autonomy.messages import NavEstimate
 from scenarios.load import load_scenario
 from scenarios.schema import Scenario
-from sim.hydrodynamics import FossenModel
-from sim.thrusters import ThrusterArray
-from sim.vehicle_params import load_vehicle_params
+from sim.dynamics.hydrodynamics import FossenModel
+from sim.dynamics.thrusters import ThrusterArray
+from scenarios.vehicle_params import load_vehicle_params
 
 PHYSICS_DT_S = 0.02
 CONTROL_EVERY = 5  # 10 Hz autonomy

@@ -13,7 +13,7 @@ from autonomy.messages import Detection, NavEstimate
 from scenarios import load_scenario
 from sim.sensors.fls import FlsSensor
 from sim.sensors.raycast import MujocoRayCaster
-from sim.world import build_world
+from sim.scene.world import build_world
 
 
 def _errors(method: str, frames, scn, fls) -> np.ndarray:

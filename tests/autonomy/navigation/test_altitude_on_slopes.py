@@ -21,7 +21,7 @@ from sim.sensors.nav_noise import nav_noise_model
 from sim.sensors.base import SceneView
 from sim.sensors.altimeter import AltimeterSensor
 from sim.sensors.dvl import DvlSensor
-from sim.truth import VehicleTruth
+from sim.dynamics.truth import VehicleTruth
 from tests.autonomy.navigation.test_kinematics import PlaneCaster
 
 MOUNTS = {"dvl": np.array([0.15, -0.05, 0.25]), "altimeter": np.array([0.2, 0.05, 0.25])}

@@ -7,7 +7,7 @@ import numpy as np
 
 from autonomy.frames import euler_rate_matrix, rot_from_euler
 from sim.sensors.raycast import RayHits
-from sim.truth import VehicleTruth
+from sim.dynamics.truth import VehicleTruth
 
 # ----------------------------------------------------------------------------- casters
 

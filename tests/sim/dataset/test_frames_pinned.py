@@ -1,6 +1,6 @@
 """Dataset frames are pinned: labels exactly, fan images within the cross-machine tolerance.
 
-Against the FLS reference (``tests/data/fls_reference``; :mod:`sim.sensors.fls_reference`,
+Against the FLS reference (``tests/data/fls_reference``; :mod:`sim.bench.fls_reference`,
 ``python scripts/fls_reference.py --write`` regenerates it): a change to image formation
 that shifts any dataset fan beyond the tolerance, or changes a label, fails here. On a machine
 whose numerics are the pinning machine's, every byte of every render must match as well (the
@@ -16,8 +16,7 @@ import pytest
 from sim.dataset.generate import TRAIN_RANDOMIZATION, WIDE_RANDOMIZATION, RenderSettings, fls_config, scene_spec
 from sim.dataset.scene_render import render_frames
 from sim.rng import component_rng
-from sim.sensors import fls_reference as fr
-
+from sim.bench import fls_reference as fr
 REFERENCE_DIR = Path(__file__).resolve().parents[2] / "data" / "fls_reference"
 # K-distributed clutter, rippled seabed, basin walls in wide/3; its second frame was re-pinned when a
 # fold's range extremum was bounded by the end tangents (309 pixels of a grazing surface changed)

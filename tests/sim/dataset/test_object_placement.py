@@ -11,7 +11,7 @@ from scenarios.config.world import WorldConfig
 from scenarios.schema import Scenario
 from sim.dataset import generate as gen
 from sim.dataset.randomization import HELDOUT_RANDOMIZATION, TRAIN_RANDOMIZATION, WIDE_RANDOMIZATION
-from sim.world import build_world
+from sim.scene.world import build_world
 
 
 def _world_vertices(model, data, gid: int) -> np.ndarray:

@@ -15,7 +15,7 @@ from sim.cli import main
 from sim.dataset.generate import generate_dataset
 from sim.dataset.randomization import Randomization
 from sim.dataset.sss_generate import SssSettings, sss_scene_spec
-from sim.target_meshes import target_mesh
+from sim.scene.target_meshes import target_mesh
 
 # Buried objects have a smaller exposed footprint than their mesh: none here.
 RZ = Randomization(altitude_m=(2.0, 4.0), n_targets=(1, 2), n_distractors=(0, 1), seabed_kinds=("plane", "ripple"),

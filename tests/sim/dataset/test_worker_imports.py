@@ -25,7 +25,7 @@ def test_dataset_driver_and_schema_load_no_navigation_estimation_or_meshes():
                                 check=True).stdout.split())
     assert "scenarios.schema" in loaded and "autonomy.navigation.config" in loaded  # the probe ran
     unused = {"autonomy.navigation.ekf", "autonomy.estimation.gater", "autonomy.atr.classical",
-              "autonomy.world_model.pmha", "scenarios.load", "scipy.stats", "trimesh", "sim.target_meshes"}
+              "autonomy.world_model.pmha", "scenarios.load", "scipy.stats", "trimesh", "sim.scene.target_meshes"}
     assert not unused & loaded
 
 
@@ -36,7 +36,7 @@ def test_scene_job_modules_load_no_trimesh_or_scipy_interpolation():
             "print(' '.join(sorted(sys.modules)))")
     loaded = set(subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True,
                                 check=True).stdout.split())
-    assert {"sim.world", "sim.target_meshes", "sim.sensors.fls", "sim.sensors.sss"} <= loaded  # the probe ran
+    assert {"sim.scene.world", "sim.scene.target_meshes", "sim.sensors.fls", "sim.sensors.sss"} <= loaded  # the probe ran
     assert not {"trimesh", "scipy.interpolate", "scipy.spatial"} & loaded
 
 

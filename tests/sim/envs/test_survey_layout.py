@@ -8,7 +8,7 @@ import pytest
 
 from autonomy.localization import fls_visibility
 from sim.envs.survey_env import SurveyEnv, SurveyEnvOptions
-from sim.sensors.fls_presets import resolve_geometry
+from scenarios.fls_presets import resolve_geometry
 
 
 @pytest.fixture(scope="module")

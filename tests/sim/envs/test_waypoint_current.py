@@ -10,7 +10,7 @@ import sim.envs  # noqa: F401  (registers the ids)
 from scenarios import load_scenario
 from scenarios.config.world import CurrentConfig
 from sim.envs import WAYPOINT_ID
-from sim.physics import Physics
+from sim.scene.physics import Physics
 
 
 def test_passive_hull_drifts_with_the_episode_current():

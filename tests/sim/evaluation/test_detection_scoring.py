@@ -7,7 +7,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from sim.evaluation.detection_scoring import DetectionScorer
-from sim.records import PerceptionResult
+from sim.events.records import PerceptionResult
 
 
 def _obj(box, visible=True, is_target=True):

@@ -63,7 +63,7 @@ def test_world_model_metrics_report_each_targets_nees_and_the_chi_square_band():
     from scipy.stats import chi2
 
     from autonomy.world_model.pmha import WorldObject
-    from sim.perception import world_model_metrics
+    from sim.features.perception import world_model_metrics
 
     truth = np.array([[0.0, 0.0, 5.0], [10.0, 0.0, 5.0]])
     target = np.array([0.99, 0.01])

@@ -150,8 +150,8 @@ def test_the_loop_names_no_study():
     src = (ROOT / "sim" / "mission" / "loop.py").read_text()
     tree = ast.parse(src)
     imported = {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)}
-    studies = ("autonomy.tracking", "autonomy.guidance.buddy", "sim.comms", "sim.surface_runner", "autonomy.msis",
-               "sim.mcm", "sim.sonar_pipeline", "autonomy.navigation.delayed", "sim.perception")
+    studies = ("autonomy.tracking", "autonomy.guidance.buddy", "sim.comms", "sim.features.surface_runner", "autonomy.msis",
+               "sim.mcm", "sim.process.sonar_pipeline", "autonomy.navigation.delayed", "sim.features.perception")
     assert not [m for m in imported if m and m.startswith(studies)]
     step = next(n for n in ast.walk(tree) if isinstance(n, ast.FunctionDef) and n.name == "step")
     body = ast.get_source_segment(src, step)

@@ -13,7 +13,7 @@ ROOT = Path(__file__).resolve().parents[3]
 
 _PROBE = """
 import os, sys
-import sim.cli.app, sim.outputs.mission_outputs, sim.mission
+import sim.cli.app, sim.mission.run, sim.mission
 early = sorted(m for m in ("rerun", "rerun_bindings", "pyarrow") if m in sys.modules)
 import sim.outputs.rerun_recording as r
 print(early, "rerun_bindings" in sys.modules, os.environ["MIMALLOC_PURGE_DELAY"], os.environ["MIMALLOC_PURGE_DECOMMITS"])

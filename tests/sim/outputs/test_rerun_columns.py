@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from collections import defaultdict
 
-from sim.records import ObserverBase
+from sim.events.records import ObserverBase
 import numpy as np
 import pytest
 

@@ -3,7 +3,7 @@ whole path, each re-logged only while it grows (recording and memory linear in m
 
 from __future__ import annotations
 
-from sim.records import ObserverBase
+from sim.events.records import ObserverBase
 import numpy as np
 import pytest
 

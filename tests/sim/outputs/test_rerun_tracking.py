@@ -4,7 +4,7 @@ fan image of the frame it gated (paper 004 section 4), and the clusters it weigh
 from __future__ import annotations
 
 import cv2
-from sim.records import ObserverBase
+from sim.events.records import ObserverBase
 import numpy as np
 import pytest
 

@@ -10,7 +10,7 @@ from scenarios.load import load_scenario
 from sim.features import TrackingFeature
 from sim.mission import Mission
 from sim.outputs.map_plot import build_map_figure
-from sim.outputs.mission_outputs import map_layers, planned_length_s
+from sim.mission.run import map_layers, planned_length_s
 from sim.outputs.tracking_overlay import mover_paths_ned
 
 

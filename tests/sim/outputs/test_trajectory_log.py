@@ -10,8 +10,8 @@ import numpy as np
 from autonomy.frames import rot_from_euler
 from autonomy.messages import NavEstimate
 from sim.outputs.trajectory_log import COLUMNS, TrajectoryLog
-from sim.records import StepRecord
-from sim.truth import VehicleTruth
+from sim.events.records import StepRecord
+from sim.dynamics.truth import VehicleTruth
 
 MODES = ("idle", "dive", "survey")
 

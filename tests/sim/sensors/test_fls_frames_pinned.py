@@ -1,7 +1,7 @@
 """FLS renders are pinned: labels exactly, images within the cross-machine tolerance, bytes on one machine.
 
 The reference (``tests/data/fls_reference``, written by ``python scripts/fls_reference.py
---write``; :mod:`sim.sensors.fls_reference` says what it holds and why the tolerance is what it
+--write``; :mod:`sim.bench.fls_reference` says what it holds and why the tolerance is what it
 is) covers the bench pose sequence and dataset scenes with K clutter, rough mesh seabeds and
 basin walls. It was rendered by the code whose every byte equals the renders pinned before the
 speed-ups of the renderer (with OpenBLAS's Haswell kernels, ``OPENBLAS_CORETYPE=Haswell``,
@@ -22,8 +22,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sim.sensors import fls_reference as fr
-
+from sim.bench import fls_reference as fr
 ROOT = Path(__file__).resolve().parents[3]
 REFERENCE_DIR = ROOT / "tests" / "data" / "fls_reference"
 CASES = ("bench", "train/1", "wide/1")  # the dataset test covers the other two
@@ -66,7 +65,7 @@ def test_renders_are_bit_for_bit_repeatable_in_and_across_processes(rendered):
     a fresh interpreter (no state carried between renders, no hash-seed or allocation order)."""
     again = fr.render_case("bench").digest
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
-    fresh = subprocess.run([sys.executable, "-c", "from sim.sensors.fls_reference import render_case; "
+    fresh = subprocess.run([sys.executable, "-c", "from sim.bench.fls_reference import render_case; "
                             "print(render_case('bench').digest)"], cwd=ROOT, env=env, capture_output=True,
                            text=True, timeout=120, check=True).stdout.strip()
     assert rendered["bench"].digest == again == fresh

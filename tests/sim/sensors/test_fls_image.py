@@ -10,7 +10,7 @@ from scipy import integrate, stats
 from scenarios.config.fls import FlsConfig
 from sim.sensors.analytic_caster import AnalyticCaster
 from sim.sensors.fls import FlsSensor
-from sim.sensors.fls_presets import resolve_geometry
+from scenarios.fls_presets import resolve_geometry
 
 
 def flat_seabed_render(speckle: str, seed: int, **kw):
@@ -83,7 +83,7 @@ def test_fewer_ray_columns_interpolate_to_beams():
 def test_aris_frame_rate_is_bounded_by_its_pings_per_frame():
     """The ARIS forms its 128 beams in 8 pings, each listening the two-way time to the far
     end of the window: 1500 / (2 x 15 x 8) = 6.25 frames/s over 15 m, 18.75 over 5 m."""
-    from sim.sensors.fls_presets import max_frame_rate_hz
+    from scenarios.fls_presets import max_frame_rate_hz
 
     assert max_frame_rate_hz(8, 15.0) == pytest.approx(6.25)
     assert max_frame_rate_hz(8, 5.0) == pytest.approx(18.75)

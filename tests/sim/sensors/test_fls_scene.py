@@ -10,8 +10,8 @@ from autonomy.guidance.lawnmower import fls_swath_width_m
 from scenarios.config.fls import FlsConfig
 from sim.bench import fls as bench_fls
 from sim.sensors.fls import FlsSensor
-from sim.truth import VehicleTruth
-from sim.physics import Physics
+from sim.dynamics.truth import VehicleTruth
+from sim.scene.physics import Physics
 
 
 @pytest.fixture(scope="module")

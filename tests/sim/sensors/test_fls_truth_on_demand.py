@@ -62,7 +62,7 @@ def test_k_clutter_frames_without_truth_are_the_full_renders_bytes(paired):
 
 def test_reading_the_truth_a_frame_was_rendered_without_raises():
     from scenarios.load import load_scenario
-    from sim.world import build_world
+    from sim.scene.world import build_world
     from sim.sensors.raycast import MujocoRayCaster
 
     scn = load_scenario("cssn_lawnmower")

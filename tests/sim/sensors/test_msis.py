@@ -9,7 +9,7 @@ import pytest
 from autonomy.msis import ping360
 from scenarios import ScenarioError, load_scenario
 from scenarios.config.msis import MsisConfig
-from sim.scheduler import SensorScheduler
+from sim.events.scheduler import SensorScheduler
 from sim.sensors.analytic_caster import AnalyticBox, AnalyticCaster
 from sim.sensors.msis import NO_ECHO_ID, WALL_ID, MsisSensor
 from sim.sensors.msis_head import HeadSweep
@@ -104,7 +104,7 @@ def test_facing_away_from_the_wall_the_ping_is_noise_only():
 
 def _truth(t_s, pos, yaw=0.0):
     from autonomy.frames import rot_from_euler
-    from sim.truth import VehicleTruth
+    from sim.dynamics.truth import VehicleTruth
 
     return VehicleTruth(t_s, np.asarray(pos, float), rot_from_euler(0, 0, yaw), np.array([0, 0, yaw]),
                         np.zeros(6), np.zeros(6), np.zeros(3))

@@ -30,12 +30,12 @@ from autonomy.frames import wrap_angle
 from scenarios.config.sensor import SensorConfig, sensor_config, sensor_config_kinds
 from scenarios.schema import SensorsConfig
 from sim.rng import component_rng
-from sim.scheduler import SensorScheduler
+from sim.events.scheduler import SensorScheduler
 from sim.sensors.analytic_caster import AnalyticCaster, AnalyticSphere
 from sim.sensors.base import Mount, SceneView, Sensor
 from sim.sensors import registry
 from sim.sensors.registry import BUILTIN_SENSORS, build_sensor, register_sensor, sensor_classes
-from sim.truth import VehicleTruth
+from sim.dynamics.truth import VehicleTruth
 from tests.autonomy.navigation.test_kinematics import static_truth, wiggle_truth
 
 ROOT = Path(__file__).resolve().parents[3]

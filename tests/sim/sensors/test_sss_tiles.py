@@ -10,7 +10,7 @@ import pytest
 from scenarios.config.sss import SssConfig
 from sim.sensors.analytic_caster import AnalyticCaster, AnalyticSphere
 from sim.sensors.sss import SssSensor, Waterfall
-from sim.sensors.sss_tiles import cut_tiles, pings_per_tile, write_tiles
+from sim.dataset.sss_tiles import cut_tiles, pings_per_tile, write_tiles
 from tests.sim.sensors.test_sss_geometry import Obj
 
 

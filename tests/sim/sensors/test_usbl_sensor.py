@@ -13,7 +13,7 @@ from autonomy.frames import rot_from_euler
 from scenarios.config.usbl import UsblConfig
 from sim.sensors.base import Mount, SceneView
 from sim.sensors.usbl import UsblSensor
-from sim.truth import VehicleTruth
+from sim.dynamics.truth import VehicleTruth
 
 N_FIXES = 5000
 

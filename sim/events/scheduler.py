@@ -15,7 +15,7 @@ Firing times are exact: the n-th firing of a channel (n = 0, 1, ...) is at
 drift over a long run), and no firing is skipped: a sensor faster than the physics step fires
 several times in one step, each firing at its own time (:meth:`SensorScheduler.take_due`
 gives them in time order; the mission loop moves the true state to each of these times,
-:func:`sim.truth.interpolate_truth`).
+:func:`sim.dynamics.truth.interpolate_truth`).
 """
 
 from __future__ import annotations

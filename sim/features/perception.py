@@ -22,8 +22,8 @@ from autonomy.world_model import CLASS_NAMES, PMHA
 from autonomy.world_model.surface import SonarFootprint
 from scenarios.schema import Scenario
 from sim.evaluation.world_model_score import score_world_model
-from sim.records import PerceptionResult
-from sim.seabed import Seabed
+from sim.events.records import PerceptionResult
+from sim.scene.seabed import Seabed
 from sim.sensors.fls import FlsRender, FlsSensor
 
 TARGET_CLASS = CLASS_NAMES[0]  # the world model's class of objects of potential interest

@@ -24,7 +24,7 @@ from autonomy.control.allocation import (
     command_to_speed,
     speed_to_thrust,
 )
-from sim.vehicle_params import VehicleParams
+from scenarios.vehicle_params import VehicleParams
 
 FloatArray = NDArray[np.float64]
 

@@ -2,8 +2,8 @@
 
 :func:`add_mover_bodies` adds them to the world's MjSpec (acoustic geoms, labelled scene
 objects); :class:`MovingBodies` draws each mover's seeded trajectory
-(:mod:`sim.target_motion`) and sets the mocap poses for a given time (what
-:class:`sim.physics.Physics` calls before every physics step and before sensors look).
+(:mod:`sim.scene.target_motion`) and sets the mocap poses for a given time (what
+:class:`sim.scene.physics.Physics` calls before every physics step and before sensors look).
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 
 from scenarios.config.movers import MoverConfig
 from sim.rng import component_rng
-from sim.target_motion import PARKED_NED, BubblePlumes, ManoeuvreTrajectory, WaterDrift, plume_slots
+from sim.scene.target_motion import PARKED_NED, BubblePlumes, ManoeuvreTrajectory, WaterDrift, plume_slots
 
 FloatArray = NDArray[np.float64]
 DIVER_RADIUS_M = 0.2  # capsule: a prone diver 1.8 m long (with fins), 0.4 m across
@@ -85,7 +85,7 @@ class MovingBodies:
             plume from ``"bubbles:<name>"``).
         duration_s: mission length to draw manoeuvres for, s.
         current: the water current (``velocity_tuple``, ``mean_ned``, ``sigma_mps`` as
-            :class:`sim.current.OceanCurrent`) that carries the bubbles; None: still water.
+            :class:`sim.dynamics.current.OceanCurrent`) that carries the bubbles; None: still water.
     """
 
     def __init__(self, model: mujoco.MjModel, movers: tuple[MoverConfig, ...], seed: int, duration_s: float,

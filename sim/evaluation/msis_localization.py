@@ -18,7 +18,7 @@ import numpy as np
 from autonomy.frames import wrap_angle
 from autonomy.messages import PositionFixMsg, WrenchCmdMsg
 from autonomy.msis.localization import tank_walls
-from sim.records import MissionInfo, MissionSummary, ObserverBase, StepRecord
+from sim.events.records import MissionInfo, MissionSummary, ObserverBase, StepRecord
 
 
 @dataclass

@@ -8,7 +8,7 @@ of its delivery time (capture + latency), in other processes, while the mission 
 on. Processes, not threads: the render and the perception are largely Python and small numpy
 operations that hold the GIL, so threads of one process take turns on one core.
 
-Two ``spawn``-started workers (:mod:`sim.sonar_workers`): one renders, one runs the ATR
+Two ``spawn``-started workers (:mod:`sim.process.sonar_workers`): one renders, one runs the ATR
 detector (which reads only the frame); the mission process runs the rest of perception
 (geolocalisation with the navigation estimate of each frame's delivery, the world model) on
 the detections as they come back. That makes three busy processes of similar load, which a
@@ -24,7 +24,7 @@ two-core machine's scheduler shares out. The results are the serial loop's bit f
   each frame as it comes; the mission's own perception then geolocalises the detections and
   updates its world model in delivery order, each frame with the estimate the serial loop
   would pass (kept at its delivery), so the mission's perception holds its state throughout;
-* frames go from worker to worker through shared memory (:class:`sim.frame_transport.FrameRing`);
+* frames go from worker to worker through shared memory (:class:`sim.process.frame_transport.FrameRing`);
   they come back to the mission process only when an observer takes them (an observer sets
   ``sonar_frames = False`` when it ignores the sonar's renders); detections come back the same
   way, and results reach the observers on the mission process, in the serial loop's order,
@@ -49,13 +49,13 @@ from typing import Any
 
 import numpy as np
 
-from sim.frame_transport import FrameRing, shared_objects
-from sim.physics import Physics
+from sim.process.frame_transport import FrameRing, shared_objects
+from sim.scene.physics import Physics
 from sim.sensors.base import Sensor
-from sim.sonar_workers import detection_main, render_main
-from sim.spawn_guard import NO_MAIN_GUARD_EXIT, exit_if_spawn_reimport
-from sim.truth import VehicleTruth
-from sim.worker_signals import sigint_blocked
+from sim.process.sonar_workers import detection_main, render_main
+from sim.process.spawn_guard import NO_MAIN_GUARD_EXIT, exit_if_spawn_reimport
+from sim.dynamics.truth import VehicleTruth
+from sim.process.worker_signals import sigint_blocked
 
 RING_SLOTS = 4  # frames in flight between two processes
 CAPTURES_IN_FLIGHT = 2 * RING_SLOTS  # captures sent and not yet rendered before a capture waits
@@ -100,7 +100,7 @@ class SonarPipeline:
         physics: the mission's world (its model is copied to the render worker once; the poses
             of its moving geoms at each capture).
         sonar: the sensor whose frames are pipelined (copied with its noise state).
-        perception: the mission's :class:`sim.perception.Perception` (its detector is rebuilt
+        perception: the mission's :class:`sim.features.perception.Perception` (its detector is rebuilt
             in the detection worker from ``perception.scenario.autonomy.atr``; the rest runs
             here, on this object, through ``process(render, nav, detections=...)``).
         frames: send each rendered frame back to this process (observers that read them).

@@ -1,6 +1,6 @@
 """The sim side of a surface vessel's autonomy: its GNSS and compass fire at their rates,
 its onboard :class:`autonomy.surface.buoy.SurfaceAutonomy` ticks at its rate, and the
-commands go to the physics (:meth:`sim.physics.Physics.set_command`).
+commands go to the physics (:meth:`sim.scene.physics.Physics.set_command`).
 
 With a ``usbl`` head in its config, the vessel's USBL fixes the AUV's transponder (at the
 AUV's body origin) at the USBL's rate; each fix reaches the vessel's computer after the
@@ -11,7 +11,7 @@ a following vessel follows these fixes, not the AUV's true position, and they ar
 
 :class:`SurfaceVehicleRunner` keeps no clock: it declares its periodic events
 (:meth:`SurfaceVehicleRunner.periodic_events`: each sensor's firing and the autonomy tick, at
-their rates) and whoever runs it orders them on a scheduler (:class:`sim.scheduler.SensorScheduler`;
+their rates) and whoever runs it orders them on a scheduler (:class:`sim.events.scheduler.SensorScheduler`;
 in a mission, the loop's, at the autonomy ticks: :mod:`sim.features.sea_trial`).
 """
 
@@ -30,11 +30,11 @@ from autonomy.messages import GpsMsg, ImuMsg, UsblMsg
 from autonomy.surface.buoy import SurfaceAutonomy
 from autonomy.surface.usbl_fix import UsblFixer
 from scenarios.config.vehicle import SurfaceVehicleConfig
-from sim.physics import Physics
+from sim.scene.physics import Physics
 from sim.rng import component_rng
 from sim.sensors.base import Mount, SceneView, Sensor
 from sim.sensors.registry import build_sensor
-from sim.truth import VehicleTruth
+from sim.dynamics.truth import VehicleTruth
 
 #: Entry name of each sensor of an extra vehicle -> the preset's mount it sits on.
 SENSOR_MOUNTS = {"gnss": "gps", "compass": "imu", "usbl": "usbl"}

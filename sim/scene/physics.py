@@ -8,7 +8,7 @@ step count times the step (``t_s = n dt``), not a running sum, so it does not dr
 
 More than one vehicle: the scenario's ``vehicle`` is the AUV (``physics.vehicle``, the
 default of every readout); ``scenario.vehicles`` adds surface vessels
-(:class:`sim.surface_vessel.SurfaceVesselDynamics`) stepped on the same clock in the same
+(:class:`sim.dynamics.surface_vessel.SurfaceVesselDynamics`) stepped on the same clock in the same
 current, each holding the thruster command last given with :meth:`Physics.set_command`;
 their forces are updated at :data:`EXTRA_WRENCH_RATE_HZ` and held in between.
 ``physics.vehicles`` maps ``"auv"`` and each extra name to its dynamics.
@@ -24,16 +24,16 @@ from numpy.typing import ArrayLike, NDArray
 
 from scenarios.config.world import CurrentConfig
 from scenarios.schema import Scenario
-from sim.current import OceanCurrent
+from sim.dynamics.current import OceanCurrent
 from sim.rng import component_rng
 from sim.sensors.base import SceneView
 from sim.sensors.raycast import MujocoRayCaster
-from sim.truth import VehicleTruth
-from sim.vehicle import VehicleDynamics
-from sim.movers import MovingBodies
-from sim.surface_vessel import SurfaceVesselDynamics
-from sim.vehicle_params import VehicleParams, load_params_file, load_vehicle_params, params_path
-from sim.world import SceneObject, World, build_world
+from sim.dynamics.truth import VehicleTruth
+from sim.dynamics.vehicle import VehicleDynamics
+from sim.scene.movers import MovingBodies
+from sim.dynamics.surface_vessel import SurfaceVesselDynamics
+from scenarios.vehicle_params import VehicleParams, load_params_file, load_vehicle_params, params_path
+from sim.scene.world import SceneObject, World, build_world
 
 FloatArray = NDArray[np.float64]
 #: Rate at which surface vessels' hydrodynamic and thruster forces are updated, Hz.

@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from autonomy.messages import Detection, NavEstimate
-from sim.truth import VehicleTruth
+from sim.dynamics.truth import VehicleTruth
 
 
 @dataclass(frozen=True, slots=True)
@@ -128,7 +128,7 @@ class MissionObserver(Protocol):
 
     Every observer declares ``sonar_frames`` and ``sonar_truth`` (:class:`ObserverBase`
     declares both True). An observer that ignores the sonar's renders sets ``sonar_frames = False``: the
-    pipelined loop (:mod:`sim.sonar_pipeline`) then does not ship them from its render worker
+    pipelined loop (:mod:`sim.process.sonar_pipeline`) then does not ship them from its render worker
     when no observer takes them, and passes only the perception results.
 
     An observer that does not read the forward-looking sonar's ground truth (a render's

@@ -1,6 +1,6 @@
 """A surface vessel in the scene: Fossen's 3-DOF horizontal-plane model on MuJoCo joints.
 
-The hull (:func:`sim.hull.build_hull_spec` of a ``surface_3dof`` preset) moves on a north
+The hull (:func:`sim.dynamics.hull.build_hull_spec` of a ``surface_3dof`` preset) moves on a north
 slide, an east slide and a yaw hinge, at its waterline depth, level. Heave, roll and pitch
 are constrained rather than integrated: the simulator models no waves, so a floating hull
 only sits at its hydrostatic equilibrium in those DOFs, and their stiff restoring modes
@@ -24,7 +24,7 @@ exactly ((M_RB + M_A) is diagonal), and MuJoCo gets the joint forces that make i
 body accelerate so: with the CG on the hinge the joint-space mass matrix is diag(m, m, I_z)
 and has no bias terms, so ``qfrc = [m a_n, m a_e, I_z r_dot]`` with the CO acceleration
 over ground ``a_ned = R(psi) [u_dot - r v, v_dot + r u]``. Held over a step (explicit, as
-:mod:`sim.vehicle`).
+:mod:`sim.dynamics.vehicle`).
 """
 
 from __future__ import annotations
@@ -36,10 +36,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from autonomy.frames import rot_from_euler
-from sim.current import OceanCurrent
-from sim.thrusters import ThrusterArray
-from sim.truth import VehicleTruth
-from sim.vehicle_params import VehicleParams
+from sim.dynamics.current import OceanCurrent
+from sim.dynamics.thrusters import ThrusterArray
+from sim.dynamics.truth import VehicleTruth
+from scenarios.vehicle_params import VehicleParams
 
 FloatArray = NDArray[np.float64]
 SURGE, SWAY, YAW = 0, 1, 5  # rows of the 6-DOF preset matrices this model uses

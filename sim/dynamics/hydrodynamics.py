@@ -48,7 +48,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from autonomy.frames import skew
-from sim.vehicle_params import VehicleParams
+from scenarios.vehicle_params import VehicleParams
 
 FloatArray = NDArray[np.float64]
 

@@ -11,6 +11,7 @@ buoyancy from CO; added mass ``M_A`` and damping matrices are *positive* (``M_A 
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from importlib import resources
 from pathlib import Path
 from typing import Annotated, Mapping
 
@@ -25,14 +26,14 @@ from scenarios.config.base import NonNegFloat, PositiveFloat, StrictModel, Vec3
 from scenarios.config.vehicle import VehicleConfig
 
 FloatArray = NDArray[np.float64]
-ASSETS_DIR = Path(__file__).resolve().parent / "assets"
+ASSETS_DIR = Path(str(resources.files("sim") / "assets"))  # the presets ship with the simulator package
 SENSOR_NAMES = ("fls", "dvl", "imu", "altimeter", "depth", "gps")
 #: Sensor mounts a preset must have, by its motion model (a surface vessel carries no sonar,
 #: DVL or depth cell: GNSS and a compass/AHRS only).
 REQUIRED_SENSORS = {"free_6dof": SENSOR_NAMES, "surface_3dof": ("imu", "gps")}
-#: Motion models: ``free_6dof`` (a free body, Fossen's 6-DOF model, :mod:`sim.vehicle`) or
+#: Motion models: ``free_6dof`` (a free body, Fossen's 6-DOF model, :mod:`sim.dynamics.vehicle`) or
 #: ``surface_3dof`` (a surface vessel held at its waterline, level, moving in surge, sway
-#: and yaw only: Fossen's horizontal-plane model, :mod:`sim.surface_vessel`).
+#: and yaw only: Fossen's horizontal-plane model, :mod:`sim.dynamics.surface_vessel`).
 MOTION_MODELS = tuple(REQUIRED_SENSORS)
 GRAVITY_MPS2 = 9.81
 

@@ -1,10 +1,10 @@
 """Build the MuJoCo scene from a scenario with MjSpec: seabed, basin walls, targets, hull.
 
 The MuJoCo world frame is NED (z down) and MuJoCo gravity is off: weight and buoyancy
-act through the hydrodynamic wrench (:mod:`sim.vehicle`). Geom groups:
+act through the hydrodynamic wrench (:mod:`sim.dynamics.vehicle`). Geom groups:
 
 * ``ACOUSTIC_GROUP`` (0): what sonars and ray-cast sensors see (seabed, walls, targets);
-* ``HULL_GROUP`` (1, :mod:`sim.hull`): the vehicles' geoms (the AUV's and those of the
+* ``HULL_GROUP`` (1, :mod:`sim.dynamics.hull`): the vehicles' geoms (the AUV's and those of the
   extra vehicles of ``scenario.vehicles``, e.g. a surface buoy): no sonar sees them and
   they are no scene object;
 * ``COLLISION_PROXY_GROUP`` (3): invisible collision stand-ins (a plane under a terrain
@@ -24,10 +24,10 @@ from autonomy.frames import quat_from_rot, rot_from_euler
 from scenarios.config.world import BasinConfig, TargetConfig, WorldConfig
 from scenarios.schema import Scenario
 from sim.rng import component_rng
-from sim.seabed import Seabed, make_seabed
+from sim.scene.seabed import Seabed, make_seabed
 from sim.sensors.raycast import BACKGROUND_ID
-from sim.hull import VEHICLE_BODY, build_hull_spec
-from sim.target_meshes import target_mesh
+from sim.dynamics.hull import VEHICLE_BODY, build_hull_spec
+from sim.scene.target_meshes import target_mesh
 
 ACOUSTIC_GROUP = 0
 COLLISION_PROXY_GROUP = 3
@@ -253,7 +253,7 @@ def build_world(scenario: Scenario, *, with_vehicle: bool = True) -> World:
         target_geoms.append(geom)
         objects.append(obj)
 
-    from sim.movers import add_mover_bodies
+    from sim.scene.movers import add_mover_bodies
 
     mover_geoms = add_mover_bodies(spec, wcfg.movers, ACOUSTIC_GROUP)
     for j, mg in enumerate(mover_geoms):
@@ -264,12 +264,12 @@ def build_world(scenario: Scenario, *, with_vehicle: bool = True) -> World:
             height_m=mg.height_m, reflectivity=mg.reflectivity))
 
     if with_vehicle:
-        from sim.vehicle_params import load_vehicle_params
+        from scenarios.vehicle_params import load_vehicle_params
 
         hull = build_hull_spec(load_vehicle_params(scenario.vehicle))
         frame = spec.worldbody.add_frame()
         frame.attach_body(hull.body(VEHICLE_BODY), HULL_PREFIX, "")
-    from sim.vehicle_params import load_params_file, params_path
+    from scenarios.vehicle_params import load_params_file, params_path
 
     for name, vcfg in scenario.vehicles.items():  # after the AUV: its ids stay those of a single-vehicle scene
         extra = build_hull_spec(load_params_file(params_path(vcfg.preset)))

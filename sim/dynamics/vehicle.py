@@ -5,7 +5,7 @@ Usage per physics step::
     dyn.step_inputs(thruster_cmd, dt_s)   # rotors, current, hydrodynamic wrench -> xfrc_applied
     mujoco.mj_step(model, data)
 
-MuJoCo integrates the rigid body (gravity off); :class:`sim.hydrodynamics.FossenModel`
+MuJoCo integrates the rigid body (gravity off); :class:`sim.dynamics.hydrodynamics.FossenModel`
 supplies the wrench that makes it follow Fossen's equations with added mass solved exactly
 (see that module). The wrench is evaluated at the start of each step and held over it, so
 hydrodynamic terms are integrated explicitly (first order in dt: at 200 Hz, positions of a
@@ -31,12 +31,12 @@ from numpy.typing import ArrayLike, NDArray
 
 from autonomy.frames import euler_from_rot, quat_from_euler, rot_from_quat
 from scenarios.config.world import CurrentConfig
-from sim.current import OceanCurrent
-from sim.hydrodynamics import FossenModel
-from sim.hull import VEHICLE_BODY
-from sim.thrusters import ThrusterArray
-from sim.truth import VehicleTruth
-from sim.vehicle_params import VehicleParams
+from sim.dynamics.current import OceanCurrent
+from sim.dynamics.hydrodynamics import FossenModel
+from sim.dynamics.hull import VEHICLE_BODY
+from sim.dynamics.thrusters import ThrusterArray
+from sim.dynamics.truth import VehicleTruth
+from scenarios.vehicle_params import VehicleParams
 
 FloatArray = NDArray[np.float64]
 
@@ -54,7 +54,7 @@ class VehicleDynamics:
     """Vehicle physics bound to one ``MjModel`` / ``MjData``.
 
     Args:
-        model, data: compiled scene holding the hull (:func:`sim.hull.build_hull_spec`).
+        model, data: compiled scene holding the hull (:func:`sim.dynamics.hull.build_hull_spec`).
         params: the vehicle's parameters.
         current: a :class:`CurrentConfig` (the current is built with ``rng`` and advanced
             by :meth:`step_inputs`), an :class:`OceanCurrent` owned and advanced by the

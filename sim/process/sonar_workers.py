@@ -1,4 +1,4 @@
-"""The two worker processes of :mod:`sim.sonar_pipeline`: sonar rendering and ATR detection.
+"""The two worker processes of :mod:`sim.process.sonar_pipeline`: sonar rendering and ATR detection.
 
 Each runs a loop over messages from the mission process (``multiprocessing`` connections,
 ``spawn`` start) and ends on ``("stop",)`` or when the mission process's end of its connection
@@ -15,7 +15,7 @@ when objects move, the scene objects, at capture), ``("state",)``, ``("stop",)``
 frame ``k`` exactly as the serial loop (same geom poses, same draws in the same order), sends
 the perception's view of it (the frame; with ``nav_source='truth'`` also its truth) to the
 detection worker, and, when the mission's observers take frames, ``(k, render)`` to the
-mission process over a connection of its own, both through shared memory (:class:`sim.frame_transport.FrameRing`).
+mission process over a connection of its own, both through shared memory (:class:`sim.process.frame_transport.FrameRing`).
 ``("rendered", k)`` then tells the mission process it is done with capture ``k`` (which bounds the
 captures in flight); ``("state",)`` answers ``("state", noise generator state)``.
 
@@ -35,16 +35,16 @@ import traceback
 from multiprocessing.connection import wait
 from typing import Any
 
-from sim.frame_transport import FrameRing, shared_objects
-from sim.worker_signals import ignore_sigint
+from sim.process.frame_transport import FrameRing, shared_objects
+from sim.process.worker_signals import ignore_sigint
 
 
 def _worker_start() -> None:
     """Ignore Ctrl-C and SIGTERM (the mission process stops the worker), keep OpenCV to one
-    thread and set the garbage collector for the loop (:mod:`sim.gc_policy`)."""
+    thread and set the garbage collector for the loop (:mod:`sim.process.gc_policy`)."""
     import cv2
 
-    from sim.gc_policy import set_loop_thresholds
+    from sim.process.gc_policy import set_loop_thresholds
 
     set_loop_thresholds()
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
@@ -123,7 +123,7 @@ def render_main(conn: Any, to_detection: Any, ring_detection: FrameRing, to_main
 def detection_main(conn: Any, from_render: Any, ring_in: FrameRing, to_main: Any, ring_out: FrameRing) -> None:
     """Detection-worker loop (see the module doc). The first message on ``conn`` (bytes): the
     pickled dict ``atr`` (the ATR config the detector is built from) and ``shared`` (the sonar's
-    fixed tables, :func:`sim.frame_transport.shared_objects`)."""
+    fixed tables, :func:`sim.process.frame_transport.shared_objects`)."""
     _worker_start()
     try:
         import dataclasses

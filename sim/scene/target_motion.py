@@ -104,7 +104,7 @@ class WaterDrift:
     """Displacement of a water parcel by a spatially uniform current since t = 0 (NED, m).
 
     ``D(t) = mean t + integral_0^t g(s) ds``: the mean part is exact; the time-varying part
-    ``g`` (the Gauss-Markov part of :class:`sim.current.OceanCurrent`) is integrated from the
+    ``g`` (the Gauss-Markov part of :class:`sim.dynamics.current.OceanCurrent`) is integrated from the
     values :meth:`record` is given, each held until the next (as the physics holds the
     current over a step). A record at an earlier time than the last one starts a new history
     (the clock was reset).

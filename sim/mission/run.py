@@ -12,20 +12,19 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from sim.records import ObserverBase
 import numpy as np
 
 from scenarios.schema import Scenario
-from sim.outputs.map_plot import plot_map
 from sim.evaluation.detection_scoring import DetectionScorer
-from sim.mission import Mission
-from sim.movers import BUBBLE_CLASS
+from sim.events.records import ObserverBase
+from sim.features import runs_to_duration
+from sim.mission.loop import Mission
+from sim.outputs.json_files import standard_json, with_geodetic, write_json  # noqa: F401 (re-exported)
+from sim.outputs.map_plot import plot_map
 from sim.outputs.progress import MissionProgress
 from sim.outputs.run_dir import StagedOutput, check_output_dir
-from sim.outputs.json_files import standard_json, with_geodetic, write_json  # noqa: F401 (re-exported)
 from sim.outputs.trajectory_log import TrajectoryLog
-from sim.features import runs_to_duration
-from sim.records import ObserverBase
+from sim.scene.movers import BUBBLE_CLASS
 
 METRICS_DECIMALS = 4
 

@@ -4,7 +4,7 @@ The spec's worldbody holds one body ``"vehicle"`` (origin at the centre of origi
 axes) with a free joint (a ``surface_3dof`` preset: north/east slides and a yaw hinge at
 its waterline depth), an explicit inertial (mass ``m``, CoM at ``r_bg``, inertia
 ``I_g``: the *rigid body only*; added mass, damping, weight and buoyancy act through
-:mod:`sim.vehicle`), a collision geom of the hull envelope, an optional visual mesh that
+:mod:`sim.dynamics.vehicle`), a collision geom of the hull envelope, an optional visual mesh that
 never collides, and sites for its sensor mounts (``fls``, ``dvl``, ``imu``, ``altimeter``,
 ``depth``, ``gps``, those it has) and
 ``thruster_<name>`` (site x axis along the thrust direction). All hull geoms are in
@@ -20,10 +20,10 @@ import mujoco
 import numpy as np
 
 from autonomy.frames import quat_from_euler, quat_from_rot
-from sim.vehicle_params import SENSOR_NAMES, VehicleParams
+from scenarios.vehicle_params import SENSOR_NAMES, VehicleParams
 
 VEHICLE_BODY = "vehicle"
-HULL_GROUP = 1  # geom group of every hull geom (sim.world's groups are documented there)
+HULL_GROUP = 1  # geom group of every hull geom (sim.scene.world's groups are documented there)
 VISUAL_MESH = "hull_visual"
 
 _SHAPES = {

@@ -1,0 +1,1 @@
+"""The MuJoCo world: seabed, basin, targets and their meshes, movers, and the physics that steps it."""
