@@ -134,8 +134,8 @@ def prose() -> tuple[tuple[Path, str], ...]:
 
 def test_checker_reports_a_made_up_path_and_a_broken_link(tmp_path):
     made_up = "sim/" + "no_such_module_xyz.py"
-    text = f"See `{made_up}`, `docs/` and (`tests/sim/test_vehicle.py`, docs/speed/<key>.json)."
-    assert path_tokens(text) == [made_up, "docs/", "tests/sim/test_vehicle.py", "docs/speed/"]
+    text = f"See `{made_up}`, `docs/` and (`tests/sim/dynamics/test_vehicle.py`, docs/speed/<key>.json)."
+    assert path_tokens(text) == [made_up, "docs/", "tests/sim/dynamics/test_vehicle.py", "docs/speed/"]
     assert missing_paths(text) == [made_up]
     assert missing_paths("scripts/" + "no_such_folder/") == ["scripts/no_such_folder/"]
     assert missing_paths("not a path: runs/cssn/metrics.json, /tmp/sim/x.py, ../docs/x.png") == []

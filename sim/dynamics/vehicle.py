@@ -11,7 +11,7 @@ supplies the wrench that makes it follow Fossen's equations with added mass solv
 hydrodynamic terms are integrated explicitly (first order in dt: at 200 Hz, positions of a
 60 s manoeuvre agree with an adaptive solve_ivp solution to ~0.1 %; a yaw spin-down with
 0.2-0.5 s time constants decays 2-4 % faster than the exact solution, see
-tests/sim/test_vehicle.py). Contact forces from MuJoCo act on the rigid body only.
+tests/sim/dynamics/test_vehicle.py). Contact forces from MuJoCo act on the rigid body only.
 
 Free-joint conventions used here: ``qpos = [pos of CO in NED, quat wxyz]``,
 ``qvel = [velocity of CO in NED, angular velocity in body axes]``; ``xfrc_applied`` is a

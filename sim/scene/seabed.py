@@ -116,7 +116,7 @@ class Seabed:
         r0, r1 = rim, np.roll(rim, -1)
         faces += [np.c_[r0, r0 + off, r1], np.c_[r1, r0 + off, r1 + off]]
         # wound outward by construction (closed, consistent, positive volume; checked against
-        # trimesh in tests/sim/test_seabed_mesh.py), so no normal repair pass is needed
+        # trimesh in tests/sim/scene/test_seabed_mesh.py), so no normal repair pass is needed
         return verts, np.vstack(faces)
 
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from autonomy.msis.circle_fit import circle_residuals, fit_circle_algebraic, mlesac_circle, mlesac_iterations
-from autonomy.msis.fuzzy_segments import FuzzySegment, FuzzySegmentMap, matching_degree
+from autonomy.msis.fuzzy_segments import FuzzySegment, matching_degree
 from autonomy.msis.line_segments import fit_line, iepf_split, t_quantile
 from autonomy.msis.localization import fuse_wall_segments
 

@@ -14,6 +14,7 @@ from pathlib import Path
 import pytest
 
 from sim.cli import main
+from tests.support import assert_clean_error, run_cli
 
 SHORT_RUN = ["--set", "duration_s=4", "--no-rerun", "--detector", "none", "--quiet"]
 
@@ -40,36 +41,19 @@ def sandbox(tmp_path, monkeypatch):
     return tmp_path
 
 
-def _run(argv, capsys) -> tuple[int, str]:
-    capsys.readouterr()  # only this command's output
-    code = main(argv)
-    err = capsys.readouterr().err
-    return code, err
-
-
-def _assert_clean_error(code: int, err: str, *culprits: str) -> None:
-    assert code == 2, err
-    assert "Traceback" not in err, err
-    assert err.strip(), "no message"
-    first = err.strip().splitlines()[0]
-    for c in culprits:
-        assert c in err, f"{c!r} not named in: {err}"
-    assert first.startswith("auvsim "), first
-
-
 @pytest.mark.parametrize("out", [".", "", "..", "~", "/"])
 def test_out_that_would_lose_data_is_refused(sandbox, capsys, out):
     before = _snapshot(sandbox)
-    code, err = _run(["run", "--out", out, "--overwrite", *SHORT_RUN], capsys)
-    _assert_clean_error(code, err, "--out")
+    code, err = run_cli(["run", "--out", out, "--overwrite", *SHORT_RUN], capsys)
+    assert_clean_error(code, err, "--out")
     assert "refusing" in err or "empty string" in err
     assert _snapshot(sandbox) == before
 
 
 def test_out_that_contains_the_working_directory_is_refused(sandbox, capsys):
     before = _snapshot(sandbox)
-    code, err = _run(["run", "--out", str(sandbox), "--overwrite", *SHORT_RUN], capsys)
-    _assert_clean_error(code, err, "contains the current directory")
+    code, err = run_cli(["run", "--out", str(sandbox), "--overwrite", *SHORT_RUN], capsys)
+    assert_clean_error(code, err, "contains the current directory")
     assert _snapshot(sandbox) == before
 
 
@@ -77,8 +61,8 @@ def test_out_that_contains_the_working_directory_is_refused(sandbox, capsys):
                                      ("src", "not an auvsim run output")])
 def test_out_that_cannot_be_written_is_named(sandbox, capsys, out, why):
     before = _snapshot(sandbox)
-    code, err = _run(["run", "--out", out, "--overwrite", *SHORT_RUN], capsys)
-    _assert_clean_error(code, err, "--out", why)
+    code, err = run_cli(["run", "--out", out, "--overwrite", *SHORT_RUN], capsys)
+    assert_clean_error(code, err, "--out", why)
     assert _snapshot(sandbox) == before
 
 
@@ -86,8 +70,8 @@ def test_overwrite_replaces_only_an_earlier_run_and_only_when_complete(sandbox, 
     assert main(["run", "--out", "runs/a", *SHORT_RUN]) == 0
     first = (sandbox / "work/runs/a/metrics.json").read_text()
     assert (sandbox / "work/runs/a/.auvsim-output").is_file()
-    code, err = _run(["run", "--out", "runs/a", *SHORT_RUN], capsys)
-    _assert_clean_error(code, err, "--overwrite")
+    code, err = run_cli(["run", "--out", "runs/a", *SHORT_RUN], capsys)
+    assert_clean_error(code, err, "--overwrite")
     assert (sandbox / "work/runs/a/metrics.json").read_text() == first
     assert main(["run", "--out", "runs/a", "--overwrite", "--seed", "5", *SHORT_RUN]) == 0
     assert '"seed": 5' in (sandbox / "work/runs/a/metrics.json").read_text()
@@ -115,14 +99,14 @@ def test_a_failed_run_keeps_the_earlier_one(sandbox, capsys, monkeypatch):
 def test_bad_scenario_files(sandbox, capsys, content, why):
     path = sandbox / "work" / "bad.yaml"
     path.write_bytes(content)
-    code, err = _run(["run", str(path), "--out", "runs/x", *SHORT_RUN], capsys)
-    _assert_clean_error(code, err, "bad.yaml", why)
+    code, err = run_cli(["run", str(path), "--out", "runs/x", *SHORT_RUN], capsys)
+    assert_clean_error(code, err, "bad.yaml", why)
     assert not (sandbox / "work/runs").exists()
 
 
 def test_scenario_that_is_a_directory(sandbox, capsys):
-    code, err = _run(["validate", str(sandbox / "work" / "src")], capsys)
-    _assert_clean_error(code, err, "src", "is a directory")
+    code, err = run_cli(["validate", str(sandbox / "work" / "src")], capsys)
+    assert_clean_error(code, err, "src", "is a directory")
 
 
 @pytest.mark.parametrize("override,named", [
@@ -142,15 +126,15 @@ def test_scenario_that_is_a_directory(sandbox, capsys):
     ("nokey", "key.path=value"),
 ])
 def test_values_that_would_break_the_run_are_rejected_at_load(capsys, override, named):
-    code, err = _run(["validate", "cssn_lawnmower", "--set", override], capsys)
-    _assert_clean_error(code, err, named, "--set")
+    code, err = run_cli(["validate", "cssn_lawnmower", "--set", override], capsys)
+    assert_clean_error(code, err, named, "--set")
 
 
 def test_corrupt_model_is_named_by_its_key(sandbox, capsys):
     bad = sandbox / "work" / "corrupt.onnx"
     bad.write_bytes(b"not a protobuf at all")
-    code, err = _run(["validate", "cssn_lawnmower", "--set", f"autonomy.atr.model_path={bad}"], capsys)
-    _assert_clean_error(code, err, "autonomy.atr.model_path", "corrupt.onnx", "not a valid ONNX model")
+    code, err = run_cli(["validate", "cssn_lawnmower", "--set", f"autonomy.atr.model_path={bad}"], capsys)
+    assert_clean_error(code, err, "autonomy.atr.model_path", "corrupt.onnx", "not a valid ONNX model")
 
 
 def test_shipped_scenarios_pass_the_placement_checks(capsys):
@@ -180,8 +164,8 @@ def test_shipped_scenarios_pass_the_placement_checks(capsys):
 ])
 def test_command_arguments(sandbox, capsys, argv, named):
     before = _snapshot(sandbox)
-    code, err = _run(argv, capsys)
-    _assert_clean_error(code, err, named)
+    code, err = run_cli(argv, capsys)
+    assert_clean_error(code, err, named)
     assert _snapshot(sandbox) == before
 
 
@@ -234,8 +218,8 @@ def test_a_survey_past_the_abort_limits_is_refused_at_load(sandbox, capsys, scen
     sets = [a for o in overrides for a in ("--set", o)]
     for argv in (["validate", scenario, *sets], ["run", scenario, "--out", "runs/lim", *sets, *SHORT_RUN[2:]]):
         before = _snapshot(sandbox)
-        code, err = _run(argv, capsys)
-        _assert_clean_error(code, err, *named, "--set")
+        code, err = run_cli(argv, capsys)
+        assert_clean_error(code, err, *named, "--set")
         assert "would abort" in err
         assert _snapshot(sandbox) == before
 
@@ -293,8 +277,8 @@ def test_overwrite_refuses_a_run_folder_holding_the_users_own_files(sandbox, cap
     (sandbox / "work/runs/k/notes.txt").write_text("mine")
     (sandbox / "work/runs/k/analysis").mkdir()
     before = _snapshot(sandbox)
-    code, err = _run(["run", "--out", "runs/k", "--overwrite", *SHORT_RUN], capsys)
-    _assert_clean_error(code, err, "notes.txt", "analysis", "did not write")
+    code, err = run_cli(["run", "--out", "runs/k", "--overwrite", *SHORT_RUN], capsys)
+    assert_clean_error(code, err, "notes.txt", "analysis", "did not write")
     assert _snapshot(sandbox) == before
 
 
@@ -306,8 +290,8 @@ def test_overwrite_refuses_a_run_folder_holding_the_users_own_files(sandbox, cap
     ("autonomy.guidance.survey.altitude_m=10", "autonomy.guidance.survey.altitude_m"),
 ])
 def test_types_and_surveys_that_cannot_be_are_rejected(capsys, override, named):
-    code, err = _run(["validate", "cssn_lawnmower", "--set", override], capsys)
-    _assert_clean_error(code, err, named, "--set")
+    code, err = run_cli(["validate", "cssn_lawnmower", "--set", override], capsys)
+    assert_clean_error(code, err, named, "--set")
 
 
 def test_scientific_notation_without_a_dot_is_a_number(capsys):
@@ -318,8 +302,8 @@ def test_scientific_notation_without_a_dot_is_a_number(capsys):
 def test_a_key_given_twice_is_an_error(sandbox, capsys):
     path = sandbox / "work" / "dup.yaml"
     path.write_text("duration_s: 900\nduration_s: 5\n")
-    code, err = _run(["validate", str(path)], capsys)
-    _assert_clean_error(code, err, "dup.yaml", "'duration_s' appears twice")
+    code, err = run_cli(["validate", str(path)], capsys)
+    assert_clean_error(code, err, "dup.yaml", "'duration_s' appears twice")
 
 
 def _tiny_dataset_copy(sandbox, name: str) -> Path:
@@ -333,16 +317,16 @@ def _tiny_dataset_copy(sandbox, name: str) -> Path:
 def test_corrupt_dataset_annotations_are_named(sandbox, capsys, content, why):
     folder = _tiny_dataset_copy(sandbox, "ds")
     (folder / "annotations.json").write_text(content)
-    code, err = _run(["eval-atr", "--data", str(folder), "--detector", "classical"], capsys)
-    _assert_clean_error(code, err, "annotations.json", why)
+    code, err = run_cli(["eval-atr", "--data", str(folder), "--detector", "classical"], capsys)
+    assert_clean_error(code, err, "annotations.json", why)
 
 
 def test_damaged_manifest_on_resume_is_named(sandbox, capsys):
     folder = _tiny_dataset_copy(sandbox, "ds")
     (folder / "manifest.json").write_text("{bad")
     (folder / ".auvsim-output").write_text('{"kind": "dataset"}')
-    code, err = _run(["dataset", "--n", "2", "--out", str(folder), "--workers", "1", "--no-progress"], capsys)
-    _assert_clean_error(code, err, "manifest.json", "damaged")
+    code, err = run_cli(["dataset", "--n", "2", "--out", str(folder), "--workers", "1", "--no-progress"], capsys)
+    assert_clean_error(code, err, "manifest.json", "damaged")
 
 
 @pytest.mark.parametrize("argv,named", [
@@ -354,8 +338,8 @@ def test_damaged_manifest_on_resume_is_named(sandbox, capsys):
 ])
 def test_contradictions_and_limits(sandbox, capsys, argv, named):
     before = _snapshot(sandbox)
-    code, err = _run(argv, capsys)
-    _assert_clean_error(code, err, named)
+    code, err = run_cli(argv, capsys)
+    assert_clean_error(code, err, named)
     assert _snapshot(sandbox) == before
 
 
@@ -368,8 +352,8 @@ def test_a_full_disk_is_reported_as_such_not_as_a_bug(sandbox, capsys, monkeypat
         raise OSError(errno.ENOSPC, "No space left on device", "runs/f/.partial/trajectory.csv")
 
     monkeypatch.setattr(mo.TrajectoryLog, "write_csv", full)
-    code, err = _run(["run", "--out", "runs/f", *SHORT_RUN], capsys)
-    _assert_clean_error(code, err, "No space left on device")
+    code, err = run_cli(["run", "--out", "runs/f", *SHORT_RUN], capsys)
+    assert_clean_error(code, err, "No space left on device")
     assert not (sandbox / "work/runs/f").exists() and not (sandbox / "work/runs/.f.partial").exists()
 
 

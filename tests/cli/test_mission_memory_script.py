@@ -6,11 +6,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tests.cli.test_study_scripts_bad_input import _refused, _script
+from tests.support import script_refusal, load_script
 
 
 def test_fit_growth_recovers_a_known_line():
-    mod = _script("mission_memory")
+    mod = load_script("mission_memory")
     t = np.linspace(0.0, 9000.0, 400)
     rss = 300.0 + 5.0 * t / 3600.0 + np.where(t < 600.0, -80.0, 0.0)  # 5 MB/h after a 600 s warm-up
     rss = rss + np.random.default_rng(0).normal(0.0, 0.5, t.size)
@@ -37,7 +37,7 @@ def test_fit_growth_recovers_a_known_line():
 def test_mission_memory_refuses(argv, culprits, capsys, tmp_path):
     (tmp_path / "f.txt").write_text("keep")
     argv = [a.format(file=tmp_path / "f.txt", new=tmp_path / "new") for a in argv]
-    _refused(_script("mission_memory"), argv, capsys, *culprits)
+    script_refusal(load_script("mission_memory"), argv, capsys, *culprits)
     assert (tmp_path / "f.txt").read_text() == "keep" and not (tmp_path / "new").exists()
 
 
@@ -47,7 +47,7 @@ def test_the_tree_rss_counts_child_processes():
     import sys
     import time
 
-    mod = _script("mission_memory")
+    mod = load_script("mission_memory")
     child = subprocess.Popen([sys.executable, "-c", "import subprocess, sys, time; "
                               "p = subprocess.Popen([sys.executable, '-c', 'import time; b = bytearray(200_000_000); "
                               "b[::4096] = bytes(len(b[::4096])); time.sleep(30)']); time.sleep(30)"])
@@ -65,7 +65,7 @@ def test_the_tree_rss_counts_child_processes():
 
 
 def test_a_run_argument_the_run_refuses_is_repeated_not_hidden(capsys, tmp_path):
-    mod = _script("mission_memory")
+    mod = load_script("mission_memory")
     rc = mod.main(["--out", str(tmp_path / "m"), "--duration-s", "5", "--warmup-s", "0",
                    "--run-arg=--workers=0"])
     err = capsys.readouterr().err

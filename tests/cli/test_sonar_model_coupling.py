@@ -12,7 +12,7 @@ import pytest
 
 from scenarios.load import load_scenario
 from sim.cli import main
-from tests.cli.test_bad_input import _assert_clean_error, _run
+from tests.support import assert_clean_error, run_cli
 
 #: The issue's command: the three coupled overrides a preset change needed.
 ARIS_LF = ["--set", "sensors.fls.preset=aris3000_lf", "--set", "sensors.fls.range_window_m=[1,15]",
@@ -26,16 +26,16 @@ TWO_SONARS = ["--set", "sensors.fls_down.kind=fls", "--set", "sensors.fls_down.t
     (["--set", "sensors.fls.fan_size_px=[600,300]"], "sensors.fls.fan_size_px", "set fan_size_px: [894, 477]"),
 ])
 def test_a_fan_the_cnn_was_not_trained_on_is_refused_at_load(capsys, overrides, key, fix):
-    code, err = _run(["validate", "cssn_lawnmower", *overrides], capsys)
-    _assert_clean_error(code, err, key, fix, "894 x 477", "autonomy.atr.accept_any_fan_size: true",
+    code, err = run_cli(["validate", "cssn_lawnmower", *overrides], capsys)
+    assert_clean_error(code, err, key, fix, "894 x 477", "autonomy.atr.accept_any_fan_size: true",
                         "autonomy.atr.detector: classical or none", "autonomy.atr.model_path", "(from --set")
     assert len(err.strip().splitlines()) == 1, err
 
 
 def test_run_refuses_it_before_creating_anything(tmp_path, capsys):
-    code, err = _run(["run", "cssn_lawnmower", "--out", str(tmp_path / "r"), "--no-rerun", "--quiet",
+    code, err = run_cli(["run", "cssn_lawnmower", "--out", str(tmp_path / "r"), "--no-rerun", "--quiet",
                       "--set", "duration_s=2", *ARIS_LF], capsys)
-    _assert_clean_error(code, err, "sensors.fls.preset")
+    assert_clean_error(code, err, "sensors.fls.preset")
     assert "internal error" not in err and not (tmp_path / "r").exists()
 
 
@@ -123,15 +123,15 @@ def test_validate_says_which_keys_the_preset_replaced(capsys):
 
 @pytest.mark.parametrize("value,why", [("gps", "is a gps sensor"), ("fls2", "is not an enabled sensor")])
 def test_the_atr_sonar_must_be_an_enabled_fls(capsys, value, why):
-    code, err = _run(["validate", "cssn_lawnmower", *TWO_SONARS, "--set", f"autonomy.atr.sonar_sensor={value}"],
+    code, err = run_cli(["validate", "cssn_lawnmower", *TWO_SONARS, "--set", f"autonomy.atr.sonar_sensor={value}"],
                      capsys)
-    _assert_clean_error(code, err, "autonomy.atr.sonar_sensor", why, "allowed: fls, fls_down")
+    assert_clean_error(code, err, "autonomy.atr.sonar_sensor", why, "allowed: fls, fls_down")
 
 
 def test_the_atr_sonar_is_checked_against_the_model_too(capsys):
-    code, err = _run(["validate", "cssn_lawnmower", *TWO_SONARS, "--set", "sensors.fls_down.fan_size_px=[600,300]",
+    code, err = run_cli(["validate", "cssn_lawnmower", *TWO_SONARS, "--set", "sensors.fls_down.fan_size_px=[600,300]",
                       "--set", "autonomy.atr.sonar_sensor=fls_down"], capsys)
-    _assert_clean_error(code, err, "sensors.fls_down.fan_size_px")
+    assert_clean_error(code, err, "sensors.fls_down.fan_size_px")
     # the sonar perception does not read may make any fan
     assert main(["validate", "cssn_lawnmower", *TWO_SONARS, "--set", "sensors.fls_down.fan_size_px=[600,300]"]) == 0
 

@@ -5,32 +5,9 @@ before any run (so a study's results are never lost at its end)."""
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
 
 import pytest
-
-SCRIPTS = Path(__file__).resolve().parents[2] / "scripts"
-
-
-def _script(name: str):
-    spec = importlib.util.spec_from_file_location(name, SCRIPTS / f"{name}.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
-def _refused(mod, argv, capsys, *culprits: str) -> str:
-    capsys.readouterr()
-    code = mod.main(argv)
-    out = capsys.readouterr()
-    assert code == 2, out.err
-    assert "Traceback" not in out.err and out.out == ""
-    lines = out.err.strip().splitlines()
-    assert len(lines) == 1, out.err
-    for c in culprits:
-        assert c in lines[0], lines[0]
-    return lines[0]
+from tests.support import SCRIPTS, load_script, script_refusal
 
 
 @pytest.mark.parametrize("argv,culprits", [
@@ -46,7 +23,7 @@ def _refused(mod, argv, capsys, *culprits: str) -> str:
 def test_tracking_study_refuses(argv, culprits, capsys, tmp_path):
     (tmp_path / "f.txt").write_text("keep")
     argv = [a.format(file=tmp_path / "f.txt", missing=tmp_path / "nope", dir=tmp_path) for a in argv]
-    _refused(_script("tracking_study"), argv, capsys, *culprits)
+    script_refusal(load_script("tracking_study"), argv, capsys, *culprits)
     assert (tmp_path / "f.txt").read_text() == "keep"
 
 
@@ -58,7 +35,7 @@ def test_tracking_study_refuses(argv, culprits, capsys, tmp_path):
     (["pool_circular", "--set", "sensors.msis.sector_width_grad=401"], ("sector_width_grad", "400")),
 ])
 def test_msis_evaluation_refuses(argv, culprits, capsys):
-    _refused(_script("evaluate_msis_localization"), argv, capsys, *culprits)
+    script_refusal(load_script("evaluate_msis_localization"), argv, capsys, *culprits)
 
 
 @pytest.mark.parametrize("argv,culprits", [
@@ -75,7 +52,7 @@ def test_sea_trial_evaluation_refuses(argv, culprits, capsys, tmp_path):
     argv = [a.format(file=tmp_path / "f.txt") for a in argv]
     if "--out" not in argv:
         argv += ["--out", str(tmp_path / "out")]
-    _refused(_script("evaluate_sea_trial"), argv, capsys, *culprits)
+    script_refusal(load_script("evaluate_sea_trial"), argv, capsys, *culprits)
     assert (tmp_path / "f.txt").read_text() == "keep"
     assert not (tmp_path / "out").exists()
 
@@ -89,7 +66,7 @@ def test_sea_trial_evaluation_refuses(argv, culprits, capsys, tmp_path):
 ])
 def test_atr_detect_ab_refuses(argv, culprits, capsys, tmp_path):
     argv = [a.format(missing=tmp_path / "nope", root=SCRIPTS.parent) for a in argv]
-    _refused(_script("atr_detect_ab"), argv, capsys, *culprits)
+    script_refusal(load_script("atr_detect_ab"), argv, capsys, *culprits)
 
 
 @pytest.mark.parametrize("argv,culprits", [
@@ -102,5 +79,5 @@ def test_fls_frame_digest_refuses(argv, culprits, capsys):
     from sim.sensors.fls import FlsSensor
 
     render = FlsSensor.render
-    _refused(_script("fls_frame_digest"), argv, capsys, *culprits)
+    script_refusal(load_script("fls_frame_digest"), argv, capsys, *culprits)
     assert FlsSensor.render is render  # its digest hook does not outlive the call

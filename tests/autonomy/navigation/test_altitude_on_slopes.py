@@ -12,7 +12,7 @@ import pytest
 from autonomy.control.setpoint import Setpoint
 from autonomy.frames import rot_from_euler
 from autonomy.messages import ImuMsg
-from autonomy.navigation import NavigationFilter, NavNoiseModel
+from autonomy.navigation import NavigationFilter
 from scenarios import load_scenario
 from scenarios.config.nav_sensors import AltimeterConfig, DvlConfig
 from autonomy.navigation.config import NavigationConfig
@@ -22,7 +22,7 @@ from sim.sensors.base import SceneView
 from sim.sensors.altimeter import AltimeterSensor
 from sim.sensors.dvl import DvlSensor
 from sim.dynamics.truth import VehicleTruth
-from tests.autonomy.navigation.test_kinematics import PlaneCaster
+from tests.support import PlaneCaster
 
 MOUNTS = {"dvl": np.array([0.15, -0.05, 0.25]), "altimeter": np.array([0.2, 0.05, 0.25])}
 

@@ -14,43 +14,17 @@ from autonomy.navigation import NavigationFilter
 from autonomy.navigation.config import NavigationConfig
 from autonomy.navigation.ekf import rotated_vector_jacobian
 from scenarios.schema import SensorsConfig
-from sim.sensors.base import SceneView
-from sim.sensors.nav_noise import nav_noise_model
 from sim.sensors.nav_suite import build_nav_sensors
-from tests.autonomy.navigation.test_kinematics import flat_seabed, survey_truths
-
-MOUNTS = {"imu": np.zeros(3), "dvl": np.array([0.15, 0.0, 0.25]), "depth": np.array([-0.2, 0.0, 0.0]),
-          "altimeter": np.array([0.2, 0.0, 0.25]), "gps": np.array([-0.1, 0.0, -0.4])}
-SEABED = flat_seabed(6.0)
-DT_S = 0.2  # IMU, DVL and depth every step, GPS every 5th
-TRUTHS = survey_truths(dt_s=DT_S, leg_s=80.0, n_legs=2)
-NOISE = nav_noise_model()  # the filter's model of the default sensors
+from tests.support import NAV_MOUNTS, NAV_NOISE, SURVEY_TRUTHS, fly_filters
 
 
 def _distance_m(truths) -> float:
     return float(sum(np.linalg.norm(b.pos_ned[:2] - a.pos_ned[:2]) for a, b in zip(truths, truths[1:])))
 
 
-def _fly(filters, sensors, truths, every: int = 1, noise: bool = True):
-    """Feed every filter the same sensor messages; yield (truth, [estimate...]) every ``every`` steps."""
-    for k, tr in enumerate(truths):
-        msgs = [sensors["imu"].measure(tr, noise=noise),
-                sensors["dvl"].measure(tr, SceneView(0.0, SEABED), noise=noise),
-                sensors["depth"].measure(tr, noise=noise)]
-        gps = sensors["gps"].measure(tr, noise=noise) if k % 5 == 0 else None
-        for f in filters:
-            f.on_imu(msgs[0])
-            f.on_dvl(msgs[1])
-            f.on_depth(msgs[2])
-            if gps is not None:
-                f.on_gps(gps)
-        if k % every == 0:
-            yield tr, [f.estimate() for f in filters]
-
-
 def _initial_pos(cfg: NavigationConfig, seed: int) -> np.ndarray:
     sigma = np.array([cfg.initial_pos_sigma_m, cfg.initial_pos_sigma_m, cfg.initial_depth_sigma_m])
-    return TRUTHS[0].pos_ned + np.random.default_rng(10_000 + seed).standard_normal(3) * sigma
+    return SURVEY_TRUTHS[0].pos_ned + np.random.default_rng(10_000 + seed).standard_normal(3) * sigma
 
 
 # ----------------------------------------------------------------------------- Jacobians
@@ -70,27 +44,27 @@ def test_rotated_vector_jacobian_matches_finite_differences():
 
 def test_noise_free_sensors_dead_reckon_the_true_path():
     cfg = NavigationConfig(mode="dead_reckoning")
-    sensors = build_nav_sensors(SensorsConfig(), MOUNTS, 0)
-    f = NavigationFilter(cfg, TRUTHS[0].pos_ned, TRUTHS[0].rpy_rad[2], NOISE, mounts=MOUNTS)
-    errs = [np.linalg.norm(est[0].pos_ned - tr.pos_ned) for tr, est in _fly([f], sensors, TRUTHS, 10, noise=False)]
+    sensors = build_nav_sensors(SensorsConfig(), NAV_MOUNTS, 0)
+    f = NavigationFilter(cfg, SURVEY_TRUTHS[0].pos_ned, SURVEY_TRUTHS[0].rpy_rad[2], NAV_NOISE, mounts=NAV_MOUNTS)
+    errs = [np.linalg.norm(est[0].pos_ned - tr.pos_ned) for tr, est in fly_filters([f], sensors, SURVEY_TRUTHS, 10, noise=False)]
     # only the zero-order hold of the 5 Hz DVL velocity separates the estimate from the truth
     assert max(errs) < 0.02
     est = f.estimate()
-    np.testing.assert_allclose(wrap_angle(est.rpy_rad - TRUTHS[-1].rpy_rad), 0.0, atol=1e-4)
-    np.testing.assert_allclose(est.vel_body_mps, TRUTHS[-1].nu[:3], atol=1e-3)
+    np.testing.assert_allclose(wrap_angle(est.rpy_rad - SURVEY_TRUTHS[-1].rpy_rad), 0.0, atol=1e-4)
+    np.testing.assert_allclose(est.vel_body_mps, SURVEY_TRUTHS[-1].nu[:3], atol=1e-3)
 
 
 def test_dead_reckoning_drift_is_a_few_percent_of_distance():
     cfg = NavigationConfig(mode="dead_reckoning")
-    distance = _distance_m(TRUTHS)
+    distance = _distance_m(SURVEY_TRUTHS)
     drift, sigma = [], []
     for seed in range(6):
-        sensors = build_nav_sensors(SensorsConfig(), MOUNTS, seed)
-        f = NavigationFilter(cfg, TRUTHS[0].pos_ned, TRUTHS[0].rpy_rad[2], NOISE, mounts=MOUNTS)
-        for _ in _fly([f], sensors, TRUTHS, len(TRUTHS)):
+        sensors = build_nav_sensors(SensorsConfig(), NAV_MOUNTS, seed)
+        f = NavigationFilter(cfg, SURVEY_TRUTHS[0].pos_ned, SURVEY_TRUTHS[0].rpy_rad[2], NAV_NOISE, mounts=NAV_MOUNTS)
+        for _ in fly_filters([f], sensors, SURVEY_TRUTHS, len(SURVEY_TRUTHS)):
             pass
         est = f.estimate()
-        drift.append(np.linalg.norm(est.pos_ned[:2] - TRUTHS[-1].pos_ned[:2]) / distance)
+        drift.append(np.linalg.norm(est.pos_ned[:2] - SURVEY_TRUTHS[-1].pos_ned[:2]) / distance)
         sigma.append(np.sqrt(np.trace(est.cov_pos_ned[:2, :2])) / distance)
     # FeelHippo: about 3 % of the distance travelled; FOG + DVL defaults do better
     assert np.median(drift) < 0.03 and max(drift) < 0.05
@@ -100,9 +74,9 @@ def test_dead_reckoning_drift_is_a_few_percent_of_distance():
 
 def test_gps_is_ignored_in_dead_reckoning_and_gated_in_ekf():
     gps = GpsMsg(t_s=0.0, pos_ne_m=np.array([1.0, 0.0]), valid=True)
-    dr = NavigationFilter(NavigationConfig(mode="dead_reckoning"), np.zeros(3), 0.0, NOISE)
+    dr = NavigationFilter(NavigationConfig(mode="dead_reckoning"), np.zeros(3), 0.0, NAV_NOISE)
     assert not dr.on_gps(gps)
-    ekf = NavigationFilter(NavigationConfig(), np.zeros(3), 0.0, NOISE)
+    ekf = NavigationFilter(NavigationConfig(), np.zeros(3), 0.0, NAV_NOISE)
     cov_before = ekf.estimate().cov_pos_ned
     assert ekf.on_gps(gps)
     after = ekf.estimate()
@@ -116,7 +90,7 @@ def test_gps_is_ignored_in_dead_reckoning_and_gated_in_ekf():
 def test_lost_bottom_lock_inflates_covariance():
     cfg = NavigationConfig(mode="dead_reckoning", initial_pos_sigma_m=0.0, initial_depth_sigma_m=0.0)
     imu = ImuMsg(t_s=0.0, rpy_rad=np.zeros(3), rate_body_radps=np.zeros(3), accel_body_mps2=np.array([0, 0, -9.81]))
-    locked, lost = (NavigationFilter(cfg, np.zeros(3), 0.0, NOISE) for _ in range(2))
+    locked, lost = (NavigationFilter(cfg, np.zeros(3), 0.0, NAV_NOISE) for _ in range(2))
     for k in range(1, 51):
         t = 0.2 * k
         good = DvlMsg(t_s=t, vel_body_mps=np.array([0.5, 0.0, 0.0]), valid=True, altitude_m=2.0,
@@ -137,16 +111,16 @@ def test_ekf_nees_within_chi_square_bounds_over_monte_carlo_runs():
     at (nearly) every checkpoint; a filter with over-optimistic noise fails the same check."""
     n_runs, every = 24, 50  # checkpoint every 10 s
     cfg = NavigationConfig()
-    good_noise = NOISE
+    good_noise = NAV_NOISE
     bad_noise = dataclasses.replace(good_noise, attitude_bias_sigma_rad=good_noise.attitude_bias_sigma_rad / 4,
                                     dvl_scale_sigma=good_noise.dvl_scale_sigma / 4)
     nees = []
     for seed in range(n_runs):
-        sensors = build_nav_sensors(SensorsConfig(), MOUNTS, seed)
+        sensors = build_nav_sensors(SensorsConfig(), NAV_MOUNTS, seed)
         p0 = _initial_pos(cfg, seed)
-        filters = [NavigationFilter(cfg, p0, TRUTHS[0].rpy_rad[2], n, mounts=MOUNTS) for n in (good_noise, bad_noise)]
+        filters = [NavigationFilter(cfg, p0, SURVEY_TRUTHS[0].rpy_rad[2], n, mounts=NAV_MOUNTS) for n in (good_noise, bad_noise)]
         run = []
-        for tr, ests in _fly(filters, sensors, TRUTHS, every):
+        for tr, ests in fly_filters(filters, sensors, SURVEY_TRUTHS, every):
             errs = [e.pos_ned - tr.pos_ned for e in ests]
             run.append([d @ np.linalg.solve(e.cov_pos_ned, d) for d, e in zip(errs, ests)])
         nees.append(run)
@@ -165,7 +139,7 @@ def test_usbl_fixes_pull_a_wrong_prior_to_the_truth():
     beacon = np.array([20.0, -10.0, 15.0])
     truth_pos, yaw = np.array([3.0, 4.0, 5.0]), 0.7
     cfg = NavigationConfig(initial_pos_sigma_m=5.0, initial_depth_sigma_m=5.0)
-    f = NavigationFilter(cfg, truth_pos + [3.0, -2.0, 1.5], yaw, NOISE, usbl_beacon_pos_ned=beacon)
+    f = NavigationFilter(cfg, truth_pos + [3.0, -2.0, 1.5], yaw, NAV_NOISE, usbl_beacon_pos_ned=beacon)
     R = rot_from_euler(0.0, 0.0, yaw)
     rng = np.random.default_rng(1)
     sig_a = np.radians(cfg.usbl_angle_noise_deg)
@@ -184,7 +158,7 @@ def test_usbl_fixes_pull_a_wrong_prior_to_the_truth():
     assert np.linalg.norm(err) < 0.3
     assert err @ np.linalg.solve(est.cov_pos_ned, err) < chi2.ppf(0.999, 3)
     with pytest.raises(ValueError, match="usbl_beacon_pos_ned"):
-        NavigationFilter(cfg, np.zeros(3), 0.0, NOISE).on_usbl(UsblMsg(t_s=0.0, range_m=1.0, bearing_rad=0.0, elevation_rad=0.0))
+        NavigationFilter(cfg, np.zeros(3), 0.0, NAV_NOISE).on_usbl(UsblMsg(t_s=0.0, range_m=1.0, bearing_rad=0.0, elevation_rad=0.0))
 
 
 def test_altitude_refers_to_body_origin_not_the_sensor():
@@ -192,7 +166,7 @@ def test_altitude_refers_to_body_origin_not_the_sensor():
     from autonomy.messages import AltimeterMsg
 
     mounts = {"altimeter": np.array([0.15, 0.0, 0.24]), "dvl": np.array([0.0, 0.0, 0.3])}
-    f = NavigationFilter(NavigationConfig(), np.zeros(3), 0.0, NOISE, mounts=mounts)
+    f = NavigationFilter(NavigationConfig(), np.zeros(3), 0.0, NAV_NOISE, mounts=mounts)
     f.on_imu(ImuMsg(t_s=0.0, rpy_rad=np.zeros(3), rate_body_radps=np.zeros(3),
                     accel_body_mps2=np.array([0.0, 0.0, -9.81])))
     f.on_altimeter(AltimeterMsg(t_s=0.0, altitude_m=1.76, valid=True))

@@ -15,8 +15,7 @@ from autonomy.frames import euler_rate_matrix, rot_from_euler
 from autonomy.navigation import NavigationFilter
 from autonomy.navigation.config import NavigationConfig
 from autonomy.navigation.ekf import SEABED_RELIEF_M_PER_SQRT_M
-from sim.sensors.base import SceneView
-from tests.autonomy.navigation.test_ekf import MOUNTS, NOISE, SEABED, TRUTHS, _fly
+from tests.support import NAV_MOUNTS, NAV_NOISE, SURVEY_TRUTHS, fly_filters
 from sim.sensors.nav_suite import build_nav_sensors
 from scenarios.schema import SensorsConfig
 
@@ -44,8 +43,8 @@ def _dense_predict(f: NavigationFilter, t_s: float):
     F[0:3, 6] = -(R @ v_m) / one_s**2 * dt
     F[0:3, 7:10] = -R / one_s * dt
     Q = np.zeros((10, 10))
-    Q[0:3, 0:3] = J @ np.diag(NOISE.attitude_noise_rad**2) @ J.T * dt**2
-    Q[5, 5] = NOISE.heading_rw_rad_per_sqrt_s**2 * dt
+    Q[0:3, 0:3] = J @ np.diag(NAV_NOISE.attitude_noise_rad**2) @ J.T * dt**2
+    Q[5, 5] = NAV_NOISE.heading_rw_rad_per_sqrt_s**2 * dt
     cfg = f.cfg
     age = min(f._t_s - f._t_dvl_valid_s, cfg.dvl_timeout_s)
     q_vel = cfg.hold_accel_sigma_mps2**2 * (2 * age * dt + dt * dt)
@@ -84,9 +83,9 @@ class _Checked(NavigationFilter):
 
 
 def test_predict_matches_dense_matrix_form_over_a_survey():
-    sensors = build_nav_sensors(SensorsConfig(), MOUNTS, 3)
-    f = _Checked(NavigationConfig(), TRUTHS[0].pos_ned, float(TRUTHS[0].rpy_rad[2]), NOISE, mounts=MOUNTS)
-    for _ in _fly([f], sensors, TRUTHS[:300]):
+    sensors = build_nav_sensors(SensorsConfig(), NAV_MOUNTS, 3)
+    f = _Checked(NavigationConfig(), SURVEY_TRUTHS[0].pos_ned, float(SURVEY_TRUTHS[0].rpy_rad[2]), NAV_NOISE, mounts=NAV_MOUNTS)
+    for _ in fly_filters([f], sensors, SURVEY_TRUTHS[:300]):
         pass
     assert _Checked.checked > 250
     assert np.isfinite(f._altitude_m)  # the altitude branch was exercised

@@ -16,7 +16,7 @@ from autonomy.sidescan.tile_assembler import SssTileAssembler
 from scenarios.config.sss import SssConfig
 from sim.sensors.analytic_caster import AnalyticBox, AnalyticCaster
 from sim.sensors.sss import SssSensor
-from tests.sim.sensors.test_sss_geometry import Obj
+from tests.support import SceneObj
 
 
 def nav(t: float, n: float, e: float, psi: float) -> NavEstimate:
@@ -86,7 +86,7 @@ def test_detector_finds_a_box_where_it_lies_and_nothing_on_bare_seabed():
     box = AnalyticBox(centre, np.array([1.0, 0.4, 0.3]), 0)
     caster = AnalyticCaster(SEABED_M, boxes=(box,))
     det = SssHighlightShadowDetector(SssDetectorConfig())
-    tile = fly(caster, [Obj(0, "b", "mine_like", True, centre)], 250, seed=3)
+    tile = fly(caster, [SceneObj(0, "b", "mine_like", True, centre)], 250, seed=3)
     out = det.detect(tile)
     assert len(out.ell_m) == 1
     truth = tile.to_tile_frame(centre[:2][None])[0]  # exact poses: the tile frame is the true one
@@ -135,7 +135,7 @@ def test_a_2m_box_measures_the_same_length_with_the_filter_of_the_last_imu_messa
         for k in range(1, n_pings + 2):
             t = k / PING_HZ
             pos = np.array([CRUISE * t, 0.0, DEPTH_M])
-            r = sonar.render(t, pos, rot_from_euler(0.0, 0.0, 0.0), caster, [Obj(0, "b", "mine_like", True, centre)])
+            r = sonar.render(t, pos, rot_from_euler(0.0, 0.0, 0.0), caster, [SceneObj(0, "b", "mine_like", True, centre)])
             nav_t = nav(t, pos[0], pos[1], 0.0) if how == "exact" else nav_of_last_imu(t, CRUISE)
             tile = asm.add(r.ping, nav_t) or tile
         out = det.detect(tile)

@@ -3,7 +3,6 @@ at most the drawn fraction of its height, checked on the compiled MuJoCo scene."
 
 from __future__ import annotations
 
-import mujoco
 import numpy as np
 import pytest
 

@@ -10,7 +10,7 @@ import pytest
 
 from sim.cli import main
 from sim.evaluation.atr_metrics import choose_threshold, evaluate_detector, threshold_sweep
-from tests.sim.hand_made_dataset import write_fan_dataset
+from tests.support import write_fan_dataset
 
 
 class _Blind:

@@ -3,7 +3,6 @@ the scan image re-logged as it builds up, and the features of each position fix.
 
 from __future__ import annotations
 
-from collections import defaultdict
 
 from sim.events.records import ObserverBase
 import numpy as np
@@ -13,36 +12,9 @@ from scenarios import load_scenario
 from sim.mission import Mission
 from sim.outputs.rerun_recording import RerunRecorder
 from sim.sensors.msis import MsisRender
+from tests.support import FakeRerunStream, image_strips
 
 rr = pytest.importorskip("rerun")
-
-
-class _FakeStream:
-    """Stands in for ``rr.RecordingStream``: keeps (entity, archetype) per log call and the
-    columns of each ``send_columns``."""
-
-    def __init__(self) -> None:
-        self.logs: dict[str, list] = defaultdict(list)
-        self.columns: dict[str, list] = defaultdict(list)  # entity -> [(indexes, columns)] per send_columns
-        self.flushes: list[float] = []  # timeout_sec of each flush
-
-    def save(self, path) -> None:
-        pass
-
-    def set_time(self, *args, **kwargs) -> None:
-        pass
-
-    def log(self, entity: str, archetype, static: bool = False) -> None:
-        self.logs[entity].append(archetype)
-
-    def send_columns(self, entity: str, indexes, columns) -> None:
-        self.columns[entity].append((indexes, columns))
-
-    def flush(self, timeout_sec: float = 1e38) -> None:
-        self.flushes.append(timeout_sec)
-
-    def disconnect(self) -> None:
-        pass
 
 
 class _Pings(ObserverBase):
@@ -72,14 +44,10 @@ def _positions(arch) -> np.ndarray:
     return np.asarray(arch.positions.as_arrow_array().to_pylist(), dtype=float).reshape(-1, 3)
 
 
-def _strips(arch) -> list[np.ndarray]:
-    return [np.asarray(s, dtype=float) for s in arch.strips.as_arrow_array().to_pylist()]
-
-
 def _record(scenario: str, duration_s: float, tmp_path):
     scn = load_scenario(scenario, [f"duration_s={duration_s}"])
     fake = RerunRecorder(tmp_path / "fake.rrd")
-    fake._rec = _FakeStream()
+    fake._rec = FakeRerunStream()
     real = RerunRecorder(tmp_path / "real.rrd")
     pings = _Pings()
     mission = Mission(scn, observers=[fake, real, pings])
@@ -118,7 +86,7 @@ def test_pool_recording_logs_every_ping_along_its_beam_and_the_fitted_circle(tmp
     assert len(pings.fixes) >= 1 and len(logs["world/msis/msis/fix/circle"]) == len(pings.fixes)
     # features are in the navigation frame: less the navigation error they lie on the true wall
     err = pings.error_at(pings.fixes[-1].t_s)
-    circle = _strips(logs["world/msis/msis/fix/circle"][-1])[0][:, :2] - err
+    circle = image_strips(logs["world/msis/msis/fix/circle"][-1])[0][:, :2] - err
     assert np.allclose(np.hypot(circle[:, 0], circle[:, 1]), 6.0, atol=0.3)
     pts = _positions(logs["world/msis/msis/fix/points"][-1])[:, :2] - err
     assert len(pts) == len(pings.fixes[-1].points_ne_m)
@@ -134,8 +102,8 @@ def test_tank_recording_logs_wall_segments_with_their_95_percent_bands(tmp_path)
     assert not logs["world/msis/msis/fix/circle"]
     for seg_arch, band_arch, fix in zip(logs["world/msis/msis/fix/segments"], logs["world/msis/msis/fix/segments_95"],
                                         pings.fixes):
-        segs = _strips(seg_arch)
-        bands = _strips(band_arch)
+        segs = image_strips(seg_arch)
+        bands = image_strips(band_arch)
         assert len(segs) == len(fix.segments_ne_m) and len(bands) == 2 * len(segs)
         on_wall = 0
         err = pings.error_at(fix.t_s)

@@ -13,7 +13,7 @@ from scenarios import load_scenario
 from sim.mission import Mission
 from sim.outputs.rerun_recording import RerunRecorder
 from sim.sensors.fls import FlsRender
-from tests.sim.outputs.test_rerun_msis import _FakeStream, _strips
+from tests.support import FakeRerunStream, image_strips
 
 rr = pytest.importorskip("rerun")
 
@@ -37,7 +37,7 @@ class _Frames(ObserverBase):
 def test_recording_draws_the_roi_of_every_gated_frame_on_its_fan(tmp_path):
     scn = load_scenario("track_static_vehicle", ["duration_s=4"])
     rec = RerunRecorder(tmp_path / "fake.rrd")
-    rec._rec = _FakeStream()
+    rec._rec = FakeRerunStream()
     frames = _Frames()
     mission = Mission(scn, observers=[rec, frames])
     mission.run(progress=False)
@@ -52,7 +52,7 @@ def test_recording_draws_the_roi_of_every_gated_frame_on_its_fan(tmp_path):
         if roi is None:
             assert isinstance(arch, rr.Clear)
             continue
-        px = _strips(arch)[0] / s
+        px = image_strips(arch)[0] / s
         r, a = geo.pixel_to_polar(px[:, 0], px[:, 1])  # back to polar by the fan's own inverse
         lo, hi = max(roi.range_m - roi.half_range_m, 0.0), roi.range_m + roi.half_range_m
         assert np.allclose(np.minimum(np.abs(r - lo), np.abs(r - hi)), 0.0, atol=1e-3)

@@ -19,7 +19,7 @@ from sim.sensors.imu import GRAVITY_MPS2, ImuSensor
 from sim.sensors.base import SceneView
 from sim.sensors.nav_noise import nav_noise_model
 from sim.sensors.nav_suite import build_nav_sensors
-from tests.autonomy.navigation.test_kinematics import PlaneCaster, flat_seabed, static_truth, wiggle_truth
+from tests.support import PlaneCaster, flat_seabed, static_truth, wiggle_truth
 
 RNG = np.random.default_rng
 MOUNT = np.array([0.3, -0.1, 0.2])

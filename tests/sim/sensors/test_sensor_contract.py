@@ -36,7 +36,7 @@ from sim.sensors.base import Mount, SceneView, Sensor
 from sim.sensors import registry
 from sim.sensors.registry import BUILTIN_SENSORS, build_sensor, register_sensor, sensor_classes
 from sim.dynamics.truth import VehicleTruth
-from tests.autonomy.navigation.test_kinematics import static_truth, wiggle_truth
+from tests.support import static_truth, wiggle_truth
 
 ROOT = Path(__file__).resolve().parents[3]
 SEABED_DEPTH_M = 6.0
@@ -164,7 +164,7 @@ from sim.sensors.analytic_caster import AnalyticCaster
 from sim.sensors.base import SceneView
 from sim.sensors.nav_suite import NAV_SENSOR_NAMES, build_nav_sensors
 from sim.sensors.registry import build_sensor
-from tests.autonomy.navigation.test_kinematics import wiggle_truth
+from tests.support import wiggle_truth
 
 def loaded():
     sonar = ("sim.sensors.fls", "sim.sensors.msis", "sim.sensors.sss", "sim.sensors.sonar.compiled_kernels")

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 
 import numpy as np
 import pytest
@@ -14,19 +13,11 @@ from sim.sensors.analytic_caster import AnalyticBox, AnalyticCaster, AnalyticSph
 from sim.sensors.raycast import BACKGROUND_ID
 from sim.sensors.registry import sensor_class
 from sim.sensors.sss import SssSensor, Waterfall, ground_range_resample
+from tests.support import SceneObj
 
 SEABED_M = 30.0
 SONAR_DEPTH_M = 10.0
 ALT_M = SEABED_M - SONAR_DEPTH_M
-
-
-@dataclass(frozen=True)
-class Obj:
-    id: int
-    name: str
-    class_name: str
-    is_target: bool
-    centroid_ned: np.ndarray
 
 
 def sonar(**kw) -> SssSensor:
@@ -64,7 +55,7 @@ def test_sphere_slant_range_exact_to_a_bin_on_its_side():
     s = sonar()
     centre = np.array([0.0, 40.0, SEABED_M - 1.0])  # 40 m to starboard, resting on the seabed
     caster = AnalyticCaster(SEABED_M, spheres=(AnalyticSphere(centre, 1.0, 5),))
-    r = render(s, caster, [Obj(5, "s", "sphere", True, centre)])
+    r = render(s, caster, [SceneObj(5, "s", "sphere", True, centre)])
     near_m = np.linalg.norm(centre - np.array([0.0, 0.0, SONAR_DEPTH_M])) - 1.0
     hits = np.flatnonzero(r.labels[1] == 5)
     assert hits[0] == int(np.floor(near_m / s.bin_size_m))

@@ -11,7 +11,7 @@ from scenarios.config.sss import SssConfig
 from sim.sensors.analytic_caster import AnalyticCaster, AnalyticSphere
 from sim.sensors.sss import SssSensor, Waterfall
 from sim.dataset.sss_tiles import cut_tiles, pings_per_tile, write_tiles
-from tests.sim.sensors.test_sss_geometry import Obj
+from tests.support import SceneObj
 
 
 def test_sphere_box_in_a_waterfall_tile(tmp_path):
@@ -23,7 +23,7 @@ def test_sphere_box_in_a_waterfall_tile(tmp_path):
     wf = Waterfall(s.n_bins)
     xs = np.arange(n) * step
     for x in xs:
-        wf.add(s.render(0.0, np.array([x, 0.0, 10.0]), np.eye(3), caster, [Obj(4, "s", "mine", True, centre)],
+        wf.add(s.render(0.0, np.array([x, 0.0, 10.0]), np.eye(3), caster, [SceneObj(4, "s", "mine", True, centre)],
                         noise=False))
     (tile,) = cut_tiles(wf.image(), wf.labels(), n)
     x0, y0, x1, y1 = tile.boxes[4]

@@ -10,7 +10,7 @@ import pytest
 pytest.importorskip("torch", reason="torch not installed: training needs the `train` extra")
 
 from sim.cli import main  # noqa: E402
-from tests.sim.hand_made_dataset import write_fan_dataset  # noqa: E402
+from tests.support import write_fan_dataset  # noqa: E402
 
 TINY = ["--input", "96x176", "--crop", "none", "--width", "4", "--epochs", "1", "--batch-size", "4",
         "--threads", "1"]

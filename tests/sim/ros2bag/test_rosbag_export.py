@@ -4,7 +4,6 @@ records, converted to ENU/FLU by independent formulas (scipy Euler angles, axis 
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest

@@ -13,7 +13,7 @@ from scenarios import list_scenarios, load_scenario
 from sim.scene.physics import Physics
 from scenarios.vehicle_params import load_params_file
 
-PRESETS = sorted(p.parent.name for p in (Path(__file__).parents[2] / "sim" / "assets").glob("*/params.yaml")
+PRESETS = sorted(p.parent.name for p in (Path(__file__).parents[3] / "sim" / "assets").glob("*/params.yaml")
                  if load_params_file(p).motion == "free_6dof")
 
 

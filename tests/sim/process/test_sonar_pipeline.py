@@ -25,10 +25,10 @@ from sim.features.perception import Perception
 from sim.events.records import ObserverBase, PerceptionResult
 from sim.sensors.fls import FlsRender, FlsSensor
 from sim.process.sonar_pipeline import PipelineError, SonarPipeline
+from tests.support import PIPELINE_OVERRIDES, pid_alive
 
 # Dived 10 m short of OPI1 heading for it, survey started at once: frames with targets from t = 0.
-ROOT = Path(__file__).resolve().parents[2]
-OVER = ["autonomy.guidance.mission.start_delay_s=0", "vehicle.initial_pos_ned=[0.0,0.0,2.0]", "duration_s=3.0"]
+ROOT = Path(__file__).resolve().parents[3]
 
 
 class _Messages(ObserverBase):
@@ -52,25 +52,16 @@ class _Messages(ObserverBase):
         pass
 
 
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    with open(f"/proc/{pid}/stat") as f:  # a zombie is not running
-        return f.read().rsplit(")", 1)[1].split()[0] != "Z"
-
-
 def _run(workers: int, tmp_path, detector: str, frames: bool = True):
     log, msgs, scorer = TrajectoryLog(), _Messages(), DetectionScorer("fls", detector)
-    m = Mission(load_scenario("cssn_lawnmower", OVER + [f"autonomy.atr.detector={detector}"]),
+    m = Mission(load_scenario("cssn_lawnmower", PIPELINE_OVERRIDES + [f"autonomy.atr.detector={detector}"]),
                 observers=[log, msgs, scorer] if frames else [log], workers=workers)
     m.reset()
     pids = m.worker_pids
-    assert (workers > 1) == bool(pids) and all(_alive(p) for p in pids)
+    assert (workers > 1) == bool(pids) and all(pid_alive(p) for p in pids)
     summary = m.run(progress=False)
     m.close()
-    assert not any(_alive(p) for p in pids)  # no worker left behind
+    assert not any(pid_alive(p) for p in pids)  # no worker left behind
     path = tmp_path / f"trajectory_{workers}.csv"
     log.write_csv(path)
     return (path.read_bytes(), json.dumps(m.perception.world_model_json()), msgs.seen, summary, scorer.metrics(),
@@ -94,7 +85,7 @@ def test_pipelined_loop_gives_the_serial_outputs(tmp_path, detector, workers):
 
 def test_frames_stay_in_the_workers_when_no_observer_takes_them(tmp_path):
     csv1, wm1, *_ = _run(1, tmp_path, "classical", frames=False)
-    m = Mission(load_scenario("cssn_lawnmower", OVER + ["autonomy.atr.detector=classical"]),
+    m = Mission(load_scenario("cssn_lawnmower", PIPELINE_OVERRIDES + ["autonomy.atr.detector=classical"]),
                 observers=[TrajectoryLog()], workers=2)
     m.reset()
     assert m.feature(SurveyPerceptionFeature).pipeline.frames is False
@@ -105,7 +96,7 @@ def test_frames_stay_in_the_workers_when_no_observer_takes_them(tmp_path):
 
 
 def test_pipeline_is_off_where_perception_feeds_back_or_is_absent():
-    scn = load_scenario("cssn_lawnmower", OVER + ["sensors.fls.enabled=false"])
+    scn = load_scenario("cssn_lawnmower", PIPELINE_OVERRIDES + ["sensors.fls.enabled=false"])
     m = Mission(scn, workers=2)
     m.reset()
     assert not m.pipelined
@@ -115,7 +106,7 @@ def test_pipeline_is_off_where_perception_feeds_back_or_is_absent():
 
 def test_perception_on_detections_made_elsewhere_equals_perception_on_the_frame():
     # the pipeline detects on a worker and runs the rest of perception on an image-less view
-    m = Mission(load_scenario("cssn_lawnmower", OVER + ["autonomy.atr.detector=classical"]))
+    m = Mission(load_scenario("cssn_lawnmower", PIPELINE_OVERRIDES + ["autonomy.atr.detector=classical"]))
     m.reset()
     whole = Perception(m.scenario, m.fls, m.physics.world.seabed, m.parts.waypoints_ne)
     split = Perception(m.scenario, m.fls, m.physics.world.seabed, m.parts.waypoints_ne)
@@ -156,7 +147,7 @@ class _FailingFls(FlsSensor):
 
 
 def test_a_worker_failure_is_raised_with_its_traceback_and_ends_the_workers():
-    m = Mission(load_scenario("cssn_lawnmower", OVER + ["autonomy.atr.detector=classical"]))
+    m = Mission(load_scenario("cssn_lawnmower", PIPELINE_OVERRIDES + ["autonomy.atr.detector=classical"]))
     m.reset()
     failing = copy.copy(m.fls)
     failing.__class__ = _FailingFls
@@ -164,18 +155,18 @@ def test_a_worker_failure_is_raised_with_its_traceback_and_ends_the_workers():
     pids = pipe.pids
     with pytest.raises(PipelineError, match="render failed on purpose"):
         _feed(m, pipe)
-    assert not any(_alive(pid) for pid in pids)
+    assert not any(pid_alive(pid) for pid in pids)
     pipe.close()  # already closed: nothing more to do
 
 
 def test_a_killed_worker_is_reported():
-    m = Mission(load_scenario("cssn_lawnmower", OVER + ["autonomy.atr.detector=classical"]))
+    m = Mission(load_scenario("cssn_lawnmower", PIPELINE_OVERRIDES + ["autonomy.atr.detector=classical"]))
     m.reset()
     pipe = SonarPipeline(m.physics, m.fls, m.perception, frames=False)
     os.kill(pipe.pids[1], signal.SIGKILL)  # the detection worker
     with pytest.raises(PipelineError, match="ended unexpectedly.*auvsim-detection -9"):
         _feed(m, pipe)
-    assert not any(_alive(pid) for pid in pipe.pids)
+    assert not any(pid_alive(pid) for pid in pipe.pids)
 
 
 UNGUARDED = """
@@ -188,7 +179,7 @@ Mission(load_scenario("cssn_lawnmower", {over!r}), workers=2).run(progress=False
 def test_a_script_without_the_main_guard_gets_one_clear_error_not_a_hang(tmp_path):
     # spawn runs the script again in each worker, which would build the mission there again
     script = tmp_path / "unguarded.py"
-    script.write_text(UNGUARDED.format(over=OVER + ["autonomy.atr.detector=classical"]))
+    script.write_text(UNGUARDED.format(over=PIPELINE_OVERRIDES + ["autonomy.atr.detector=classical"]))
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]))
     proc = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=120, env=env,
                           cwd=tmp_path)
@@ -203,7 +194,7 @@ def test_a_killed_mission_process_leaves_no_worker_behind():
     # the render worker may be waiting for a ring slot that only the mission process frees
     code = ("import os, sys, time\nfrom scenarios import load_scenario\nfrom sim.mission import Mission\n"
             "if __name__ == '__main__':\n"
-            f"    m = Mission(load_scenario('cssn_lawnmower', {OVER[:-1] + ['duration_s=600']!r}), workers=2)\n"
+            f"    m = Mission(load_scenario('cssn_lawnmower', {PIPELINE_OVERRIDES[:-1] + ['duration_s=600']!r}), workers=2)\n"
             "    m.reset()\n    print(*m.worker_pids, flush=True)\n"
             "    for _ in range(3000):\n        m.step()\n")
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]))
@@ -214,6 +205,6 @@ def test_a_killed_mission_process_leaves_no_worker_behind():
     proc.kill()
     proc.wait()
     deadline = time.monotonic() + 15.0
-    while any(_alive(p) for p in pids) and time.monotonic() < deadline:
+    while any(pid_alive(p) for p in pids) and time.monotonic() < deadline:
         time.sleep(0.2)
-    assert not any(_alive(p) for p in pids)
+    assert not any(pid_alive(p) for p in pids)

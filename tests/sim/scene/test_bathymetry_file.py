@@ -158,7 +158,7 @@ def test_wrong_crs_all_nodata_and_outside_survey_are_refused(tmp_path, capsys):
 def test_shipped_sample_matches_its_documented_model():
     import importlib.util
 
-    spec = importlib.util.spec_from_file_location("mk", Path(__file__).resolve().parents[2] / "scripts" /
+    spec = importlib.util.spec_from_file_location("mk", Path(__file__).resolve().parents[3] / "scripts" /
                                                   "make_bathymetry_sample.py")
     mk = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mk)

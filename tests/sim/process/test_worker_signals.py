@@ -7,7 +7,6 @@ block behind."""
 from __future__ import annotations
 
 import multiprocessing as mp
-import os
 import signal
 import threading
 from multiprocessing.shared_memory import SharedMemory
@@ -19,7 +18,7 @@ from sim.process import sonar_pipeline
 from sim.mission import Mission
 from sim.process.sonar_pipeline import SonarPipeline
 from sim.process.worker_signals import ignore_sigint, sigint_blocked
-from tests.sim.test_sonar_pipeline import OVER, _alive
+from tests.support import PIPELINE_OVERRIDES, pid_alive
 
 pytestmark = pytest.mark.skipif(not hasattr(signal, "pthread_sigmask"), reason="POSIX signal masks")
 
@@ -67,7 +66,7 @@ def test_a_ctrl_c_held_back_by_sigint_blocked_is_raised_when_it_ends():
 
 
 def test_pipeline_workers_ignore_ctrl_c_and_a_ctrl_c_while_it_starts_leaves_nothing(monkeypatch):
-    m = Mission(load_scenario("cssn_lawnmower", OVER + ["autonomy.atr.detector=classical"]))
+    m = Mission(load_scenario("cssn_lawnmower", PIPELINE_OVERRIDES + ["autonomy.atr.detector=classical"]))
     m.reset()
     pipe = SonarPipeline(m.physics, m.fls, m.perception, frames=False)
     try:
@@ -112,7 +111,7 @@ def test_pipeline_workers_ignore_ctrl_c_and_a_ctrl_c_while_it_starts_leaves_noth
         SonarPipeline(m.physics, m.fls, m.perception, frames=False)
     monkeypatch.undo()
     assert len(procs) == 2 and len(rings) == 2
-    assert not any(_alive(p.pid) for p in procs)
+    assert not any(pid_alive(p.pid) for p in procs)
     for r in rings:
         with pytest.raises(FileNotFoundError):
             SharedMemory(name=r._shm.name)
@@ -129,7 +128,7 @@ def test_auvsim_run_stops_the_workers_on_a_ctrl_c_during_the_reset(tmp_path, mon
         raise KeyboardInterrupt  # as if Ctrl-C came while the observers start (the recording)
 
     monkeypatch.setattr(Mission, "reset", reset_then_ctrl_c)
-    scn = load_scenario("cssn_lawnmower", OVER + ["autonomy.atr.detector=classical"])
+    scn = load_scenario("cssn_lawnmower", PIPELINE_OVERRIDES + ["autonomy.atr.detector=classical"])
     with pytest.raises(KeyboardInterrupt):
         mission_outputs.run_mission(scn, tmp_path / "run", rerun=False, progress=False, workers=2)
-    assert len(pids) == 2 and not any(_alive(p) for p in pids)
+    assert len(pids) == 2 and not any(pid_alive(p) for p in pids)

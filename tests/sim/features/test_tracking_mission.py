@@ -13,7 +13,7 @@ from scenarios.load import load_scenario
 from sim.mission.run import run_mission
 from sim.outputs.run_dir import RUN_FILES
 
-SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
+SCENARIOS = Path(__file__).resolve().parents[3] / "scenarios"
 
 
 def test_track_static_vehicle_run_writes_tracking_outputs(tmp_path):

@@ -20,7 +20,7 @@ from sim.features import TrackingFeature
 from sim.mission import Mission
 from sim.dynamics.truth import VehicleTruth, interpolate_truth
 
-SCENARIOS = os.path.join(os.path.dirname(__file__), "..", "..", "scenarios")
+SCENARIOS = os.path.join(os.path.dirname(__file__), "..", "..", "..", "scenarios")
 NO_IMU_NOISE = [f"sensors.imu.{k}=0" for k in (
     "roll_pitch_noise_deg", "roll_pitch_bias_deg", "fog_heading_noise_deg", "fog_heading_bias_deg",
     "fog_heading_random_walk_deg_per_sqrt_h", "ahrs_heading_noise_deg", "ahrs_heading_bias_deg", "gyro_noise_dps",
