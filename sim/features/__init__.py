@@ -39,8 +39,13 @@ def build_features(ctx_args: dict, extra: tuple[type[MissionFeature], ...] = ())
         extra: feature classes of the caller's own (a study outside the package), after the shipped ones.
 
     Raises:
+        TypeError: an ``extra`` entry that is not a MissionFeature subclass (an instance, say).
         ValueError: more than one feature drives the guidance.
     """
+    for cls in extra:
+        if not (isinstance(cls, type) and issubclass(cls, MissionFeature)):
+            raise TypeError(f"features: expected MissionFeature subclasses (the loop builds each with "
+                            f"cls.build(ctx)), got {cls!r}")
     built: dict[type, MissionFeature] = {}
     for cls in (*FEATURES, *extra):
         feature = cls.build(FeatureContext(**ctx_args, features=dict(built)))
@@ -52,15 +57,16 @@ def build_features(ctx_args: dict, extra: tuple[type[MissionFeature], ...] = ())
     return tuple(built.values())
 
 
-def summary_lines(metrics: dict) -> list[str]:
-    """Every feature's console summary lines for ``metrics`` (metrics.json), in order."""
-    return [line for cls in FEATURES for line in cls.summary_lines(metrics)]
+def summary_lines(metrics: dict, extra: tuple[type[MissionFeature], ...] = ()) -> list[str]:
+    """Every feature's console summary lines for ``metrics`` (metrics.json), in order (the
+    shipped features, then ``extra``'s)."""
+    return [line for cls in (*FEATURES, *extra) for line in cls.summary_lines(metrics)]
 
 
-def runs_to_duration(scenario) -> bool:
+def runs_to_duration(scenario, extra: tuple[type[MissionFeature], ...] = ()) -> bool:
     """Whether ``scenario``'s mission runs to ``duration_s`` by design (no survey to finish)."""
-    return any(cls.runs_to_duration(scenario) for cls in FEATURES)
+    return any(cls.runs_to_duration(scenario) for cls in (*FEATURES, *extra))
 
 
-__all__ = ["FEATURES", "McmFullFeature", "MsisLocalizationFeature", "SeaTrialFeature", "SurveyPerceptionFeature",
+__all__ = ["FEATURES", "FeatureContext", "McmFullFeature", "MissionFeature", "MsisLocalizationFeature", "SeaTrialFeature", "SurveyPerceptionFeature",
            "TrackingFeature", "build_features", "runs_to_duration", "summary_lines"]

@@ -179,8 +179,11 @@ class MissionFeature:
         name: the feature's name.
         captures: sensor names whose firings this feature takes instead of the sensor's
             ``measure`` (a pipeline rendering on a worker); set by :meth:`reset`.
-        drives_guidance: the feature's :meth:`setpoint` replaces the survey state machine
-            (which then does not run); at most one feature of a mission declares it.
+        drives_guidance: the feature's :meth:`setpoint` replaces the survey state machine,
+            which then does not run: its aborts (safe depth band, minimum altitude, DVL-lock and
+            navigation timeouts) and its modes do not apply (the mode stays ``idle``), and the
+            loop does not stop at contact; the feature keeps the vehicle safe itself. At most one
+            feature of a mission declares it.
     """
 
     name: ClassVar[str] = "feature"
@@ -190,7 +193,8 @@ class MissionFeature:
     @classmethod
     def build(cls, ctx: FeatureContext) -> MissionFeature | None:
         """The feature for the mission of ``ctx``, or None when the mission does not have it."""
-        raise NotImplementedError
+        raise NotImplementedError(f"{cls.__name__}.build(ctx): return the feature for this mission "
+                                  "(e.g. cls(ctx)), or None when it does not apply")
 
     @classmethod
     def runs_to_duration(cls, scenario: Scenario) -> bool:

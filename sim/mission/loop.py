@@ -82,6 +82,7 @@ class Mission:
         features: the mission's features (:mod:`sim.features`), in the order the loop calls them.
 
     Raises:
+        TypeError: ``scenario`` not a Scenario; a ``features`` entry not a MissionFeature subclass.
         ValueError: unknown ``nav_source``; ``workers`` < 1; a sensor mount site missing on the hull;
             more than one feature drives the guidance.
         sim.process.sonar_pipeline.PipelineError: (from :meth:`reset`, :meth:`step`, :meth:`run`) a
@@ -99,6 +100,9 @@ class Mission:
         workers: int = 1,
         features: Sequence[type[MissionFeature]] = (),
     ) -> None:
+        if not isinstance(scenario, Scenario):
+            raise TypeError(f"Mission: scenario must be a Scenario (scenarios.load_scenario(name)), got "
+                            f"{type(scenario).__name__}")
         if nav_source not in NAV_SOURCES:
             raise ValueError(f"nav_source must be one of {NAV_SOURCES}, got {nav_source!r}")
         if int(workers) < 1:

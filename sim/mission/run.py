@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -18,6 +19,7 @@ from scenarios.schema import Scenario
 from sim.evaluation.detection_scoring import DetectionScorer
 from sim.events.records import ObserverBase
 from sim.features import runs_to_duration
+from sim.features.base import MissionFeature
 from sim.mission.loop import Mission
 from sim.outputs.json_files import standard_json, with_geodetic, write_json  # noqa: F401 (re-exported)
 from sim.outputs.map_plot import plot_map
@@ -163,7 +165,7 @@ class _ProgressObserver(ObserverBase):
 def run_mission(
     scenario: Scenario, out: str | Path, *, nav_source: str = "estimate", rerun: bool = True,
     progress: bool = True, overwrite: bool = False, rosbag: bool | None = None, rosbag_fls_every: int | None = None,
-    score_detections: bool = True, workers: int = 1,
+    score_detections: bool = True, workers: int = 1, features: Sequence[type[MissionFeature]] = (),
 ) -> dict[str, Any]:
     """Run ``scenario`` and write metrics.json, trajectory.csv, world_model.json (objects in NED
     and latitude / longitude / depth), map.png (with an acoustic link, also
@@ -175,7 +177,11 @@ def run_mission(
     ``outputs.rosbag_fls_every``) into ``out``. ``score_detections``: score the ATR against the
     frames' ground truth (:class:`sim.evaluation.detection_scoring.DetectionScorer`; its figures
     go under ``perception`` in metrics.json). ``workers`` > 1 pipelines the sonar and its
-    perception in worker processes (:class:`sim.mission.Mission`; same outputs). Returns the metrics.
+    perception in worker processes (:class:`sim.mission.Mission`; same outputs). ``features``:
+    feature classes of the caller's own (:class:`sim.features.base.MissionFeature`), built after
+    the shipped ones: their observers, metrics, map layers, files and ``runs_to_duration`` count
+    as the shipped ones' do (print their summary lines with :func:`sim.features.summary_lines`).
+    Returns the metrics.
 
     Raises:
         OutputDirError: ``out`` is protected, a file, not creatable, or holds files that
@@ -186,7 +192,7 @@ def run_mission(
     staged = StagedOutput(out_dir, kind="run")
     with staged as partial:
         log = TrajectoryLog()
-        mission = Mission(scenario, nav_source=nav_source, observers=[log], workers=workers)
+        mission = Mission(scenario, nav_source=nav_source, observers=[log], workers=workers, features=features)
         evaluations = [obs for feature in mission.features
                        for obs in feature.observers({"score_detections": score_detections})]
         mission.observers.extend(evaluations)  # before the recorders, which colour detections by the scorer
@@ -225,7 +231,7 @@ def run_mission(
             partial / "map.png",
             true_pos_ned=log.true_pos_ned, est_pos_ned=log.est_pos_ned,
             title=(f"{title} (nav: {nav_source})"
-                   + _outcome_suffix(metrics, runs_to_duration=runs_to_duration(scenario))),
+                   + _outcome_suffix(metrics, runs_to_duration=runs_to_duration(scenario, features))),
             other_paths=list(log.other_paths_ned().items()),
             **layers,
         )

@@ -165,3 +165,60 @@ def test_every_feature_declares_its_name_and_build():
         assert cls.name != MissionFeature.name
         assert cls.build.__func__ is not MissionFeature.build.__func__
     assert len({cls.name for cls in FEATURES}) == len(FEATURES)
+
+
+class _Written(MissionFeature):
+    """Adds a metric and writes a file of its own into a run folder."""
+
+    name = "written"
+
+    @classmethod
+    def build(cls, ctx):
+        return cls()
+
+    def reset(self, ports) -> None:
+        self.n_steps = 0
+
+    def after_nav(self, t_s, nav) -> None:
+        self.n_steps += 1
+
+    def add_metrics(self, metrics, log) -> None:
+        metrics["written"] = {"steps": self.n_steps}
+
+    def write_outputs(self, out_dir, metrics, title) -> None:
+        (out_dir / "written.txt").write_text(f"{self.n_steps}\n")
+
+
+def test_run_mission_writes_a_feature_of_ones_own(tmp_path):
+    import json
+
+    from sim.mission.run import run_mission
+
+    metrics = run_mission(load_scenario("cssn_lawnmower", QUIET), tmp_path / "run", rerun=False, progress=False,
+                          features=[_Written])
+    steps = round(3.0 / 0.1)  # 10 Hz autonomy
+    assert metrics["written"] == {"steps": steps}
+    assert json.loads((tmp_path / "run" / "metrics.json").read_text())["written"] == {"steps": steps}
+    assert (tmp_path / "run" / "written.txt").read_text() == f"{steps}\n"
+
+
+def test_the_architecture_docs_example_runs():
+    src = (ROOT / "docs" / "architecture.md").read_text()
+    code = src.split("A minimal one:\n\n```python\n", 1)[1].split("```", 1)[0]
+    code = code.replace('"duration_s=60"', '"duration_s=3", "autonomy.atr.detector=none"')
+    scope: dict = {"__name__": "docs_example"}
+    exec(compile(code, "docs/architecture.md", "exec"), scope)
+    m = scope["m"]
+    feature = m.feature(scope["DepthLog"])
+    assert feature.n_dvl == m.summary().messages_delivered["dvl"] > 0 and len(feature.depth_m) == 30
+
+
+def test_an_instance_or_a_name_is_refused_with_what_is_expected():
+    with pytest.raises(TypeError, match="MissionFeature subclasses"):
+        Mission(load_scenario("cssn_lawnmower", QUIET), features=[_Written()])
+    with pytest.raises(TypeError, match="scenarios.load_scenario"):
+        Mission("cssn_lawnmower")
+    with pytest.raises(NotImplementedError, match="return the feature for this mission"):
+        class _NoBuild(MissionFeature):
+            name = "no_build"
+        Mission(load_scenario("cssn_lawnmower", QUIET), features=[_NoBuild])
