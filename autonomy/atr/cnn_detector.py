@@ -4,11 +4,14 @@ Model contract (written by ``sim.training``, checked on load):
 - input ``image`` float32 (1, 1, H, W), / 255: the fan resized to W x H (``cv2.INTER_AREA``),
   or, with metadata ``input_transform`` = ``pad``, the fan at native resolution in the
   top-left corner with zeros beyond (H, W at least the fan's; no resize, boxes in fan px);
+  with ``input_transform`` = ``fan_uint8``, input ``image`` uint8 (1, 1, H_fan, W_fan): the
+  fan itself, the graph casting, scaling and padding it (``scripts/atr_fold_input.py`` folds
+  a ``pad`` model so, with the same outputs bit for bit);
 - outputs ``heatmap`` (1, C, H/s, W/s), ``size`` (1, 2, H/s, W/s), ``offset`` (1, 2, H/s, W/s)
   as described in :mod:`autonomy.atr.centernet_decode`;
 - metadata ``auvsim_atr_format`` = ``centernet-v1``, ``class_names`` (JSON list), ``stride``,
   ``fan_width_px``, ``fan_height_px`` (the fan size the model was trained on), optional
-  ``input_transform`` (``resize``, the default, or ``pad``).
+  ``input_transform`` (``resize``, the default, ``pad`` or ``fan_uint8``).
 """
 
 from __future__ import annotations
@@ -29,7 +32,7 @@ from autonomy.messages import Detection, FlsFrame
 
 MODEL_FORMAT = "centernet-v1"
 #: How a fan becomes the model input (metadata ``input_transform``).
-INPUT_TRANSFORMS = ("resize", "pad")
+INPUT_TRANSFORMS = ("resize", "pad", "fan_uint8")
 INPUT_NAME = "image"
 OUTPUT_NAMES = ("heatmap", "size", "offset")
 #: The input scale of the model contract (uint8 grey level -> [0, 1]).
@@ -103,7 +106,10 @@ class CnnDetector:
         if self.input_transform == "pad" and (self.fan_hw[0] > self.input_hw[0] or self.fan_hw[1] > self.input_hw[1]):
             raise ModelFileError(f"ATR model file {self.model_path}: input {self.input_hw} is smaller than the "
                                  f"fan {self.fan_hw} it pads")
-        if self.input_transform == "pad" and accept_any_fan_size:
+        if self.input_transform == "fan_uint8" and self.input_hw != self.fan_hw:
+            raise ModelFileError(f"ATR model file {self.model_path}: input {self.input_hw} is not the fan "
+                                 f"{self.fan_hw} it takes as it is")
+        if self.input_transform in ("pad", "fan_uint8") and accept_any_fan_size:
             raise ModelFileError(f"ATR model file {self.model_path}: reads fans at native resolution "
                                  f"({self.fan_hw[1]} x {self.fan_hw[0]} px) and cannot take fans of any size")
         out_names = tuple(o.name for o in self._session.get_outputs())
@@ -124,21 +130,26 @@ class CnnDetector:
         self._binding = None
         outs = {o.name: o for o in self._session.get_outputs()}
         shapes = {name: outs[name].shape for name in OUTPUT_NAMES}
+        in_type = "tensor(uint8)" if self.input_transform == "fan_uint8" else "tensor(float)"
         if not (all(isinstance(v, int) for shape in shapes.values() for v in shape)
-                and self._session.get_inputs()[0].type == "tensor(float)"
+                and self._session.get_inputs()[0].type == in_type
                 and all(outs[name].type == "tensor(float)" for name in OUTPUT_NAMES)):
             return
         self._small = np.empty(self.input_hw, np.uint8)
-        self._input = np.zeros((1, 1, *self.input_hw), np.float32)
+        in_dtype = np.uint8 if self.input_transform == "fan_uint8" else np.float32
+        self._input = np.zeros((1, 1, *self.input_hw), in_dtype)
         self._outputs = {name: np.zeros(shapes[name], np.float32) for name in OUTPUT_NAMES}
         self._binding = self._session.io_binding()
-        self._binding.bind_input(INPUT_NAME, "cpu", 0, np.float32, self._input.shape, self._input.ctypes.data)
+        self._binding.bind_input(INPUT_NAME, "cpu", 0, in_dtype, self._input.shape, self._input.ctypes.data)
         for name, buf in self._outputs.items():
             self._binding.bind_output(name, "cpu", 0, np.float32, buf.shape, buf.ctypes.data)
 
     def preprocess(self, fan: NDArray[np.uint8]) -> NDArray[np.float32]:
-        """Fan image (H_fan, W_fan) uint8 -> model input (1, 1, H, W) float32."""
+        """Fan image (H_fan, W_fan) uint8 -> model input (1, 1, H, W): float32, or the uint8 fan
+        itself for a model that scales and pads inside its graph (``fan_uint8``)."""
         h, w = self.input_hw
+        if self.input_transform == "fan_uint8":
+            return np.ascontiguousarray(fan, dtype=np.uint8)[None, None]
         if self.input_transform == "pad":
             out = np.zeros((1, 1, h, w), np.float32)
             np.multiply(fan, INPUT_SCALE, out=out[0, 0, :fan.shape[0], :fan.shape[1]], dtype=np.float32)
@@ -159,7 +170,9 @@ class CnnDetector:
         so only under ``self._lock``)."""
         if self._binding is None:
             return self.raw_outputs(fan)
-        if self.input_transform == "pad" and fan.shape == self.fan_hw and fan.dtype == np.uint8:
+        if self.input_transform == "fan_uint8" and fan.shape == self.fan_hw and fan.dtype == np.uint8:
+            np.copyto(self._input[0, 0], fan)  # the graph casts, scales and pads
+        elif self.input_transform == "pad" and fan.shape == self.fan_hw and fan.dtype == np.uint8:
             # the padding stays zero from allocation; only the fan's corner is written
             np.multiply(fan, INPUT_SCALE, out=self._input[0, 0, :fan.shape[0], :fan.shape[1]])
         elif self.input_transform == "resize" and fan.ndim == 2 and fan.dtype == np.uint8:
