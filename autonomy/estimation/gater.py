@@ -56,6 +56,17 @@ def innovation_log_likelihoods(
     return maha2, loglik
 
 
+def mahalanobis2(residual: ArrayLike, covar: ArrayLike) -> float:
+    """Squared Mahalanobis distance ``r^T S^-1 r`` of one innovation ``residual`` (m,) with
+    covariance ``covar`` (m, m) (Bar-Shalom, Li and Kirubarajan 2001, section 2.6).
+
+    Raises:
+        numpy.linalg.LinAlgError: a singular ``covar``.
+    """
+    r = np.asarray(residual, dtype=float)
+    return float(r @ np.linalg.solve(np.asarray(covar, dtype=float), r))
+
+
 class MahalanobisGater:
     """Admits pairs whose squared Mahalanobis distance is at most ``threshold``.
 
@@ -84,3 +95,8 @@ class MahalanobisGater:
     def rejects(self, maha2: ArrayLike) -> NDArray[np.bool_]:
         """Mask of the pairs outside the gate (same shape as ``maha2``)."""
         return np.asarray(maha2) > self.threshold
+
+    def admits(self, residual: ArrayLike, covar: ArrayLike) -> bool:
+        """Whether one innovation ``residual`` (m,) with covariance ``covar`` (m, m) lies inside
+        the gate (:func:`mahalanobis2` at most the threshold)."""
+        return mahalanobis2(residual, covar) <= self.threshold

@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from autonomy.estimation.gater import mahalanobis2
 from autonomy.messages import NavEstimate, PositionFixMsg
 from autonomy.navigation.ekf import NavigationFilter
 
@@ -149,7 +150,7 @@ class DelayedFixFilter:
         if self.gate_chi2 is not None:
             r = np.asarray(msg.pos_ne_m, dtype=float) - nav.state[:2]
             S = nav.covariance[:2, :2] + np.asarray(msg.cov_ne_m2, dtype=float).reshape(2, 2)
-            if float(r @ np.linalg.solve(S, r)) > self.gate_chi2:
+            if mahalanobis2(r, S) > self.gate_chi2:
                 return False
         return nav.on_position_fix(msg)
 

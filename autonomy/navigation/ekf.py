@@ -39,6 +39,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from autonomy.estimation.gater import mahalanobis2
 from autonomy.estimation.measurement import PositionFix, RangeBearingElevation
 from autonomy.frames import cross3, euler_rate_matrix, rot_from_euler, rot_x, rot_y, rot_z, wrap_angle
 from autonomy.messages import (AltimeterMsg, DepthMsg, DvlMsg, GpsMsg, ImuMsg, NavEstimate, PositionFixMsg, UsblMsg,
@@ -320,9 +321,9 @@ class NavigationFilter:
     def _update(self, residual: FloatArray, H: FloatArray, R_meas: FloatArray, gate_chi2: float | None) -> bool:
         P = self._P
         S = H @ P @ H.T + R_meas
-        S_inv = np.linalg.inv(S)
-        if gate_chi2 is not None and float(residual @ S_inv @ residual) > gate_chi2:
+        if gate_chi2 is not None and mahalanobis2(residual, S) > gate_chi2:
             return False
+        S_inv = np.linalg.inv(S)
         K = P @ H.T @ S_inv
         self._x += K @ residual
         I_KH = np.eye(N_STATES) - K @ H

@@ -38,8 +38,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.stats import chi2
 
+from autonomy.estimation.gater import MahalanobisGater
 from autonomy.estimation.measurement import RangeBearingElevation
 from autonomy.estimation.updater import ExtendedKalmanUpdater
 from autonomy.frames import rot_from_euler
@@ -137,7 +137,7 @@ class TargetTracker:
         self._R_b_usbl = rot_from_euler(*np.asarray(usbl_mount_rpy_rad, dtype=float))
         self._sonar_mount = np.asarray(sonar_mount_body_m, dtype=float).reshape(3)
         self._R_b_sonar = rot_from_euler(*np.asarray(sonar_mount_rpy_rad, dtype=float))
-        self._gate = {m: float(chi2.ppf(cfg.gate_probability, m)) for m in (2, 3)}
+        self._gate = {m: MahalanobisGater.chi_square(cfg.gate_probability, m) for m in (2, 3)}
         self._cv_q_axes = np.diag([cfg.initiation_accel_noise_m2_per_s3] * 2 + [cfg.heave_noise_m2_per_s3])
         self._cv_pos_q = np.diag([cfg.pos_noise_m2_per_s] * 3 + [0.0] * 3)
         self.reset()
@@ -374,8 +374,7 @@ class TargetTracker:
         H = ev.model.jacobian(x)
         S = H @ P @ H.T + R
         r = ev.model.residual(z, ev.model.function(x))
-        d2 = float(r @ np.linalg.solve(S, r))
-        ev.accepted = d2 <= self._gate[m]
+        ev.accepted = self._gate[m].admits(r, S)
         if not ev.accepted:
             if ev.kind == USBL and self._usbl_rejections_before(ev) + 1 >= self.cfg.usbl_rejections_to_restart:
                 ev.accepted = True  # the track is lost: restart from this fix
