@@ -30,11 +30,6 @@ def _slope_of_normal_rad(normal: np.ndarray) -> float:
     return float(np.arccos(np.clip(abs(normal[2]), 0.0, 1.0)))
 
 
-def fitted_slope_rad(points_ned: np.ndarray) -> float:
-    """Slope (rad from horizontal) of the least-squares plane through >= 3 points (n, 3)."""
-    return _slope_of_normal_rad(_fitted_plane_ned(points_ned)[1])
-
-
 def plane_altitude_m(points_ned: np.ndarray, origin_ned: np.ndarray,
                      plane: tuple[np.ndarray, np.ndarray] | None = None) -> float:
     """Vertical distance (m, down positive) from ``origin_ned`` (3,) to the least-squares plane
