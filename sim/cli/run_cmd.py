@@ -43,11 +43,21 @@ def _cmd_run(args: argparse.Namespace) -> int:
         except ImportError:
             what = "--rosbag" if args.rosbag else "outputs.rosbag"
             raise CliError(f"{what}: needs the rosbags package (pip install 'auvsim[rosbag]')") from None
+    ping360_log = args.ping360_log or scenario.outputs.ping360_log
+    if ping360_log:
+        what = "--ping360-log" if args.ping360_log else "outputs.ping360_log"
+        if scenario.sensors.first_of_kind("msis") is None:
+            raise CliError(f"{what}: the scenario has no sensor of kind msis (a scanning sonar) to log; "
+                           "shipped ones with one: pool_circular, tank_rectangular")
+        try:
+            import brping  # noqa: F401
+        except ImportError:
+            raise CliError(f"{what}: needs the bluerobotics-ping package (pip install 'auvsim[ping]')") from None
     fls_every = args.rosbag_fls_every if args.rosbag_fls_every is not None else scenario.outputs.rosbag_fls_every
     metrics = run_mission(scenario, args.out, nav_source=args.nav, rerun=not args.no_rerun,
                           overwrite=args.overwrite, progress=not args.quiet, rosbag=rosbag,
                           rosbag_fls_every=fls_every, score_detections=not args.no_scoring,
-                          workers=args.workers)
+                          workers=args.workers, ping360_log=ping360_log)
     print_summary(metrics, args.out)
     mission = metrics["mission"]
     if mission["aborted"]:
@@ -76,6 +86,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--rosbag-fls-every", type=positive_int, default=None, metavar="N",
                    help="export every N-th sonar frame into the bag (default: the scenario's "
                         "outputs.rosbag_fls_every, 1: all; frames are ~0.8 MB)")
+    p.add_argument("--ping360-log", action="store_true",
+                   help="also write the scanning sonar's pings as Blue Robotics ping-protocol PING360_DEVICE_DATA "
+                        "messages into OUT/ping360/ (needs a sensor of kind msis and the ping extra)")
     p.add_argument("--overwrite", action="store_true",
                    help="replace an earlier run's output folder (only a folder written by auvsim run)")
     p.add_argument("--nav", choices=["estimate", "truth"], default="estimate",

@@ -166,6 +166,7 @@ def run_mission(
     scenario: Scenario, out: str | Path, *, nav_source: str = "estimate", rerun: bool = True,
     progress: bool = True, overwrite: bool = False, rosbag: bool | None = None, rosbag_fls_every: int | None = None,
     score_detections: bool = True, workers: int = 1, features: Sequence[type[MissionFeature]] = (),
+    ping360_log: bool | None = None,
 ) -> dict[str, Any]:
     """Run ``scenario`` and write metrics.json, trajectory.csv, world_model.json (objects in NED
     and latitude / longitude / depth), map.png (with an acoustic link, also
@@ -174,7 +175,9 @@ def run_mission(
     trackers' figures under ``tracking`` in metrics.json; and recording.rrd; with ``rosbag``, a
     ROS 2 bag folder ``rosbag/`` in MCAP storage, :class:`sim.ros2bag.recorder.RosbagRecorder`,
     every ``rosbag_fls_every``-th sonar frame; None takes the scenario's ``outputs.rosbag`` /
-    ``outputs.rosbag_fls_every``) into ``out``. ``score_detections``: score the ATR against the
+    ``outputs.rosbag_fls_every``; with ``ping360_log``, the scanning sonar's pings as Blue
+    Robotics ping-protocol messages in ``ping360/``, :mod:`sim.outputs.ping360_log`; None: the
+    scenario's ``outputs.ping360_log``) into ``out``. ``score_detections``: score the ATR against the
     frames' ground truth (:class:`sim.evaluation.detection_scoring.DetectionScorer`; its figures
     go under ``perception`` in metrics.json). ``workers`` > 1 pipelines the sonar and its
     perception in worker processes (:class:`sim.mission.Mission`; same outputs). ``features``:
@@ -209,6 +212,12 @@ def run_mission(
             from sim.ros2bag.recorder import RosbagRecorder
 
             mission.observers.append(RosbagRecorder(partial / "rosbag", fls_every=rosbag_fls_every))
+        if ping360_log is None:
+            ping360_log = scenario.outputs.ping360_log
+        if ping360_log:
+            from sim.outputs.ping360_log import Ping360LogRecorder
+
+            mission.observers.append(Ping360LogRecorder(partial / "ping360"))
         label = next((f.progress_label() for f in mission.features if f.progress_label() is not None), None)
         mission.observers.append(_ProgressObserver(MissionProgress(scenario.name, planned_length_s(mission),
                                                                    enabled=progress), label=label))
