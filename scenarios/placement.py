@@ -17,7 +17,7 @@ import math
 import numpy as np
 
 from scenarios.schema import Scenario
-from scenarios.vehicle_presets import surface_hull_span_m, vehicle_envelope_m, vehicle_half_height_m  # noqa: F401
+from scenarios.vehicle_presets import surface_hull_span_m, vehicle_envelope_m, vehicle_half_height_m
 
 # Relief allowed around the mean plane of a rough seabed, in rms heights (a Gaussian field
 # exceeds 4 sigma on about 6e-5 of its area).

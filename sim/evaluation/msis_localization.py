@@ -34,7 +34,6 @@ class LocalizationErrorObserver(ObserverBase):
         t_start_s: errors are recorded from this time on.
     """
 
-    sonar_frames = True
     sonar_truth = False  # reads no sonar ground truth (the sonar need not compute it)
 
     make_nav_filter: Callable[[Any], Any]

@@ -32,7 +32,6 @@ class DvlOnlyBaseline(ObserverBase):
             the DVL-only one against the truth at each step, m.
     """
 
-    sonar_frames = True
     sonar_truth = False  # reads no sonar ground truth (the sonar need not compute it)
 
     def __init__(self, make_nav_filter: Any) -> None:

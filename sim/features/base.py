@@ -101,7 +101,7 @@ class LoopPorts:
         them; :meth:`consume`: messages of a type that stop at the handler (a pipeline's
         tickets), neither filtered nor observed.
 
-    Use (any time): :meth:`emit` to the observers, :attr:`t_s`, :attr:`mode`,
+    Use (any time): :meth:`emit` to the observers, :attr:`t_s`, :attr:`others`, :attr:`mode`,
     :attr:`nav_filter`, :attr:`timer`, :attr:`observers` (read-only declared flags).
     """
 
@@ -151,6 +151,11 @@ class LoopPorts:
     @property
     def t_s(self) -> float:
         return self._loop.physics.t_s
+
+    @property
+    def others(self) -> Mapping[str, VehicleTruth]:
+        """True state of each extra vehicle now, by name (what the step record carries)."""
+        return self._loop._others
 
     @property
     def mode(self) -> str:

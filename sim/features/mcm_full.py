@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from sim.features.base import FeatureContext, LoopPorts, MissionFeature
+from sim.outputs.json_files import write_json
 from sim.features.base import fmt_or_na as _fmt
 from sim.events.records import MissionObserver
 
@@ -76,8 +77,6 @@ class McmFullFeature(MissionFeature):
     def write_outputs(self, out_dir: Path, metrics: dict[str, Any], title: str) -> None:
         if self.result is not None:
             from sim.mcm.figures import write_figures
-            from sim.outputs.json_files import write_json
-
             write_json(out_dir / "mcm.json", self.result)
             write_figures(out_dir, [self.result], title=title)
 

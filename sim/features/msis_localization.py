@@ -14,6 +14,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from autonomy.msis.localization import MsisLocalizer
+from sim.evaluation.msis_localization import LocalizationErrorObserver
 from sim.features.base import FeatureContext, LoopPorts, MissionFeature
 from sim.features.base import fmt_or_na as _fmt
 from sim.events.records import MissionObserver
@@ -55,8 +56,6 @@ class MsisLocalizationFeature(MissionFeature):
     # -- a run's outputs -------------------------------------------------------------------
     def error_observer(self) -> MissionObserver:
         """A fresh :class:`sim.evaluation.msis_localization.LocalizationErrorObserver` of this mission."""
-        from sim.evaluation.msis_localization import LocalizationErrorObserver
-
         return LocalizationErrorObserver(self.ctx.parts.make_nav_filter, self.localizer, self.ctx.scenario.world.basin)
 
     def observers(self, options: Mapping[str, Any]) -> list[MissionObserver]:

@@ -19,9 +19,11 @@ import numpy as np
 from autonomy.navigation.delayed import DelayedFixFilter
 from sim.comms.vehicle_link import VehicleLink
 from sim.features.base import FeatureContext, LoopPorts, MissionFeature
+from sim.outputs.json_files import with_geodetic, write_json
 from sim.features.base import fmt_or_na as _fmt
 from sim.events.records import PerceptionResult
 from sim.features.surface_runner import SurfaceVehicleRunner
+from sim.features.survey_perception import SurveyPerceptionFeature
 from sim.dynamics.truth import VehicleTruth
 
 
@@ -46,8 +48,6 @@ class SeaTrialFeature(MissionFeature):
         self.link: VehicleLink | None = None
         self.vehicle_contacts: Counter[tuple[str, str]] = Counter()
         self.nav_filter: DelayedFixFilter | None = None
-        from sim.features.survey_perception import SurveyPerceptionFeature
-
         self._perception_feature = ctx.features.get(SurveyPerceptionFeature)
 
     @classmethod
@@ -103,7 +103,7 @@ class SeaTrialFeature(MissionFeature):
             return
         timer = self._ports.timer
         with timer.stage("link"):
-            fixes = self.link.tick(t_s, truth, self.ctx.physics.truth(self.link.node), timer)
+            fixes = self.link.tick(t_s, truth, self._ports.others[self.link.node], timer)
         if self.nav_filter is not None:
             with timer.stage("nav_late_fix"):  # the re-processing is the link's cost
                 for fix in fixes:
@@ -155,8 +155,6 @@ class SeaTrialFeature(MissionFeature):
 
     def write_outputs(self, out_dir: Path, metrics: dict[str, Any], title: str) -> None:
         if self.link is not None and self.link.surface_world_model is not None:
-            from sim.outputs.json_files import with_geodetic, write_json
-
             write_json(out_dir / "surface_world_model.json",
                        with_geodetic(self.link.surface_world_model.to_json(), self.ctx.scenario.world.origin))
 

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from sim.features.base import FeatureContext, LoopPorts, MissionFeature
+from sim.outputs.json_files import with_geodetic, write_json
 from sim.features.base import fmt_or_na as _fmt
 from sim.features.perception import Perception
 from sim.events.records import MissionObserver, PerceptionResult
@@ -140,8 +141,6 @@ class SurveyPerceptionFeature(MissionFeature):
         layers["rejected_ned"] = [o.pos_ned for o in perception.world_objects() if o.id not in target_ids]
 
     def write_outputs(self, out_dir: Path, metrics: dict[str, Any], title: str) -> None:
-        from sim.outputs.json_files import with_geodetic, write_json
-
         write_json(out_dir / "world_model.json",
                    with_geodetic(self.results().world_model_json(), self.ctx.scenario.world.origin))
 

@@ -21,7 +21,7 @@ from sim.events.records import ObserverBase
 from sim.features import runs_to_duration
 from sim.features.base import MissionFeature
 from sim.mission.loop import Mission
-from sim.outputs.json_files import standard_json, with_geodetic, write_json  # noqa: F401 (re-exported)
+from sim.outputs.json_files import write_json
 from sim.outputs.map_plot import plot_map
 from sim.outputs.progress import MissionProgress
 from sim.outputs.run_dir import StagedOutput, check_output_dir
