@@ -80,6 +80,7 @@ class FlsGeometry:
     azimuth_columns: int
     frequency_hz: float = 0.0  # the preset's centre frequency (0: unknown)
     sound_speed_mps: float = SOUND_SPEED_MPS  # the nominal speed that turns travel times into ranges
+    elevation_span_beamwidths: float = 1.0  # rays span this many vertical beam widths
 
     @property
     def n_bins(self) -> int:
@@ -99,8 +100,9 @@ class FlsGeometry:
         return -0.5 * self.fov_rad + (np.arange(self.azimuth_columns) + 0.5) * step
 
     def elevations_rad(self) -> np.ndarray:
-        """(elevation_rays,) ray elevations, up (negative) to down, edges included."""
-        half = 0.5 * self.vertical_beamwidth_rad
+        """(elevation_rays,) ray elevations, up (negative) to down, edges included: the vertical
+        beam width times ``elevation_span_beamwidths``."""
+        half = 0.5 * self.vertical_beamwidth_rad * self.elevation_span_beamwidths
         return np.linspace(-half, half, self.elevation_rays)
 
     def bin_centres_m(self) -> np.ndarray:
@@ -134,4 +136,5 @@ def resolve_geometry(cfg: FlsConfig) -> FlsGeometry:
         beamwidth_az_rad=float(np.deg2rad(p.beamwidth_az_deg)), absorption_db_per_m=float(p.absorption_db_per_m),
         fan_size_px=(int(p.fan_size_px[0]), int(p.fan_size_px[1])), elevation_rays=int(cfg.elevation_rays),
         azimuth_columns=int(columns), frequency_hz=float(p.frequency_hz),
+        elevation_span_beamwidths=float(cfg.formation.elevation_span_beamwidths),
     )

@@ -15,6 +15,7 @@ from typing import Literal
 from pydantic import Field, model_validator
 
 from scenarios.config.sensor import SensorConfig, sensor_config
+from scenarios.config.sonar_formation import SonarFormationConfig
 
 FlsPresetName = Literal["m900_130", "aris3000", "aris3000_lf"]
 
@@ -87,6 +88,8 @@ class FlsConfig(SensorConfig):
     tvg_absorption: bool = Field(True, description="TVG also compensates 2 alpha r")
     gain_db: float = Field(0.0, ge=-100.0, le=200.0, description="added after TVG; 0 dB shows as 255")
     dynamic_range_db: float = Field(50.0, gt=1.0, le=150.0, description="dB below 0 mapped to 0..255")
+    formation: SonarFormationConfig = Field(
+        SonarFormationConfig(), description="correlated speckle, seabed texture, reverberation, display law")
 
     # Ground truth
     min_visible_fraction: float = Field(

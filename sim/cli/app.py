@@ -1,7 +1,7 @@
 """auvsim: closed-loop AUV mission simulator (MuJoCo, Fossen hydrodynamics, sonar, onboard autonomy).
 
 Subcommands: ``scenarios``, ``validate``, ``run``, ``bench``, ``dataset``, ``sweep``, ``train-atr``,
-``eval-atr``. Anything a user can get wrong (arguments, scenario files and keys, output
+``eval-atr``, ``realism``. Anything a user can get wrong (arguments, scenario files and keys, output
 folders, model and dataset files) is reported as one line naming it, with exit status 2
 and no traceback. An unexpected internal error prints a short traceback and exits 1;
 ``--debug`` (or ``AUVSIM_DEBUG=1``) prints the full one.
@@ -22,7 +22,8 @@ import sys
 import traceback
 from collections.abc import Callable, Sequence
 
-from sim.cli import bench_cmd, dataset_cmd, eval_atr_cmd, run_cmd, scenario_cmds, sweep_cmd, train_cmd
+from sim.cli import (bench_cmd, dataset_cmd, eval_atr_cmd, realism_cmd, run_cmd, scenario_cmds, sweep_cmd,
+                     train_cmd)
 from sim.cli.errors import (EXIT_INTERNAL_ERROR, EXIT_INTERRUPTED, EXIT_OK, EXIT_TERMINATED, EXIT_USAGE,
                             user_error_types)
 from sim.process.gc_policy import set_loop_thresholds
@@ -76,7 +77,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--debug", action="store_true",
                         help=f"print full tracebacks of internal errors (also {DEBUG_ENV}=1)")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
-    for module in (scenario_cmds, run_cmd, bench_cmd, dataset_cmd, sweep_cmd, train_cmd, eval_atr_cmd):
+    for module in (scenario_cmds, run_cmd, bench_cmd, dataset_cmd, sweep_cmd, train_cmd, eval_atr_cmd, realism_cmd):
         module.add_parser(sub)
     return parser
 

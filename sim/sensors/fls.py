@@ -36,6 +36,7 @@ from sim.sensors.sonar.beam_pattern import azimuth_kernel
 from sim.sensors.sonar.display import FanRemap
 from sim.sensors.sonar.echo_chain import EchoChain
 from sim.sensors.sonar.echo_lines import echo_segments, ray_strength
+from sim.sensors.sonar.image_formation import formation_model
 from sim.sensors.sonar.ground_truth import (
     SceneObjectLike,
     SonarGroundTruth,
@@ -130,7 +131,9 @@ class FlsSensor(Sensor[FlsRender]):
             g.bin_centres_m(), g.absorption_db_per_m, cfg.tvg_spreading_db_per_decade,
             g.absorption_db_per_m if cfg.tvg_absorption else 0.0, cfg.noise_floor_db, cfg.speckle, cfg.k_shape,
             cfg.gain_db, cfg.dynamic_range_db,
-            azimuth_kernel(g.fov_rad / n_cols, g.beamwidth_az_rad, cfg.side_lobe_extent_beamwidths))
+            azimuth_kernel(g.fov_rad / n_cols, g.beamwidth_az_rad, cfg.side_lobe_extent_beamwidths),
+            formation=formation_model(cfg.formation, g.bin_centres_m(), g.range_resolution_m, g.beam_spacing_rad,
+                                      g.beamwidth_az_rad, g.absorption_db_per_m, cfg.side_lobe_extent_beamwidths))
         beam_az = g.beam_azimuths_rad()
         col_az = self.rays.column_azimuths_rad
         col_step = g.fov_rad / n_cols
@@ -221,13 +224,13 @@ class FlsSensor(Sensor[FlsRender]):
         n_cols = self.rays.n_cols
         mean = self.echo.mean_intensity(echoes.lines(n_cols, self.n_bins, dtype=np.float32))
         mask = extents = None
-        if truth or self.echo.speckle == "k":  # the K texture reads the clutter mask
+        if truth or self.echo.needs_clutter:  # the K and seabed textures read the clutter mask
             mask, extents = label_bins(echoes, n_cols, self.n_bins)
         if n_cols != g.n_beams:
             mean = cv2.resize(mean, (self.n_bins, g.n_beams), interpolation=cv2.INTER_LINEAR)
             if mask is not None:
                 mask = mask[self._beam_col]
-        clutter = (mask < 0) if self.echo.speckle == "k" else None  # only the K texture reads it
+        clutter = (mask < 0) if self.echo.needs_clutter else None  # only the textures read it
         objs = self._objects_truth(objects, origin, R_ns, sampled, owner, extents, caster, spheres) if truth else None
         record = SonarGroundTruth(t_s=float(t_s), mask_polar=mask if truth else None, objects=objs,
                                   pos_ned=origin.copy(), R_ns=R_ns, fan_remap=self._remap)

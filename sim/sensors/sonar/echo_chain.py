@@ -14,8 +14,10 @@ from numpy.typing import ArrayLike, NDArray
 
 from sim.sensors.sonar.beam_pattern import apply_azimuth_pattern
 from sim.sensors.sonar.display import to_uint8_db
+from sim.sensors.sonar.image_formation import (FormationModel, correlated_speckle, lognormal_texture,
+                                               to_uint8_gamma)
 from sim.sensors.sonar.propagation import transmission_gain, tvg_gain
-from sim.sensors.sonar.speckle import SpeckleKind, add_speckle_and_noise
+from sim.sensors.sonar.speckle import SpeckleKind, add_speckle_and_noise, standard_exponential_f32
 
 FloatArray = NDArray[np.float64]
 
@@ -34,6 +36,9 @@ class EchoChain:
         gain_db, dynamic_range_db: display gain and the dB span mapped onto 0..255.
         azimuth_kernel: (2K + 1,) pattern across lines (:func:`sim.sensors.sonar.beam_pattern.azimuth_kernel`);
             default a single tap (lines do not overlap).
+        formation: correlated speckle, seabed texture, volume reverberation and the power-law
+            display (:class:`sim.sensors.sonar.image_formation.FormationModel`); None: none of
+            them (independent speckle per bin, dB display).
 
     Raises:
         ValueError: if ``bin_centres_m`` is empty or ``dynamic_range_db`` is not positive.
@@ -42,7 +47,8 @@ class EchoChain:
     def __init__(self, bin_centres_m: ArrayLike, absorption_db_per_m: float, tvg_db_per_decade: float,
                  tvg_absorption_db_per_m: float, noise_floor_db: float, speckle: SpeckleKind, k_shape: float,
                  gain_db: float, dynamic_range_db: float,
-                 azimuth_kernel: NDArray[np.float32] | None = None) -> None:
+                 azimuth_kernel: NDArray[np.float32] | None = None, *,
+                 formation: FormationModel | None = None) -> None:
         bins_m = np.asarray(bin_centres_m, dtype=float).reshape(-1)
         if bins_m.size == 0 or not dynamic_range_db > 0.0:
             raise ValueError("need at least one range bin and dynamic_range_db > 0")
@@ -56,6 +62,14 @@ class EchoChain:
         self.gain_db = float(gain_db)
         self.dynamic_range_db = float(dynamic_range_db)
         self.azimuth_kernel = np.ones(1, dtype=np.float32) if azimuth_kernel is None else azimuth_kernel
+        self.formation = formation
+        self._reverb = (None if formation is None or not np.any(formation.reverberation > 0)
+                        else formation.reverberation.astype(np.float32))
+
+    @property
+    def needs_clutter(self) -> bool:
+        """Whether :meth:`realise` reads a clutter mask (the K or the seabed texture)."""
+        return self.speckle == "k" or (self.formation is not None and self.formation.textured)
 
     def mean_intensity(self, energy_lines: NDArray[np.float32]) -> NDArray[np.float32]:
         """Noise-free received power (n_lines, n_bins) of binned echo energy (n_lines, n_bins).
@@ -64,17 +78,56 @@ class EchoChain:
         then the azimuth pattern across lines.
         """
         img = np.multiply(energy_lines, self._bin_gain32[None, :], out=energy_lines)
-        return apply_azimuth_pattern(img, self.azimuth_kernel)
+        img = apply_azimuth_pattern(img, self.azimuth_kernel)
+        if self._reverb is not None:
+            img = np.add(img, self._reverb[None, :], out=img)
+        return img
 
     def realise(self, mean: NDArray[np.float32], rng: np.random.Generator, *, noise: bool = True,
                 clutter: NDArray[np.bool_] | None = None) -> NDArray[np.float32]:
         """Received intensity (n_lines, n_bins): speckle and receiver noise drawn from ``rng``,
         the K texture only where ``clutter``; ``noise=False`` gives ``mean + noise power``."""
+        f = self.formation
+        if noise and f is not None and (f.correlated or f.textured):
+            return self._realise_formed(mean, rng, clutter)
         if noise:
             return add_speckle_and_noise(mean, rng, self.speckle, self.noise_power, k_shape=self.k_shape,
                                          clutter=clutter)
         return mean + np.float32(self.noise_power)
 
+    def _realise_formed(self, mean: NDArray[np.float32], rng: np.random.Generator,
+                        clutter: NDArray[np.bool_] | None) -> NDArray[np.float32]:
+        """:meth:`realise` with the formation model: texture on the clutter (then the K texture
+        if asked), correlated speckle, independent receiver noise."""
+        f = self.formation
+        m = mean
+        if f.textured:
+            tex = lognormal_texture(mean.shape, rng, f.texture_sigma, f.texture_corr_bins, f.texture_corr_lines)
+            if clutter is not None:
+                np.copyto(tex, np.float32(1.0), where=~clutter)
+            m = np.multiply(m, tex, out=tex)
+        if self.speckle == "k":
+            tex = rng.standard_gamma(self.k_shape, mean.shape, dtype=np.float32)
+            tex *= np.float32(1.0 / self.k_shape)
+            if clutter is not None:
+                np.copyto(tex, np.float32(1.0), where=~clutter)
+            m = np.multiply(m, tex, out=tex)
+        if self.speckle == "none":
+            out = np.array(m, dtype=np.float32, copy=True)
+        elif f.correlated:
+            out = correlated_speckle(mean.shape, rng, f.range_kernel, f.beam_kernel)
+            out *= m
+        else:
+            return add_speckle_and_noise(np.ascontiguousarray(m, dtype=np.float32), rng, "rayleigh",
+                                         self.noise_power)
+        if self.noise_power > 0.0:
+            out += np.float32(self.noise_power) * standard_exponential_f32(rng, mean.shape)
+        return out
+
     def display(self, intensity: NDArray[np.float32]) -> NDArray[np.uint8]:
-        """8-bit echo lines: time-varied gain, gain and the dB display mapping."""
+        """8-bit echo lines: time-varied gain, gain and the display mapping (dB, or the
+        formation model's power law)."""
+        if self.formation is not None and self.formation.display_gamma is not None:
+            return to_uint8_gamma(intensity, self.tvg, self.gain_db, self.formation.display_gamma,
+                                  self.formation.display_soft_limit)
         return to_uint8_db(intensity, self.tvg, self.gain_db, self.dynamic_range_db)

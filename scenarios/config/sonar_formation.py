@@ -1,0 +1,50 @@
+"""Image-formation settings a sonar shares (forward-looking and side-scan): correlated speckle,
+seabed texture, volume reverberation and the display law.
+
+Every field's default leaves the image formation as it was: speckle drawn independently per
+range bin and line, no texture, no reverberation, a dB display. The models and their sources
+are in :mod:`sim.sensors.sonar.image_formation`; the values a real sonar calls for are
+estimated in ``docs/realism.md``.
+"""
+
+from __future__ import annotations
+
+from pydantic import Field
+
+from scenarios.config.base import StrictModel
+
+
+class SonarFormationConfig(StrictModel):
+    """Image formation beyond independent speckle.
+
+    Attributes:
+        pulse_length_m: range extent of the transmitted pulse (c tau / 2), m; None: one range
+            bin (speckle independent between bins). Longer pulses correlate neighbouring bins.
+        beam_correlated_speckle: correlate the speckle of neighbouring lines by the beams'
+            two-way amplitude pattern (their overlap); False: independent lines.
+        texture_sigma: standard deviation of the log of the seabed's log-normal texture (0: none).
+        texture_corr_m: correlation length (Gaussian sigma) of the texture's log, m.
+        reverberation_db: volume reverberation level at 1 m before TVG, dB on the noise floor's
+            scale (None: none). Falls as ``r^-2`` with absorption, flat under 20 log r TVG.
+        display_gamma: show amplitude to this power (``255 (A / A_0)^gamma``, saturating; 0 dB
+            after the gain is 255); None: the dB display over ``dynamic_range_db``.
+        display_soft_limit: with ``display_gamma``, pass the power law through ``tanh`` (a
+            receiver that limits softly: the brightest echoes approach white without piling up).
+        elevation_span_beamwidths: rays span this many vertical -3 dB beam widths (1: the
+            nominal beam; 2.26 reaches the main lobe's first null, where the floor enters the
+            beam gradually instead of at a hard edge). Forward-looking sonar only.
+    """
+
+    pulse_length_m: float | None = Field(None, gt=0.0, le=10.0)
+    beam_correlated_speckle: bool = False
+    texture_sigma: float = Field(0.0, ge=0.0, le=3.0)
+    texture_corr_m: float = Field(0.05, gt=0.0, le=100.0)
+    reverberation_db: float | None = Field(None, ge=-200.0, le=0.0)
+    display_gamma: float | None = Field(None, gt=0.0, le=4.0)
+    display_soft_limit: bool = False
+    elevation_span_beamwidths: float = Field(1.0, ge=1.0, le=4.0)
+
+    @property
+    def is_default(self) -> bool:
+        """Whether every field keeps today's image formation."""
+        return self == SonarFormationConfig()

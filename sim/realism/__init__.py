@@ -1,0 +1,1 @@
+"""Sonar realism: real frames against the simulator's, measured by one report (``auvsim realism``)."""

@@ -1,0 +1,266 @@
+"""The realism report: real forward-looking sonar frames against a matched simulated set.
+
+:func:`realism_report` reads the real frames from a folder, fits their fan
+(:func:`sim.realism.real_frames.fit_fan_outline`), draws matched water-tank scenes with a fixed
+seed (:mod:`sim.realism.tank_scenes`), matches the display gain on the mid-range background,
+renders them onto the real pixel grid, and measures both sets with the same code
+(:mod:`sim.realism.image_measures`): the statistics table, the range profile and the classifier
+two-sample tests on background and object patches (:mod:`sim.realism.two_sample`). It can do
+so for several image-formation models in one run (:data:`FORMATIONS`: ``before``, the
+sonar's formation without the realism work, and ``after``, the formation estimated for the
+ARIS 3000 in the tank), so the two are compared on the same scenes, seed and real frames.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sim.realism.image_measures import MEASURES, FrameSetMeasures
+from sim.realism.real_frames import RealFrames, fit_fan_outline, load_real_frames
+from sim.realism.tank_scenes import (TANK, TANK_FORMATION, TankGeometry, background_grey, calibrate_gain_db,
+                                     draw_scenes, render_tank_frames)
+from sim.realism.two_sample import (TwoSampleResult, balanced_sets, cnn_judge, feature_judges,
+                                    patch_features)
+
+#: Image-formation models the report can render, by name: FLS config overrides over the
+#: ``aris3000`` preset (the display gain is matched afterwards, for each model alike).
+FORMATIONS: dict[str, dict] = {
+    "before": {},
+    "after": TANK_FORMATION,
+}
+#: Goals of the report: two-sample accuracies at most these (background, object patches);
+#: statistics within 20 % of the real value; the range profile's correlation at least 0.8.
+GOAL_ACCURACY = {"background": 0.75, "object": 0.80}
+GOAL_RELATIVE = 0.20
+GOAL_PROFILE_CORR = 0.80
+N_BEAMS = 128  # the ARIS 3000's beams across the fan
+
+
+@dataclass
+class SetResult:
+    """One set's measures: the :data:`MEASURES` values, the range profile, and the patches."""
+
+    name: str
+    frames: int
+    measures: dict[str, float]
+    profile: NDArray[np.float64]
+    bg_patches: list
+    obj_patches: list
+    bg_groups: NDArray[np.int64]
+    obj_groups: NDArray[np.int64]
+    examples: list = field(default_factory=list)  # a few (image) for the figure
+    gain_db: float | None = None
+
+
+@dataclass
+class FormationResult:
+    """The simulated set of one formation model against the real set."""
+
+    name: str
+    sim: SetResult
+    profile_corr: float
+    judges: dict[str, list[TwoSampleResult]]
+
+
+@dataclass
+class RealismReport:
+    """Everything :func:`realism_report` measured (``to_json`` for a file)."""
+
+    real_dir: str
+    seed: int
+    outline: dict
+    real: SetResult
+    formations: list[FormationResult]
+
+    def to_json(self) -> dict:
+        def judges(d):
+            return {k: [{"judge": j.judge, "accuracy": j.accuracy, "n_scored": j.n_scored, "ci95": list(j.ci95)}
+                        for j in v] for k, v in d.items()}
+        return {
+            "real_dir": self.real_dir, "seed": self.seed, "fan_outline": self.outline,
+            "real": {"frames": self.real.frames, "measures": self.real.measures,
+                     "range_profile": self.real.profile.tolist()},
+            "simulated": {f.name: {"frames": f.sim.frames, "gain_db": f.sim.gain_db, "measures": f.sim.measures,
+                                   "range_profile": f.sim.profile.tolist(), "profile_corr": f.profile_corr,
+                                   "two_sample": judges(f.judges),
+                                   "within_20pct": within_goal(self.real.measures, f.sim.measures)}
+                          for f in self.formations},
+            "goals": {"accuracy_at_most": GOAL_ACCURACY, "relative_error_at_most": GOAL_RELATIVE,
+                      "profile_corr_at_least": GOAL_PROFILE_CORR},
+        }
+
+
+def within_goal(real: dict[str, float], sim: dict[str, float]) -> dict[str, bool | None]:
+    """Per measure: whether the simulated value is within :data:`GOAL_RELATIVE` of the real
+    one with the same sign (None where either is not finite)."""
+    out: dict[str, bool | None] = {}
+    for m in MEASURES:
+        a, b = real.get(m.key, np.nan), sim.get(m.key, np.nan)
+        if not (np.isfinite(a) and np.isfinite(b)):
+            out[m.key] = None
+        else:
+            out[m.key] = bool(np.sign(a) == np.sign(b) and abs(b - a) <= GOAL_RELATIVE * abs(a))
+    return out
+
+
+def _measure_set(name: str, pairs, geom, n_beams: int, rng: np.random.Generator, n_examples: int = 4,
+                 progress: Callable[[int], None] | None = None) -> SetResult:
+    acc = FrameSetMeasures(geom, n_beams)
+    bg_g, obj_g, examples = [], [], []
+    n = 0
+    for k, (image, mask) in enumerate(pairs):
+        nb, no = len(acc.bg_patches), len(acc.obj_patches)
+        acc.add(image, mask, rng)
+        bg_g += [k] * (len(acc.bg_patches) - nb)
+        obj_g += [k] * (len(acc.obj_patches) - no)
+        if len(examples) < n_examples:
+            examples.append(image)
+        n += 1
+        if progress is not None:
+            progress(1)
+    return SetResult(name, n, acc.summary(), acc.range_profile(), acc.bg_patches, acc.obj_patches,
+                     np.array(bg_g, dtype=np.int64), np.array(obj_g, dtype=np.int64), examples)
+
+
+def _judge(real: SetResult, sim: SetResult, seed: int, cnn: bool) -> dict[str, list[TwoSampleResult]]:
+    out = {}
+    for kind, attr in (("background", "bg"), ("object", "obj")):
+        rp, sp = getattr(real, f"{attr}_patches"), getattr(sim, f"{attr}_patches")
+        if len(rp) < 10 or len(sp) < 10:
+            out[kind] = []
+            continue
+        rf = np.array([patch_features(p) for p in rp])
+        sf = np.array([patch_features(p) for p in sp])
+        rng = np.random.default_rng(seed)
+        X, y, g = balanced_sets(rf, getattr(real, f"{attr}_groups"), sf, getattr(sim, f"{attr}_groups"), rng)
+        res = feature_judges(X, y, g, seed=seed)
+        if cnn:
+            P, yp, gp = balanced_sets(np.stack(rp), getattr(real, f"{attr}_groups"), np.stack(sp),
+                                      getattr(sim, f"{attr}_groups"), np.random.default_rng(seed))
+            res.append(cnn_judge(P, yp, gp, seed=seed))
+        out[kind] = res
+    return out
+
+
+def realism_report(real_dir: str, *, n_sim: int = 200, seed: int = 0, near_m: float = 0.7,
+                   formations: tuple[str, ...] = ("before", "after"), cnn: bool = False,
+                   limit_real: int | None = None, tank: TankGeometry = TANK,
+                   progress: Callable[[str, int], Callable[[int], None]] | None = None) -> RealismReport:
+    """Measure the real frames of ``real_dir`` against ``n_sim`` simulated ones per formation.
+
+    Args:
+        real_dir: folder of real frames (:func:`sim.realism.real_frames.load_real_frames`).
+        n_sim: simulated frames per formation (one per drawn scene).
+        seed: root seed of the scenes, the noise and the patch draws.
+        near_m: the real window's near range, m (sets the metric scale).
+        formations: names in :data:`FORMATIONS`.
+        cnn: add the small-CNN judge (needs torch).
+        limit_real: read at most this many real frames.
+        progress: ``progress(label, total)`` returns a per-item callback (a progress bar).
+
+    Raises:
+        sim.realism.real_frames.RealDataError: the folder cannot be read.
+        KeyError: an unknown formation name.
+    """
+    for f in formations:
+        if f not in FORMATIONS:
+            raise KeyError(f)
+    real: RealFrames = load_real_frames(real_dir, limit=limit_real)
+    outline = fit_fan_outline(real.images)
+    geom = outline.geometry(near_m)
+    masks = real.masks if real.masks is not None else np.zeros_like(real.images)
+    bar = progress("real frames", len(real.images)) if progress else None
+    real_set = _measure_set("real", zip(real.images, masks), geom, N_BEAMS, np.random.default_rng(seed), progress=bar)
+    target_grey = background_grey(list(zip(real.images, masks)), geom)
+    scenes = draw_scenes(n_sim, seed, tank)
+    results = []
+    for name in formations:
+        over = dict(FORMATIONS[name])
+        over["gain_db"] = calibrate_gain_db(target_grey, scenes[:8], geom, seed=seed + 1, fls_overrides=over,
+                                            tank=tank)
+        bar = progress(f"simulated frames ({name})", n_sim) if progress else None
+        frames = ((f.image, f.mask) for f in render_tank_frames(scenes, geom, seed=seed, fls_overrides=over,
+                                                                 tank=tank))
+        sim_set = _measure_set(name, frames, geom, N_BEAMS, np.random.default_rng(seed), progress=bar)
+        sim_set.gain_db = over["gain_db"]
+        corr = float(np.corrcoef(real_set.profile, sim_set.profile)[0, 1])
+        results.append(FormationResult(name, sim_set, corr, _judge(real_set, sim_set, seed, cnn)))
+    od = {k: getattr(outline, k) for k in ("width_px", "height_px", "apex_x_px", "apex_y_px", "near_px", "far_px",
+                                           "half_angle_rad", "edge_rms_px")}
+    od.update(near_m=geom.range_min_m, far_m=geom.range_max_m, m_per_px=geom.m_per_px)
+    return RealismReport(str(real_dir), int(seed), od, real_set, results)
+
+
+def report_lines(rep: RealismReport) -> list[str]:
+    """The report as console lines: the fan fit, the table (real, then each formation, a
+    ``*`` where within the goal), the range profiles and the two-sample accuracies."""
+    o = rep.outline
+    lines = [f"real frames: {rep.real_dir} ({rep.real.frames} frames); fan apex ({o['apex_x_px']:.1f}, "
+             f"{o['apex_y_px']:.1f}) px, near/far {o['near_px']:.1f}/{o['far_px']:.1f} px, half-angle "
+             f"{np.degrees(o['half_angle_rad']):.2f} deg, fit rms {o['edge_rms_px']:.2f} px; window "
+             f"{o['near_m']:.2f}-{o['far_m']:.2f} m at {1000 * o['m_per_px']:.2f} mm/px",
+             ""]
+    names = [f.name for f in rep.formations]
+    head = f"{'measure':62s} {'real':>8s}" + "".join(f" {n:>9s}" for n in names)
+    lines += [head, "-" * len(head)]
+    goals = {f.name: within_goal(rep.real.measures, f.sim.measures) for f in rep.formations}
+    for m in MEASURES:
+        label = f"{m.label}{f' ({m.unit})' if m.unit else ''}"
+        row = f"{label[:62]:62s} {rep.real.measures[m.key]:8.3f}"
+        for f in rep.formations:
+            ok = goals[f.name][m.key]
+            row += f" {f.sim.measures[m.key]:8.3f}{'*' if ok else ' '}"
+        lines.append(row)
+    lines.append("")
+    lines.append(f"{'mean grey against range, near to far':40s} real " + " ".join(f"{v:.2f}" for v in rep.real.profile))
+    for f in rep.formations:
+        lines.append(f"{'':40s} {f.name:>4s} " + " ".join(f"{v:.2f}" for v in f.sim.profile)
+                     + f"  (correlation {f.profile_corr:+.2f}{'*' if f.profile_corr >= GOAL_PROFILE_CORR else ''})")
+    lines.append("")
+    lines.append("two-sample classifier, held-out accuracy (0.5: indistinguishable; goal: background <= 0.75, "
+                 "object <= 0.80)")
+    for f in rep.formations:
+        for kind, res in f.judges.items():
+            txt = ", ".join(f"{j.judge} {j.accuracy:.3f} [{j.ci95[0]:.2f}, {j.ci95[1]:.2f}]"
+                            f"{'*' if j.accuracy <= GOAL_ACCURACY[kind] else ''}" for j in res) or "too few patches"
+            lines.append(f"  {f.name:>6s} {kind:10s} ({res[0].n_scored if res else 0} patches): {txt}")
+    lines.append("(* within the goal; gain matched on the mid-range background: "
+                 + ", ".join(f"{f.name} {f.sim.gain_db:+.1f} dB" for f in rep.formations) + ")")
+    return lines
+
+
+def side_by_side_png(rep: RealismReport, path) -> None:
+    """A figure: a row of real frames, a row per formation's simulated frames (same scenes
+    for every formation), and the range profiles; written as a PNG."""
+    import cv2
+
+    rows = [("real", rep.real.examples)] + [(f"simulated: {f.name}", f.sim.examples) for f in rep.formations]
+    n = max(len(ex) for _, ex in rows)
+    h, w = rep.real.examples[0].shape
+    pad = 24
+    canvas = np.zeros((len(rows) * (h + pad) + 200, n * w), dtype=np.uint8)
+    for i, (label, ex) in enumerate(rows):
+        y0 = i * (h + pad)
+        cv2.putText(canvas, label, (6, y0 + 17), cv2.FONT_HERSHEY_SIMPLEX, 0.55, 255, 1, cv2.LINE_AA)
+        for j, img in enumerate(ex):
+            canvas[y0 + pad:y0 + pad + h, j * w:(j + 1) * w] = img
+    # range profiles: near (left) to far (right)
+    y0 = len(rows) * (h + pad)
+    pw = canvas.shape[1] - 40
+    cv2.putText(canvas, "mean grey against range (near -> far), over its mean: real thick, simulated thin",
+                (6, y0 + 18), cv2.FONT_HERSHEY_SIMPLEX, 0.45, 255, 1, cv2.LINE_AA)
+    profiles = [(rep.real.profile, 3)] + [(f.sim.profile, 1) for f in rep.formations]
+    for prof, thick in profiles:
+        xs = 20 + np.linspace(0, pw, len(prof))
+        ys = y0 + 190 - np.clip(prof, 0, 2) * 80
+        pts = np.stack([xs, ys], axis=1).astype(np.int32)
+        cv2.polylines(canvas, [pts], False, 255, thick, cv2.LINE_AA)
+    for k, (f) in enumerate(rep.formations):
+        prof = f.sim.profile
+        cv2.putText(canvas, f.name, (int(20 + pw) - 60, int(y0 + 190 - np.clip(prof[-1], 0, 2) * 80) - 4),
+                    cv2.FONT_HERSHEY_SIMPLEX, 0.4, 200, 1, cv2.LINE_AA)
+    cv2.imwrite(str(path), canvas)

@@ -1,0 +1,231 @@
+"""Water-tank scenes matched to a real forward-looking sonar set, and their frames on its pixel grid.
+
+The geometry is estimated from the real frames (``docs/realism.md`` gives the estimate and
+how it was made): the fan outline (:func:`sim.realism.real_frames.fit_fan_outline`) gives
+the near/far ratio of the window; the preset's minimum range (0.7 m for the ARIS 3000, its
+nearest window start) gives the metric scale. The sonar looks down at a flat tank floor from
+:data:`TANK.height_m` with its boresight tilted :data:`TANK.tilt_deg` down; a wall crosses the
+far part of the fan in about half the scenes (the real set labels a wall in about half of
+its frames); one to three debris objects of the real set's kinds, in its class mix, lie on
+the floor in the fan.
+
+Every scene is drawn from one seeded generator; frames are rendered with the project's
+sonar (:class:`sim.sensors.fls.FlsSensor`) and resampled once from its polar image onto the
+real set's fan pixels (:class:`sim.sensors.sonar.display.FanRemap` on the fitted geometry),
+with the instance mask mapped to the real set's class ids.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from autonomy.sonar_geometry import FanGeometry
+from sim.realism.real_frames import MARINE_DEBRIS_CLASSES, WALL_CLASS_ID
+
+CLASS_ID = {name: cid for cid, name in MARINE_DEBRIS_CLASSES.items()}
+
+#: Instances per class in the whole real set ([MarineDebrisFLS]): the scenes' class mix.
+CLASS_MIX: dict[str, int] = {
+    "Bottle": 468, "Can": 292, "Chain": 320, "Drink-carton": 347, "Hook": 171, "Propeller": 197,
+    "Shampoo-bottle": 111, "Standing-bottle": 65, "Tire": 615, "Valve": 240}
+
+#: Debris shape of each class (:mod:`sim.scene.debris_meshes`) and its pitch (deg) on the floor.
+CLASS_SHAPE: dict[str, tuple[str, float]] = {
+    "Bottle": ("bottle", 0.0), "Can": ("can", 0.0), "Chain": ("chain", 0.0), "Drink-carton": ("drink_carton", 0.0),
+    "Hook": ("hook", 0.0), "Propeller": ("propeller", 0.0), "Shampoo-bottle": ("shampoo_bottle", 0.0),
+    "Standing-bottle": ("bottle", 90.0), "Tire": ("tyre", 0.0), "Valve": ("valve", 0.0)}
+
+
+@dataclass(frozen=True)
+class TankGeometry:
+    """Ranges of the drawn tank geometry (uniform between the bounds).
+
+    Attributes:
+        floor_depth_m: depth of the tank floor (the water surface is at 0), m.
+        height_m: sonar head height above the floor, m.
+        tilt_deg: boresight tilt below horizontal, deg.
+        wall_share: share of scenes with a wall across the far fan.
+        wall_range_m: slant range of the wall's nearest point on the boresight, m.
+        objects: (min, max) debris objects per scene.
+        object_range_m: ground range of the objects from the head, m.
+        floor_reflectivity, wall_reflectivity: the floor's and wall's backscatter reflectivity.
+    """
+
+    floor_depth_m: float = 3.0
+    height_m: tuple[float, float] = (0.25, 0.42)
+    tilt_deg: tuple[float, float] = (12.0, 20.0)
+    wall_share: float = 0.5
+    wall_range_m: tuple[float, float] = (2.2, 3.2)
+    objects: tuple[int, int] = (1, 3)
+    object_range_m: tuple[float, float] = (1.0, 2.6)
+    floor_reflectivity: float = 0.3
+    wall_reflectivity: float = 0.6
+
+
+TANK = TankGeometry()
+
+#: The image formation estimated for the ARIS 3000 in the tank (``docs/realism.md``): FLS
+#: config fields over the ``aris3000`` preset. TVG 40 log r (the point-target law; the real
+#: set's flat range profile calls for more than 20 log r); a pulse of 12 mm (two bins of
+#: 3 mm: the real speckle's length along range); speckle correlated across the overlapping
+#: beams; a log-normal floor texture; volume reverberation; an amplitude display with gamma
+#: 0.5 through a soft limiter (the real grey histogram's bright tail that thins out below
+#: 255); rays to the vertical main lobe's first nulls.
+TANK_FORMATION: dict = {
+    "tvg_spreading_db_per_decade": 40.0,
+    "formation": {"pulse_length_m": 0.012, "beam_correlated_speckle": True, "texture_sigma": 0.7,
+                  "texture_corr_m": 0.015, "reverberation_db": -50.0, "display_gamma": 0.5,
+                  "display_soft_limit": True, "elevation_span_beamwidths": 2.26},
+}
+
+
+@dataclass(frozen=True)
+class TankScene:
+    """One drawn scene: the sonar pose and the world's targets (``TargetConfig`` list)."""
+
+    index: int
+    height_m: float
+    tilt_deg: float
+    yaw_deg: float
+    targets: tuple
+
+
+def draw_scenes(n: int, seed: int, tank: TankGeometry = TANK) -> list[TankScene]:
+    """``n`` scenes drawn from one generator seeded with ``seed``."""
+    from scenarios.config.world import TargetConfig
+    from sim.scene.debris_meshes import debris_default_size_m
+
+    rng = np.random.default_rng(seed)
+    names = list(CLASS_MIX)
+    p = np.array([CLASS_MIX[k] for k in names], dtype=float)
+    p /= p.sum()
+    out = []
+    for i in range(n):
+        h = float(rng.uniform(*tank.height_m))
+        tilt = float(rng.uniform(*tank.tilt_deg))
+        targets = []
+        floor = tank.floor_depth_m
+        for j in range(int(rng.integers(tank.objects[0], tank.objects[1] + 1))):
+            cls = names[int(rng.choice(len(names), p=p))]
+            rng_m = float(rng.uniform(*tank.object_range_m))
+            az = float(rng.uniform(-11.0, 11.0))
+            north, east = rng_m * np.cos(np.deg2rad(az)), rng_m * np.sin(np.deg2rad(az))
+            yaw = float(rng.uniform(-180.0, 180.0))
+            shape, pitch = CLASS_SHAPE[cls]
+            scale = float(rng.uniform(0.85, 1.15))
+            if shape == "tyre":
+                radius = 0.14 * scale
+                targets.append(TargetConfig(name=f"obj{j}", shape="tyre", pos_ned=(north, east, floor),
+                                            rpy_deg=(0.0, 0.0, yaw), radius_m=radius, tube_radius_m=0.35 * radius,
+                                            reflectivity=0.9, class_name=cls, is_target=True))
+                continue
+            size = tuple(s * scale for s in debris_default_size_m(shape))
+            targets.append(TargetConfig(name=f"obj{j}", shape=shape, pos_ned=(north, east, floor),
+                                        rpy_deg=(0.0, pitch, yaw), size_m=size, reflectivity=0.9,
+                                        class_name=cls, is_target=True))
+        if rng.random() < tank.wall_share:
+            wr = float(rng.uniform(*tank.wall_range_m))
+            wyaw = float(rng.uniform(-35.0, 35.0))
+            targets.append(TargetConfig(name="wall", shape="box", pos_ned=(wr + 0.15, 0.0, floor),
+                                        rpy_deg=(0.0, 0.0, wyaw), size_m=(0.3, 8.0, floor), reflectivity=
+                                        tank.wall_reflectivity, class_name="Wall", is_target=False))
+        out.append(TankScene(i, h, tilt, float(rng.uniform(-5.0, 5.0)), tuple(targets)))
+    return out
+
+
+@dataclass(frozen=True)
+class SimFrame:
+    """A simulated frame on the real set's pixel grid: ``image`` (H, W) uint8 and ``mask``
+    (H, W) uint8 real-set class ids."""
+
+    scene: int
+    image: NDArray[np.uint8]
+    mask: NDArray[np.uint8]
+
+
+def render_tank_frames(scenes: list[TankScene], geom: FanGeometry, *, seed: int, frames_per_scene: int = 1,
+                       fls_overrides: dict | None = None, tank: TankGeometry = TANK) -> Iterator[SimFrame]:
+    """Render each scene's frames with the ``aris3000`` sonar over ``geom``'s range window and
+    resample them onto ``geom``'s pixels. ``fls_overrides``: further :class:`FlsConfig` fields
+    (gain, noise floor, image formation). Speckle and noise from ``component_rng(seed, "fls")``."""
+    from autonomy.frames import rot_from_euler
+    from scenarios.config.fls import FlsConfig
+    from scenarios.config.world import SeabedConfig, WorldConfig
+    from scenarios.schema import Scenario
+    from sim.rng import component_rng
+    from sim.scene.world import build_world
+    from sim.sensors.fls import FlsSensor
+    from sim.sensors.raycast import MujocoRayCaster
+    from sim.sensors.sonar.display import FanRemap
+
+    rng = component_rng(seed, "fls")
+    pose_rng = component_rng(seed, "realism_poses")
+    remap = None
+    for sc in scenes:
+        cfg = FlsConfig(preset="aris3000", tilt_deg=sc.tilt_deg, rate_hz=1.0,
+                        range_window_m=(geom.range_min_m, min(geom.range_max_m, 5.0)), **(fls_overrides or {}))
+        sensor = FlsSensor(cfg, rng=rng)
+        if remap is None:
+            g = sensor.geometry
+            remap = FanRemap(geom, g.beam_azimuths_rad(), g.window_near_m, g.range_resolution_m, g.n_bins)
+        seabed = SeabedConfig(kind="plane", depth_m=tank.floor_depth_m, reflectivity=tank.floor_reflectivity,
+                              extent_m=20.0)
+        scenario = Scenario(name=f"tank_scene_{sc.index}", seed=seed + sc.index,
+                            world=WorldConfig(seabed=seabed, targets=sc.targets))
+        world = build_world(scenario, with_vehicle=False)
+        caster = MujocoRayCaster(world.model, world.data, world.geom_object_id, world.geom_reflectivity,
+                                 exclude_body_id=-1)
+        class_of = np.zeros(len(world.objects) + 1, dtype=np.uint8)
+        for obj in world.objects:
+            class_of[int(obj.id)] = CLASS_ID.get(str(obj.class_name), 0)
+        for k in range(frames_per_scene):
+            yaw = np.deg2rad(sc.yaw_deg + (pose_rng.uniform(-3.0, 3.0) if k else 0.0))
+            pos = np.array([pose_rng.uniform(-0.05, 0.05) if k else 0.0, 0.0, tank.floor_depth_m - sc.height_m])
+            render = sensor.render(float(k), pos, rot_from_euler(0.0, 0.0, yaw), caster, world.objects, truth=True)
+            image = remap.image(render.frame.polar)
+            ids = remap.labels(render.truth.mask_polar, -1)
+            mask = np.where(ids >= 0, class_of[np.clip(ids, 0, len(class_of) - 1)], 0).astype(np.uint8)
+            yield SimFrame(sc.index, image, mask)
+
+
+
+def background_grey(frames: list[SimFrame] | list[tuple[NDArray, NDArray]], geom: FanGeometry) -> float:
+    """Median grey of the unlabelled fan pixels in the middle third of the range window
+    (the level the display gain is matched on)."""
+    from sim.realism.image_measures import fan_radius_px
+
+    rad, az = fan_radius_px(geom)
+    near_px, far_px = geom.range_min_m / geom.m_per_px, geom.range_max_m / geom.m_per_px
+    mid = (rad > near_px + (far_px - near_px) / 3) & (rad < far_px - (far_px - near_px) / 3) & (
+        np.abs(az) < 0.5 * geom.fov_rad - 0.02)
+    vals = [img[mid & (mask == 0)] for img, mask in ((f.image, f.mask) if isinstance(f, SimFrame) else f
+                                                       for f in frames)]
+    return float(np.median(np.concatenate(vals)))
+
+
+def calibrate_gain_db(target_grey: float, scenes: list[TankScene], geom: FanGeometry, *, seed: int,
+                      fls_overrides: dict | None = None, iterations: int = 3, tank: TankGeometry = TANK) -> float:
+    """The display gain (dB) at which the simulated mid-range background median grey equals
+    ``target_grey``: the one level a user matches by eye on a real sonar's display. Solved by
+    the display law's inverse (dB display: 255 / dynamic range grey per dB; power-law display:
+    grey ~ 10^(gamma gain / 20)), a few rounds for saturation."""
+    from scenarios.config.fls import FlsConfig
+
+    over = dict(fls_overrides or {})
+    cfg = FlsConfig(preset="aris3000", **over)
+    gain = float(cfg.gain_db)
+    gamma = cfg.formation.display_gamma
+    for _ in range(iterations):
+        over["gain_db"] = gain
+        grey = background_grey(list(render_tank_frames(scenes, geom, seed=seed, fls_overrides=over, tank=tank)),
+                               geom)
+        grey = max(grey, 0.5)
+        if gamma is None:
+            gain += (target_grey - grey) * cfg.dynamic_range_db / 255.0
+        else:
+            gain += 20.0 / gamma * np.log10(target_grey / grey)
+    return float(gain)

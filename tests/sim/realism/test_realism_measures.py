@@ -1,0 +1,111 @@
+"""The realism report's parts on cases with known answers: a fan drawn from a known geometry,
+speckle of known correlation, two-sample judges on equal and on different sets, the folder
+reader's errors and the command's one-line refusals."""
+
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from autonomy.sonar_geometry import FanGeometry
+from sim.realism.image_measures import FrameSetMeasures, _acf, _fwhm
+from sim.realism.real_frames import RealDataError, fit_fan_outline, load_real_frames
+from sim.realism.two_sample import PATCH_FEATURES, balanced_sets, feature_judges, patch_features
+from tests.support import assert_clean_error, run_cli
+
+GEOM = FanGeometry(320, 480, 0.7, 2.9, np.deg2rad(30.0), 0.0050, 159.4, 602.5)
+
+
+def _fan_images(geom: FanGeometry, n: int, rng: np.random.Generator, corr_px: float = 0.0) -> np.ndarray:
+    yy, xx = np.mgrid[0:geom.height_px, 0:geom.width_px]
+    r, a = geom.pixel_to_polar(xx, yy)
+    inside = geom.inside(r, a)
+    out = []
+    for _ in range(n):
+        img = rng.exponential(30.0, (geom.height_px, geom.width_px)).astype(np.float32)
+        if corr_px > 0:
+            img = cv2.GaussianBlur(img, (0, 0), corr_px)
+        out.append(np.where(inside, np.clip(img + 1, 1, 255), 0).astype(np.uint8))
+    return np.stack(out)
+
+
+def test_fan_outline_recovers_a_known_geometry():
+    imgs = _fan_images(GEOM, 5, np.random.default_rng(0))
+    fit = fit_fan_outline(imgs)
+    assert fit.apex_x_px == pytest.approx(GEOM.apex_x_px, abs=0.5)
+    assert fit.apex_y_px == pytest.approx(GEOM.apex_y_px, abs=2.0)
+    assert np.degrees(fit.half_angle_rad) == pytest.approx(15.0, abs=0.1)
+    assert fit.far_px == pytest.approx(2.9 / 0.005, abs=1.0)
+    assert fit.near_px == pytest.approx(0.7 / 0.005, abs=1.5)
+    g = fit.geometry(0.7)
+    assert g.range_max_m == pytest.approx(2.9, rel=0.01)
+    assert g.m_per_px == pytest.approx(0.005, rel=0.01)
+
+
+def test_fwhm_of_known_autocorrelations():
+    assert _fwhm(np.array([1.0, 0.0, 0.0])) == pytest.approx(1.0)  # white: half-height at lag 1/2
+    lags = np.arange(10)
+    sigma = 3.0  # Gaussian ACF exp(-k^2 / (2 s^2)): FWHM 2 s sqrt(2 ln 2), up to linear interpolation
+    est = _fwhm(np.exp(-lags ** 2 / (2 * sigma ** 2)))
+    assert est == pytest.approx(2 * sigma * np.sqrt(2 * np.log(2)), rel=0.03)
+
+
+def test_speckle_measures_see_correlation():
+    rng = np.random.default_rng(2)
+    white = FrameSetMeasures(GEOM, 128)
+    smooth = FrameSetMeasures(GEOM, 128)
+    masks = np.zeros((GEOM.height_px, GEOM.width_px), np.uint8)
+    for im in _fan_images(GEOM, 3, rng):
+        white.add(im, masks, rng)
+    for im in _fan_images(GEOM, 3, rng, corr_px=1.5):
+        smooth.add(im, masks, rng)
+    w, s = white.summary(), smooth.summary()
+    assert abs(w["speckle_lag1_range"]) < 0.3  # white, but resampled bilinearly onto the polar grid
+    assert s["speckle_lag1_range"] > 0.6
+    assert s["speckle_len_range_mid"] > 2.0 * w["speckle_len_range_mid"]
+    assert w["grey_p10"] == pytest.approx(-np.log(0.9), abs=0.05)  # exponential over its mean
+    assert w["bg_skewness"] == pytest.approx(2.0, abs=0.4)
+    prof = white.range_profile()
+    assert np.allclose(prof, 1.0, atol=0.05)
+
+
+def test_patch_features_and_judges():
+    rng = np.random.default_rng(4)
+    a = [rng.exponential(60, (64, 64)) for _ in range(120)]
+    b = [rng.exponential(60, (64, 64)) for _ in range(120)]
+    c = [cv2.GaussianBlur(rng.exponential(60, (64, 64)).astype(np.float32), (0, 0), 1.0) for _ in range(120)]
+    fa, fb, fc = (np.array([patch_features(p) for p in s]) for s in (a, b, c))
+    assert fa.shape == (120, len(PATCH_FEATURES)) == (120, 30)
+    groups = np.arange(120) // 4
+    X, y, g = balanced_sets(fa, groups, fb, groups, rng)
+    same = feature_judges(X, y, g)
+    assert all(0.35 < j.accuracy < 0.65 for j in same), same
+    X, y, g = balanced_sets(fa, groups, fc, groups, rng)
+    diff = feature_judges(X, y, g)
+    assert all(j.accuracy > 0.95 for j in diff), diff
+
+
+def test_reader_refuses_bad_folders(tmp_path: Path):
+    with pytest.raises(RealDataError, match="no such folder"):
+        load_real_frames(tmp_path / "nope")
+    (tmp_path / "images").mkdir()
+    with pytest.raises(RealDataError, match="no PNG"):
+        load_real_frames(tmp_path)
+    cv2.imwrite(str(tmp_path / "images" / "a.png"), np.zeros((48, 32), np.uint8))
+    cv2.imwrite(str(tmp_path / "images" / "b.png"), np.zeros((40, 32), np.uint8))
+    with pytest.raises(RealDataError, match="one size"):
+        load_real_frames(tmp_path)
+
+
+def test_cli_refuses_bad_input(tmp_path: Path, capsys):
+    code, err = run_cli(["realism", "--real", str(tmp_path / "missing")], capsys)
+    assert_clean_error(code, err, "--real", "missing")
+    code, err = run_cli(["realism", "--real", str(tmp_path), "--frames", "0"], capsys)
+    assert_clean_error(code, err, "--frames")
+    other = tmp_path / "other"
+    other.mkdir()
+    (other / "keep.txt").write_text("mine")
+    code, err = run_cli(["realism", "--real", str(tmp_path), "--out", str(other)], capsys)
+    assert_clean_error(code, err, "--out")
+    assert (other / "keep.txt").read_text() == "mine"

@@ -1,0 +1,127 @@
+"""Image formation beyond independent speckle, against analytic results: the Siegert relation
+for correlated speckle, the exponential marginal, log-normal moments, the display law, the
+reverberation's range law, and the floor entering the beam where the elevation span puts it."""
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from scenarios.config.fls import FlsConfig
+from scenarios.config.sonar_formation import SonarFormationConfig
+from sim.sensors.analytic_caster import AnalyticCaster
+from sim.sensors.fls import FlsSensor
+from sim.sensors.sonar.image_formation import (beam_amplitude_kernel, correlated_speckle, formation_model,
+                                               lognormal_texture, pulse_kernel, to_uint8_gamma)
+from sim.sensors.sonar.propagation import tvg_gain
+
+
+def test_kernels_have_unit_energy_and_the_pulse_its_length():
+    for L in (1.0, 2.0, 3.4, 5.0):
+        k = pulse_kernel(L)
+        assert np.isclose(np.sum(k.astype(float) ** 2), 1.0, atol=1e-6)
+        assert len(k) == int(np.ceil(L))
+        # rectangle: all taps equal but a fractional last one
+        assert np.isclose(k[-1] / k[0], L - (len(k) - 1) if len(k) > 1 else 1.0, atol=1e-6)
+    b = beam_amplitude_kernel(np.deg2rad(0.23), np.deg2rad(0.5), 3.0)
+    assert np.isclose(np.sum(b.astype(float) ** 2), 1.0, atol=1e-6)
+    assert np.argmax(b) == len(b) // 2 and np.allclose(b, b[::-1])
+
+
+def _siegert_lag1(h: np.ndarray) -> float:
+    """Intensity correlation coefficient at lag 1 of |h * w|^2 for complex white Gaussian w:
+    the squared amplitude correlation (Siegert relation)."""
+    h = h.astype(float)
+    rho = np.sum(h[:-1] * h[1:]) / np.sum(h * h)
+    return float(rho ** 2)
+
+
+def test_correlated_speckle_is_unit_mean_exponential_with_siegert_correlation():
+    rng = np.random.default_rng(3)
+    rk = pulse_kernel(3.0)
+    bk = beam_amplitude_kernel(np.deg2rad(0.25), np.deg2rad(0.6), 3.0)
+    s = correlated_speckle((400, 1200), rng, rk, bk).astype(float)
+    assert abs(s.mean() - 1.0) < 0.02
+    assert abs(s.var() - 1.0) < 0.05  # exponential: variance = mean^2
+    # marginal: exponential (a thinned sample, to keep the samples nearly independent)
+    sub = s[::7, ::9].ravel()
+    assert stats.kstest(sub, "expon").pvalue > 0.01
+    d = s - s.mean()
+    lag_range = float(np.mean(d[:, :-1] * d[:, 1:]) / d.var())
+    lag_beam = float(np.mean(d[:-1] * d[1:]) / d.var())
+    assert lag_range == pytest.approx(_siegert_lag1(rk), abs=0.02)
+    assert lag_beam == pytest.approx(_siegert_lag1(bk), abs=0.02)
+    # one tap each: independent samples
+    w = correlated_speckle((300, 300), rng, pulse_kernel(1.0), np.ones(1, np.float32)).astype(float)
+    dw = w - w.mean()
+    assert abs(np.mean(dw[:, :-1] * dw[:, 1:]) / dw.var()) < 0.02
+
+
+def test_lognormal_texture_moments_and_correlation_length():
+    rng = np.random.default_rng(1)
+    t = lognormal_texture((500, 800), rng, 0.6, 4.0, 2.0).astype(float)
+    assert abs(t.mean() - 1.0) < 0.03
+    lt = np.log(t)
+    assert abs(lt.std() - 0.6) < 0.03
+    # Gaussian-smoothed white noise: lag-1 correlation exp(-1 / (4 sigma^2)) along each axis
+    z = lt - lt.mean()
+    r_bins = float(np.mean(z[:, :-1] * z[:, 1:]) / z.var())
+    r_lines = float(np.mean(z[:-1] * z[1:]) / z.var())
+    assert r_bins == pytest.approx(np.exp(-1 / (4 * 4.0 ** 2)), abs=0.02)
+    assert r_lines == pytest.approx(np.exp(-1 / (4 * 2.0 ** 2)), abs=0.03)
+
+
+def test_gamma_display_law():
+    inten = np.array([[1e-6, 1e-3, 0.01, 0.1, 0.5, 1.0, 4.0]], dtype=np.float32)
+    g = np.full(inten.shape[1], 2.0, dtype=np.float32)
+    out = to_uint8_gamma(inten, g, -3.0, 0.5)
+    y = (inten.astype(float) * 2.0 * 10 ** (-0.3)) ** 0.25
+    assert np.array_equal(out, np.clip(np.round(255 * y), 0, 255).astype(np.uint8))
+    soft = to_uint8_gamma(inten, g, -3.0, 0.5, soft_limit=True)
+    assert np.array_equal(soft, np.clip(np.round(255 * np.tanh(y)), 0, 255).astype(np.uint8))
+    assert soft.max() < 255 and np.all(np.diff(soft.astype(int)) >= 0)
+
+
+def test_default_formation_is_none_and_reverberation_is_flat_under_20_log_tvg():
+    bins = np.linspace(0.7, 5.0, 400)
+    assert formation_model(SonarFormationConfig(), bins, 0.01, 0.004, 0.004, 0.9, 3.0) is None
+    f = formation_model(SonarFormationConfig(reverberation_db=-40.0), bins, 0.01, 0.004, 0.004, 0.9, 3.0)
+    shown = f.reverberation * tvg_gain(bins, 20.0, 0.9)
+    assert np.allclose(shown, 1e-4, rtol=1e-5)
+
+
+def _floor_sonar(span: float) -> tuple[FlsSensor, float]:
+    tilt = 12.0
+    cfg = FlsConfig(preset="aris3000", tilt_deg=tilt, range_window_m=(0.7, 3.0), rate_hz=1.0, noise_floor_db=-200.0,
+                    formation=SonarFormationConfig(elevation_span_beamwidths=span))
+    return FlsSensor(cfg, rng=np.random.default_rng(0)), tilt
+
+
+@pytest.mark.parametrize("span", [1.0, 2.26])
+def test_floor_enters_the_beam_at_the_span_edge(span):
+    """A level sonar 0.35 m above a flat floor: the first lit range is h / sin(tilt + span vbw / 2)."""
+    sensor, tilt = _floor_sonar(span)
+    h = 0.35
+    caster = AnalyticCaster(seabed_depth_m=3.0)
+    r = sensor.render(0.0, np.array([0.0, 0.0, 3.0 - h]), np.eye(3), caster, noise=False, truth=False)
+    centre = r.mean_intensity[sensor.geometry.n_beams // 2]
+    lit = np.flatnonzero(centre > 0)
+    first_m = sensor.geometry.bin_centres_m()[lit[0]]
+    expect = h / np.sin(np.deg2rad(tilt + 0.5 * 14.0 * span))
+    assert first_m == pytest.approx(expect, abs=2 * sensor.geometry.range_resolution_m)
+
+
+def test_formed_frames_are_seeded_and_differ_from_plain_speckle():
+    cfg = dict(preset="aris3000", tilt_deg=15.0, range_window_m=(0.7, 3.0), rate_hz=1.0)
+    form = SonarFormationConfig(pulse_length_m=0.009, beam_correlated_speckle=True, texture_sigma=0.5,
+                                reverberation_db=-60.0, display_gamma=0.5, display_soft_limit=True)
+    caster = AnalyticCaster(seabed_depth_m=3.0)
+    pos = np.array([0.0, 0.0, 2.6])
+
+    def frame(formation, seed):
+        s = FlsSensor(FlsConfig(**cfg, formation=formation), rng=np.random.default_rng(seed))
+        return s.render(0.0, pos, np.eye(3), caster, truth=False).frame.polar
+
+    a, b = frame(form, 5), frame(form, 5)
+    assert np.array_equal(a, b)
+    assert not np.array_equal(a, frame(form, 6))
+    assert not np.array_equal(a, frame(SonarFormationConfig(), 5))
