@@ -30,6 +30,11 @@ class SonarFormationConfig(StrictModel):
             after the gain is 255); None: the dB display over ``dynamic_range_db``.
         display_soft_limit: with ``display_gamma``, pass the power law through ``tanh`` (a
             receiver that limits softly: the brightest echoes approach white without piling up).
+        object_rice_k: Rice factor of object echoes: coherent (specular) over diffuse power
+            (0: fully developed speckle on objects too).
+        object_tail_m: e-folding length along range of the echo tail that follows each object's
+            echo (multipath between object and floor, a shell's ringing), m; None: no tail.
+        object_tail_ratio: energy of that tail over the object's direct echo.
         elevation_span_beamwidths: rays span this many vertical -3 dB beam widths (1: the
             nominal beam; 2.26 reaches the main lobe's first null, where the floor enters the
             beam gradually instead of at a hard edge). Forward-looking sonar only.
@@ -42,6 +47,9 @@ class SonarFormationConfig(StrictModel):
     reverberation_db: float | None = Field(None, ge=-200.0, le=0.0)
     display_gamma: float | None = Field(None, gt=0.0, le=4.0)
     display_soft_limit: bool = False
+    object_rice_k: float = Field(0.0, ge=0.0, le=100.0)
+    object_tail_m: float | None = Field(None, gt=0.0, le=10.0)
+    object_tail_ratio: float = Field(0.0, ge=0.0, le=10.0)
     elevation_span_beamwidths: float = Field(1.0, ge=1.0, le=4.0)
 
     @property

@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from autonomy.sonar_geometry import FanGeometry
-from sim.realism.real_frames import MARINE_DEBRIS_CLASSES, WALL_CLASS_ID
+from sim.realism.real_frames import MARINE_DEBRIS_CLASSES
 
 CLASS_ID = {name: cid for cid, name in MARINE_DEBRIS_CLASSES.items()}
 
@@ -53,6 +53,9 @@ class TankGeometry:
         objects: (min, max) debris objects per scene.
         object_range_m: ground range of the objects from the head, m.
         floor_reflectivity, wall_reflectivity: the floor's and wall's backscatter reflectivity.
+        gain_jitter_db: standard deviation of a scene's display gain about the matched one, dB
+            (the real frames' mid-range grey varies from frame to frame: recordings at
+            different gains and poses).
     """
 
     floor_depth_m: float = 3.0
@@ -64,22 +67,29 @@ class TankGeometry:
     object_range_m: tuple[float, float] = (1.0, 2.6)
     floor_reflectivity: float = 0.3
     wall_reflectivity: float = 0.6
+    gain_jitter_db: float = 3.0
 
 
 TANK = TankGeometry()
 
 #: The image formation estimated for the ARIS 3000 in the tank (``docs/realism.md``): FLS
-#: config fields over the ``aris3000`` preset. TVG 40 log r (the point-target law; the real
-#: set's flat range profile calls for more than 20 log r); a pulse of 12 mm (two bins of
-#: 3 mm: the real speckle's length along range); speckle correlated across the overlapping
-#: beams; a log-normal floor texture; volume reverberation; an amplitude display with gamma
-#: 0.5 through a soft limiter (the real grey histogram's bright tail that thins out below
-#: 255); rays to the vertical main lobe's first nulls.
+#: config fields over the ``aris3000`` preset, estimated on the development frames.
+#:
+#: * TVG 40 log r, the point-target law (20 log r leaves the far range too dark against the
+#:   real set's nearly flat range profile);
+#: * a 12 mm pulse (four 3 mm bins): the real speckle's length along range;
+#: * speckle correlated across the overlapping beams;
+#: * a log-normal floor texture, sigma 0.7 over 2 cm;
+#: * coherent object echoes (Rice factor 10) with an 8 cm echo tail of 0.3 of the echo;
+#: * an amplitude display with gamma 0.5 through a soft limiter: the real grey histogram's
+#:   bright tail, which thins out below 255 instead of piling up there;
+#: * rays out to the vertical main lobe's first nulls (2.26 beam widths).
 TANK_FORMATION: dict = {
     "tvg_spreading_db_per_decade": 40.0,
     "formation": {"pulse_length_m": 0.012, "beam_correlated_speckle": True, "texture_sigma": 0.7,
-                  "texture_corr_m": 0.015, "reverberation_db": -50.0, "display_gamma": 0.5,
-                  "display_soft_limit": True, "elevation_span_beamwidths": 2.26},
+                  "texture_corr_m": 0.02, "display_gamma": 0.5, "display_soft_limit": True,
+                  "elevation_span_beamwidths": 2.26, "object_tail_m": 0.08, "object_tail_ratio": 0.3,
+                  "object_rice_k": 10.0},
 }
 
 
@@ -92,6 +102,7 @@ class TankScene:
     tilt_deg: float
     yaw_deg: float
     targets: tuple
+    gain_offset_db: float = 0.0
 
 
 def draw_scenes(n: int, seed: int, tank: TankGeometry = TANK) -> list[TankScene]:
@@ -133,7 +144,8 @@ def draw_scenes(n: int, seed: int, tank: TankGeometry = TANK) -> list[TankScene]
             targets.append(TargetConfig(name="wall", shape="box", pos_ned=(wr + 0.15, 0.0, floor),
                                         rpy_deg=(0.0, 0.0, wyaw), size_m=(0.3, 8.0, floor), reflectivity=
                                         tank.wall_reflectivity, class_name="Wall", is_target=False))
-        out.append(TankScene(i, h, tilt, float(rng.uniform(-5.0, 5.0)), tuple(targets)))
+        out.append(TankScene(i, h, tilt, float(rng.uniform(-5.0, 5.0)), tuple(targets),
+                             float(rng.normal(0.0, tank.gain_jitter_db))))
     return out
 
 
@@ -165,9 +177,11 @@ def render_tank_frames(scenes: list[TankScene], geom: FanGeometry, *, seed: int,
     rng = component_rng(seed, "fls")
     pose_rng = component_rng(seed, "realism_poses")
     remap = None
+    over = dict(fls_overrides or {})
+    base_gain_db = float(over.pop("gain_db", 0.0))
     for sc in scenes:
-        cfg = FlsConfig(preset="aris3000", tilt_deg=sc.tilt_deg, rate_hz=1.0,
-                        range_window_m=(geom.range_min_m, min(geom.range_max_m, 5.0)), **(fls_overrides or {}))
+        cfg = FlsConfig(preset="aris3000", tilt_deg=sc.tilt_deg, rate_hz=1.0, gain_db=base_gain_db + sc.gain_offset_db,
+                        range_window_m=(geom.range_min_m, min(geom.range_max_m, 5.0)), **over)
         sensor = FlsSensor(cfg, rng=rng)
         if remap is None:
             g = sensor.geometry

@@ -35,8 +35,8 @@ from sim.sensors.raycast import RayCaster
 from sim.sensors.sonar.beam_pattern import azimuth_kernel
 from sim.sensors.sonar.display import FanRemap
 from sim.sensors.sonar.echo_chain import EchoChain
-from sim.sensors.sonar.echo_lines import echo_segments, ray_strength
-from sim.sensors.sonar.image_formation import formation_model
+from sim.sensors.sonar.echo_lines import echo_segments, ray_strength, spread_segments
+from sim.sensors.sonar.image_formation import formation_model, object_tail
 from sim.sensors.sonar.ground_truth import (
     SceneObjectLike,
     SonarGroundTruth,
@@ -222,7 +222,14 @@ class FlsSensor(Sensor[FlsRender]):
         echoes = echo_segments(rays, segments, strength, self.rays.range_slope(rays, R_ns), g.window_near_m,
                                g.range_resolution_m)
         n_cols = self.rays.n_cols
-        mean = self.echo.mean_intensity(echoes.lines(n_cols, self.n_bins, dtype=np.float32))
+        lines = echoes.lines(n_cols, self.n_bins, dtype=np.float32)
+        form = self.echo.formation
+        if form is not None and form.has_tail and np.any(echoes.obj >= 0):
+            on = echoes.obj >= 0
+            obj_lines = spread_segments(n_cols, self.n_bins, echoes.line[on], echoes.u0[on], echoes.u1[on],
+                                        echoes.energy[on], dtype=np.float32)
+            lines += object_tail(obj_lines, form.tail_decay, form.tail_ratio)
+        mean = self.echo.mean_intensity(lines)
         mask = extents = None
         if truth or self.echo.needs_clutter:  # the K and seabed textures read the clutter mask
             mask, extents = label_bins(echoes, n_cols, self.n_bins)

@@ -14,7 +14,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from sim.sensors.sonar.beam_pattern import apply_azimuth_pattern
 from sim.sensors.sonar.display import to_uint8_db
-from sim.sensors.sonar.image_formation import (FormationModel, correlated_speckle, lognormal_texture,
+from sim.sensors.sonar.image_formation import (FormationModel, lognormal_texture, rician_speckle, speckle_field,
                                                to_uint8_gamma)
 from sim.sensors.sonar.propagation import transmission_gain, tvg_gain
 from sim.sensors.sonar.speckle import SpeckleKind, add_speckle_and_noise, standard_exponential_f32
@@ -69,7 +69,8 @@ class EchoChain:
     @property
     def needs_clutter(self) -> bool:
         """Whether :meth:`realise` reads a clutter mask (the K or the seabed texture)."""
-        return self.speckle == "k" or (self.formation is not None and self.formation.textured)
+        f = self.formation
+        return self.speckle == "k" or (f is not None and (f.textured or f.object_rice_k > 0.0))
 
     def mean_intensity(self, energy_lines: NDArray[np.float32]) -> NDArray[np.float32]:
         """Noise-free received power (n_lines, n_bins) of binned echo energy (n_lines, n_bins).
@@ -88,7 +89,7 @@ class EchoChain:
         """Received intensity (n_lines, n_bins): speckle and receiver noise drawn from ``rng``,
         the K texture only where ``clutter``; ``noise=False`` gives ``mean + noise power``."""
         f = self.formation
-        if noise and f is not None and (f.correlated or f.textured):
+        if noise and f is not None and (f.correlated or f.textured or f.object_rice_k > 0.0):
             return self._realise_formed(mean, rng, clutter)
         if noise:
             return add_speckle_and_noise(mean, rng, self.speckle, self.noise_power, k_shape=self.k_shape,
@@ -114,8 +115,12 @@ class EchoChain:
             m = np.multiply(m, tex, out=tex)
         if self.speckle == "none":
             out = np.array(m, dtype=np.float32, copy=True)
-        elif f.correlated:
-            out = correlated_speckle(mean.shape, rng, f.range_kernel, f.beam_kernel)
+        elif f.correlated or f.object_rice_k > 0.0:
+            re, im = speckle_field(mean.shape, rng, f.range_kernel, f.beam_kernel)
+            if f.object_rice_k > 0.0 and clutter is not None:
+                out = np.where(clutter, re * re + im * im, rician_speckle(re, im, f.object_rice_k))
+            else:
+                out = re * re + im * im
             out *= m
         else:
             return add_speckle_and_noise(np.ascontiguousarray(m, dtype=np.float32), rng, "rayleigh",

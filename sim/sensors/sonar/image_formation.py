@@ -10,6 +10,9 @@ What each models, and its source (keys of ``docs/references.md``):
   the pulse envelope (a rectangle ``pulse_length_m`` long; the bin size only samples it) and
   across beams by the two-way amplitude pattern of the beams (:func:`beam_amplitude_kernel`),
   both normalised to unit energy so the intensity stays unit-mean exponential at every sample.
+* **Coherent object echoes** ([Goodman2007], Rice's law). A smooth object's echo is
+  dominated by a few specular facets: a coherent part plus diffuse speckle, so its
+  intensity is Rician (Rice factor ``object_rice_k``) and fluctuates less than the floor's.
 * **Seabed texture** ([Abraham2004], [Lyons2009]). The number of scatterers per cell and
   their strength vary over the bottom: the mean is modulated by a unit-mean log-normal
   texture whose log is a Gaussian field correlated over ``texture_corr_m``. The compound of
@@ -18,6 +21,12 @@ What each models, and its source (keys of ``docs/references.md``):
   ``s_v V r^-4`` from a cell of volume ``V ~ r^2`` (beam solid angle times pulse length):
   ``r^-2`` with two-way absorption, a level that 20 log r TVG shows flat, filling shadows
   where electronic noise alone is far below the echoes.
+* **Object echo tails** ([Urick1983] ch. 8 on multipath; [Williams2010] on the elastic
+  ringing of shells). A debris object's echo goes on after its first return: sound bounces
+  between the object and the floor, and a water-filled shell (a can, a bottle) rings. Each
+  beam's object echo is followed by an exponentially decaying tail along range, of length
+  ``object_tail_m`` and total energy ``object_tail_ratio`` times the direct echo; it fills
+  the object's acoustic shadow and stretches the object along range, as in real frames.
 * **Power-law display** (an adjustable gamma on the amplitude, as sonar viewers offer
   beside the log display; [Hansen2011] on sonar display mapping). Grey
   ``255 (I g / I_0)^(gamma / 2)``: amplitude to the power ``gamma``; ``gamma -> 0``
@@ -68,6 +77,9 @@ class FormationModel:
         reverberation: (n_bins,) volume reverberation power per bin before TVG (zeros: none).
         display_gamma: amplitude exponent of the display (None: the dB display).
         display_soft_limit: the power-law display limits softly (``tanh``).
+        object_rice_k: Rice factor of object echoes (coherent over diffuse power; 0: Rayleigh).
+        tail_decay: per-bin decay factor of the object echo tail (0: no tail).
+        tail_ratio: the tail's energy over the direct object echo.
     """
 
     range_kernel: NDArray[np.float32]
@@ -78,6 +90,13 @@ class FormationModel:
     reverberation: NDArray[np.float32]
     display_gamma: float | None
     display_soft_limit: bool = False
+    tail_decay: float = 0.0
+    tail_ratio: float = 0.0
+    object_rice_k: float = 0.0
+
+    @property
+    def has_tail(self) -> bool:
+        return self.tail_decay > 0.0 and self.tail_ratio > 0.0
 
     @property
     def correlated(self) -> bool:
@@ -88,21 +107,43 @@ class FormationModel:
         return self.texture_sigma > 0.0
 
 
+def speckle_field(shape: tuple[int, int], rng: np.random.Generator, range_kernel: NDArray[np.float32],
+                  beam_kernel: NDArray[np.float32]) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
+    """Real and imaginary parts (each (n_lines, n_bins), variance 1/2) of a circular complex
+    Gaussian field correlated along range by ``range_kernel`` and across lines by
+    ``beam_kernel``: white noise (two float32 standard-normal draws per sample) filtered by the
+    separable unit-energy kernels."""
+    kx, ky = range_kernel.reshape(-1, 1), beam_kernel.reshape(-1, 1)
+    scale = np.float32(np.sqrt(0.5))
+    parts = []
+    for _ in range(2):
+        w = rng.standard_normal(shape, dtype=np.float32)
+        if kx.size > 1 or ky.size > 1:
+            w = cv2.sepFilter2D(w, -1, kx, ky, borderType=cv2.BORDER_REFLECT)
+        w *= scale
+        parts.append(w)
+    return parts[0], parts[1]
+
+
 def correlated_speckle(shape: tuple[int, int], rng: np.random.Generator, range_kernel: NDArray[np.float32],
                        beam_kernel: NDArray[np.float32]) -> NDArray[np.float32]:
     """Unit-mean exponential intensities (n_lines, n_bins), correlated along range by
-    ``range_kernel`` and across lines by ``beam_kernel``: ``|h * w|^2 / 2`` for ``w`` complex
-    white Gaussian noise (two float32 standard-normal draws per sample) filtered by the
-    separable unit-energy ``h``."""
-    re = rng.standard_normal(shape, dtype=np.float32)
-    im = rng.standard_normal(shape, dtype=np.float32)
-    kx, ky = range_kernel.reshape(-1, 1), beam_kernel.reshape(-1, 1)
-    re = cv2.sepFilter2D(re, -1, kx, ky, borderType=cv2.BORDER_REFLECT)
-    im = cv2.sepFilter2D(im, -1, kx, ky, borderType=cv2.BORDER_REFLECT)
+    ``range_kernel`` and across lines by ``beam_kernel``: ``|z|^2`` of :func:`speckle_field`."""
+    re, im = speckle_field(shape, rng, range_kernel, beam_kernel)
     out = cv2.multiply(re, re)
     out += cv2.multiply(im, im)
-    out *= np.float32(0.5)
     return out
+
+
+def rician_speckle(re: NDArray[np.float32], im: NDArray[np.float32], rice_k: float) -> NDArray[np.float32]:
+    """Unit-mean intensities ``|c + s z|^2`` of a coherent part ``c^2 = K / (1 + K)`` plus a
+    diffuse part ``s^2 = 1 / (1 + K)`` (Rice's law, [Goodman2007]: a dominant specular
+    reflector among weaker scatterers); ``K = 0`` is fully developed (exponential) speckle."""
+    c = np.float32(np.sqrt(rice_k / (1.0 + rice_k)))
+    sd = np.float32(np.sqrt(1.0 / (1.0 + rice_k)))
+    a = re * sd + c
+    b = im * sd
+    return a * a + b * b
 
 
 def lognormal_texture(shape: tuple[int, int], rng: np.random.Generator, sigma: float, corr_bins: float,
@@ -128,6 +169,16 @@ def _gauss(sigma: float) -> NDArray[np.float32]:
     x = np.arange(-half, half + 1, dtype=np.float64)
     k = np.exp(-0.5 * (x / sigma) ** 2)
     return (k / k.sum()).astype(np.float32)
+
+
+def object_tail(object_lines: NDArray[np.float32], decay: float, ratio: float) -> NDArray[np.float32]:
+    """The echo tails of (n_lines, n_bins) object echo energy: each bin's energy followed, in
+    the later bins of its line, by ``ratio (1 - decay) decay^(k - 1)`` of it at ``k`` bins
+    (k >= 1; total ``ratio``). A first-order recursive filter along range (scipy's ``lfilter``)."""
+    from scipy.signal import lfilter
+
+    y = lfilter([0.0, ratio * (1.0 - decay)], [1.0, -decay], object_lines, axis=1)
+    return y.astype(np.float32)
 
 
 def to_uint8_gamma(intensity: NDArray[np.float32], gain_per_bin: NDArray[np.float32], gain_db: float,
@@ -170,4 +221,6 @@ def formation_model(cfg, bin_centres_m: NDArray[np.float64], range_resolution_m:
         texture_corr_bins=float(cfg.texture_corr_m / range_resolution_m),
         texture_corr_lines=float(cfg.texture_corr_m / max(mid_m * line_spacing_rad, 1e-9)),
         reverberation=reverb.astype(np.float32), display_gamma=cfg.display_gamma,
-        display_soft_limit=bool(cfg.display_soft_limit))
+        display_soft_limit=bool(cfg.display_soft_limit),
+        tail_decay=float(np.exp(-range_resolution_m / cfg.object_tail_m)) if cfg.object_tail_m else 0.0,
+        tail_ratio=float(cfg.object_tail_ratio), object_rice_k=float(cfg.object_rice_k))

@@ -125,3 +125,26 @@ def test_formed_frames_are_seeded_and_differ_from_plain_speckle():
     assert np.array_equal(a, b)
     assert not np.array_equal(a, frame(form, 6))
     assert not np.array_equal(a, frame(SonarFormationConfig(), 5))
+
+
+def test_object_tail_is_a_geometric_echo_train_of_the_given_energy():
+    from sim.sensors.sonar.image_formation import object_tail
+
+    x = np.zeros((2, 400), dtype=np.float32)
+    x[0, 10] = 2.0
+    tail = object_tail(x, 0.9, 0.3).astype(float)
+    assert np.all(tail[0, :11] == 0.0) and np.all(tail[1] == 0.0)  # causal, per line
+    assert tail[0, 11] == pytest.approx(2.0 * 0.3 * 0.1)
+    assert np.allclose(tail[0, 12:40] / tail[0, 11:39], 0.9, rtol=1e-5)
+    assert tail[0].sum() == pytest.approx(2.0 * 0.3, rel=1e-4)
+
+
+@pytest.mark.parametrize("rice_k", [0.0, 1.0, 10.0])
+def test_rician_speckle_moments(rice_k):
+    from sim.sensors.sonar.image_formation import rician_speckle, speckle_field
+
+    re, im = speckle_field((600, 600), np.random.default_rng(8), np.ones(1, np.float32), np.ones(1, np.float32))
+    s = rician_speckle(re, im, rice_k).astype(float)
+    assert s.mean() == pytest.approx(1.0, abs=0.01)
+    # unit-mean Rician intensity: variance 1 - (K / (1 + K))^2
+    assert s.var() == pytest.approx(1.0 - (rice_k / (1.0 + rice_k)) ** 2, rel=0.04)
