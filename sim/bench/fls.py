@@ -51,9 +51,12 @@ class _TimedCaster:
         return self.caster.object_bounding_sphere(object_id)
 
 
-def run(scenario: Scenario, n_frames: int = 60, range_window_m: tuple[float, float] = (1.0, 30.0),
+def run(scenario: Scenario, n_frames: int = 60, range_window_m: tuple[float, float] | None = (1.0, 30.0),
         altitude_m: float = 2.0, *, without_truth: bool = True) -> dict:
     """Render ``n_frames`` frames and report throughput.
+
+    ``range_window_m`` is clipped to the sonar preset's range limits (a short-range sonar
+    such as the ARIS 3000 renders its own window); None keeps the scenario's window.
 
     ``without_truth`` False renders only the pass with the ground truth (callers that hook
     :meth:`FlsSensor.render` to see the bench's frames once each).
@@ -70,7 +73,15 @@ def run(scenario: Scenario, n_frames: int = 60, range_window_m: tuple[float, flo
         :data:`IDENTITY_FRAMES` frames byte-identical with and without the truth, rendered
         again untimed from fresh noise states).
     """
-    cfg = FlsConfig(**{**scenario.sensors.fls.model_dump(), "range_window_m": tuple(range_window_m)})
+    base = scenario.sensors.fls
+    if range_window_m is not None:
+        from scenarios.fls_presets import PRESETS
+
+        p = PRESETS[base.preset]
+        lo, hi = base.range_min_m or p.range_min_m, base.range_max_m or p.range_max_m
+        near, far = max(range_window_m[0], lo), min(range_window_m[1], hi)
+        base = FlsConfig(**{**base.model_dump(), "range_window_m": (near, far) if near < far else None})
+    cfg = base
     world = build_world(scenario)
     caster = _TimedCaster(MujocoRayCaster(world.model, world.data, world.geom_object_id, world.geom_reflectivity,
                                           world.vehicle_body_id))
