@@ -4,7 +4,7 @@ seabed texture, volume reverberation and the display law.
 Every field's default leaves the image formation as it was: speckle drawn independently per
 range bin and line, no texture, no reverberation, a dB display. The models and their sources
 are in :mod:`sim.sensors.sonar.image_formation`; the values a real sonar calls for are
-estimated in ``docs/realism.md``.
+estimated in ``docs/studies/realism.md``.
 """
 
 from __future__ import annotations
@@ -35,6 +35,9 @@ class SonarFormationConfig(StrictModel):
         object_tail_m: e-folding length along range of the echo tail that follows each object's
             echo (multipath between object and floor, a shell's ringing), m; None: no tail.
         object_tail_ratio: energy of that tail over the object's direct echo.
+        side_lobe_floor_db: two-way level (dB re the main lobe) the azimuth pattern keeps outside
+            its main lobe, out to the sonar's ``side_lobe_extent_beamwidths`` (None: the ideal
+            aperture's falling side lobes). Bright echoes then streak along the arc.
         elevation_span_beamwidths: rays span this many vertical -3 dB beam widths (1: the
             nominal beam; 2.26 reaches the main lobe's first null, where the floor enters the
             beam gradually instead of at a hard edge). Forward-looking sonar only.
@@ -47,6 +50,7 @@ class SonarFormationConfig(StrictModel):
     reverberation_db: float | None = Field(None, ge=-200.0, le=0.0)
     display_gamma: float | None = Field(None, gt=0.0, le=4.0)
     display_soft_limit: bool = False
+    side_lobe_floor_db: float | None = Field(None, ge=-120.0, le=-3.0)
     object_rice_k: float = Field(0.0, ge=0.0, le=100.0)
     object_tail_m: float | None = Field(None, gt=0.0, le=10.0)
     object_tail_ratio: float = Field(0.0, ge=0.0, le=10.0)

@@ -75,7 +75,10 @@ class BasinConfig(StrictModel):
     reflectivity: Probability = 0.8
 
 
-TargetShape = Literal["half_sphere", "truncated_cone", "cylinder", "box", "tyre"]
+TargetShape = Literal["half_sphere", "truncated_cone", "cylinder", "box", "tyre", "bottle", "can", "chain",
+                      "drink_carton", "hook", "propeller", "shampoo_bottle", "valve"]
+#: Marine-debris shapes (:mod:`sim.scene.debris_meshes`): sized by ``size_m`` (length, width, height).
+DEBRIS_TARGET_SHAPES = ("bottle", "can", "chain", "drink_carton", "hook", "propeller", "shampoo_bottle", "valve")
 
 
 class TargetConfig(StrictModel):
@@ -89,7 +92,8 @@ class TargetConfig(StrictModel):
     radius_m: PositiveFloat = Field(0.5, le=20.0, description="sphere/cylinder/cone base/tyre")
     top_radius_m: NonNegFloat = Field(0.2, le=20.0, description="truncated cone top radius")
     height_m: PositiveFloat = Field(0.5, le=20.0, description="cylinder/cone height")
-    size_m: tuple[PositiveFloat, PositiveFloat, PositiveFloat] = (1.0, 0.5, 0.5)
+    size_m: tuple[PositiveFloat, PositiveFloat, PositiveFloat] = Field(
+        (1.0, 0.5, 0.5), description="box, and debris shapes: (length, width, height), m")
     tube_radius_m: PositiveFloat = Field(0.15, le=5.0, description="tyre tube radius")
     reflectivity: Probability = 0.9
     class_name: str = "opi"

@@ -66,7 +66,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("realism", help="measure real sonar frames against a matched simulated set",
                        description="Fit the real frames' fan, render matched water-tank scenes with the ARIS 3000 "
                                    "preset (fixed seed), and print image statistics, range profiles and classifier "
-                                   "two-sample tests for real against simulated (docs/realism.md).")
+                                   "two-sample tests for real against simulated (docs/studies/realism.md).")
     p.add_argument("--real", required=True, help="folder of real frames (images/*.png, optional masks/ and boxes/)")
     p.add_argument("--frames", type=positive_int, default=200, help="simulated frames per formation (default 200)")
     p.add_argument("--seed", type=non_negative_int, default=0, help="root seed of scenes, noise and patches")

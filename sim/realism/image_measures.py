@@ -9,7 +9,7 @@ pixel per range step, :data:`AZ_PER_BEAM` samples per beam.
 Speckle is the image divided by its local mean (a box of :data:`LOCAL_MEAN_PX` pixels), minus
 one; a speckle length is the full width at half maximum of its autocorrelation (linear
 interpolation between lags; white noise gives about 1 px). Definitions of every measure are
-in :data:`MEASURES` and ``docs/realism.md``.
+in :data:`MEASURES` and ``docs/studies/realism.md``.
 """
 
 from __future__ import annotations

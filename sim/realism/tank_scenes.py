@@ -1,6 +1,6 @@
 """Water-tank scenes matched to a real forward-looking sonar set, and their frames on its pixel grid.
 
-The geometry is estimated from the real frames (``docs/realism.md`` gives the estimate and
+The geometry is estimated from the real frames (``docs/studies/realism.md`` gives the estimate and
 how it was made): the fan outline (:func:`sim.realism.real_frames.fit_fan_outline`) gives
 the near/far ratio of the window; the preset's minimum range (0.7 m for the ARIS 3000, its
 nearest window start) gives the metric scale. The sonar looks down at a flat tank floor from
@@ -72,7 +72,7 @@ class TankGeometry:
 
 TANK = TankGeometry()
 
-#: The image formation estimated for the ARIS 3000 in the tank (``docs/realism.md``): FLS
+#: The image formation estimated for the ARIS 3000 in the tank (``docs/studies/realism.md``): FLS
 #: config fields over the ``aris3000`` preset, estimated on the development frames.
 #:
 #: * TVG 40 log r, the point-target law (20 log r leaves the far range too dark against the
@@ -83,13 +83,16 @@ TANK = TankGeometry()
 #: * coherent object echoes (Rice factor 10) with an 8 cm echo tail of 0.3 of the echo;
 #: * an amplitude display with gamma 0.5 through a soft limiter: the real grey histogram's
 #:   bright tail, which thins out below 255 instead of piling up there;
-#: * rays out to the vertical main lobe's first nulls (2.26 beam widths).
+#: * rays out to the vertical main lobe's first nulls (2.26 beam widths);
+#: * an azimuth side-lobe plateau at -35 dB (two-way) out to 20 beam widths: bright echoes
+#:   streak along the arc, as the real ones do.
 TANK_FORMATION: dict = {
     "tvg_spreading_db_per_decade": 40.0,
+    "side_lobe_extent_beamwidths": 20.0,
     "formation": {"pulse_length_m": 0.012, "beam_correlated_speckle": True, "texture_sigma": 0.7,
                   "texture_corr_m": 0.02, "display_gamma": 0.5, "display_soft_limit": True,
                   "elevation_span_beamwidths": 2.26, "object_tail_m": 0.08, "object_tail_ratio": 0.3,
-                  "object_rice_k": 10.0},
+                  "object_rice_k": 10.0, "side_lobe_floor_db": -35.0},
 }
 
 
@@ -135,7 +138,9 @@ def draw_scenes(n: int, seed: int, tank: TankGeometry = TANK) -> list[TankScene]
                                             reflectivity=0.9, class_name=cls, is_target=True))
                 continue
             size = tuple(s * scale for s in debris_default_size_m(shape))
-            targets.append(TargetConfig(name=f"obj{j}", shape=shape, pos_ned=(north, east, floor),
+            # standing (pitched 90 deg): raised by half its length, so its base end is on the floor
+            lift = 0.5 * size[0] if pitch else 0.0
+            targets.append(TargetConfig(name=f"obj{j}", shape=shape, pos_ned=(north, east, floor - lift),
                                         rpy_deg=(0.0, pitch, yaw), size_m=size, reflectivity=0.9,
                                         class_name=cls, is_target=True))
         if rng.random() < tank.wall_share:

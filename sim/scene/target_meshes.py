@@ -12,13 +12,13 @@ trimesh. :meth:`TriangleMesh.to_trimesh` gives a ``trimesh.Trimesh`` where one i
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from functools import lru_cache
 
 import numpy as np
 from numpy.typing import NDArray
 
-from scenarios.config.world import TargetConfig
+from scenarios.config.world import DEBRIS_TARGET_SHAPES, TargetConfig
+from sim.scene.triangle_mesh import TriangleMesh
 
 MERGE_DIGITS = 8  # vertices equal to 1e-8 m are one vertex (trimesh's ``tol.merge``)
 # unit cube corners and faces in trimesh's order (``trimesh.creation.box``)
@@ -26,64 +26,6 @@ _BOX_VERTICES = np.array([[0, 0, 0], [0, 0, 1], [0, 1, 0], [0, 1, 1], [1, 0, 0],
                          dtype=np.float64)
 _BOX_FACES = np.array([[1, 3, 0], [4, 1, 0], [0, 3, 2], [2, 4, 0], [1, 7, 3], [5, 1, 4], [5, 7, 1], [3, 7, 2],
                        [6, 4, 2], [2, 7, 6], [6, 5, 4], [7, 5, 6]], dtype=np.int64)
-
-
-@dataclass
-class TriangleMesh:
-    """A closed triangle mesh.
-
-    Attributes:
-        vertices: (n, 3) float64 positions, m.
-        faces: (m, 3) int64 vertex indices, counter-clockwise seen from outside.
-    """
-
-    vertices: NDArray[np.float64]
-    faces: NDArray[np.int64]
-    _moments: NDArray[np.float64] | None = field(default=None, repr=False, compare=False)
-
-    def _volume_moments(self) -> NDArray[np.float64]:
-        """(volume, first moments x, y, z) by the divergence theorem over the faces (Eberly,
-        "Polyhedral Mass Properties", 2002), summed in the order trimesh's ``mass_properties`` uses."""
-        if self._moments is None:
-            tri = self.vertices[self.faces]
-            edges = tri[:, 1:, :] - tri[:, :2, :]
-            crosses = np.cross(edges[:, 0], edges[:, 1])
-            f1 = tri[:, 0, :] + tri[:, 1, :] + tri[:, 2, :]
-            f2 = tri[:, 0, :] ** 2 + tri[:, 1, :] ** 2 + tri[:, 0, :] * tri[:, 1, :] + tri[:, 2, :] * f1
-            integral = np.zeros((4, len(f1)))
-            integral[0] = crosses[:, 0] * f1[:, 0]
-            integral[1:4] = (crosses * f2).T
-            self._moments = integral.sum(axis=1) / np.array([6, 24, 24, 24], dtype=np.float64)
-        return self._moments
-
-    @property
-    def volume(self) -> float:
-        """Enclosed volume, m^3 (negative when the faces are wound inwards)."""
-        return float(self._volume_moments()[0])
-
-    @property
-    def center_mass(self) -> NDArray[np.float64]:
-        """(3,) centroid of the enclosed volume (uniform density), m."""
-        m = self._volume_moments()
-        return m[1:4] / m[0]
-
-    @property
-    def bounds(self) -> NDArray[np.float64]:
-        """(2, 3) lowest and highest vertex coordinates, m."""
-        return np.array([self.vertices.min(axis=0), self.vertices.max(axis=0)])
-
-    def translated(self, offset: tuple[float, float, float]) -> "TriangleMesh":
-        return TriangleMesh(self.vertices + np.asarray(offset, dtype=np.float64), self.faces)
-
-    def inverted(self) -> "TriangleMesh":
-        """The same surface with every face's winding (hence normal) reversed."""
-        return TriangleMesh(self.vertices, np.ascontiguousarray(self.faces[:, ::-1]))
-
-    def to_trimesh(self):
-        """The mesh as a ``trimesh.Trimesh`` (imports trimesh)."""
-        import trimesh
-
-        return trimesh.Trimesh(self.vertices, self.faces, process=False)
 
 
 def _merge_duplicate_vertices(vertices: NDArray, faces: NDArray) -> TriangleMesh:
@@ -185,6 +127,10 @@ def _shape_mesh(shape: str, radius_m: float, top_radius_m: float, height_m: floa
         mesh = box(size_m)
     elif shape == "tyre":
         mesh = tyre(radius_m, tube_radius_m)
+    elif shape in DEBRIS_TARGET_SHAPES:
+        from sim.scene.debris_meshes import debris_mesh
+
+        return debris_mesh(shape, size_m)
     else:
         raise ValueError(f"unknown target shape {shape!r}")
     mesh.vertices.setflags(write=False)

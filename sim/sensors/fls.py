@@ -131,7 +131,8 @@ class FlsSensor(Sensor[FlsRender]):
             g.bin_centres_m(), g.absorption_db_per_m, cfg.tvg_spreading_db_per_decade,
             g.absorption_db_per_m if cfg.tvg_absorption else 0.0, cfg.noise_floor_db, cfg.speckle, cfg.k_shape,
             cfg.gain_db, cfg.dynamic_range_db,
-            azimuth_kernel(g.fov_rad / n_cols, g.beamwidth_az_rad, cfg.side_lobe_extent_beamwidths),
+            azimuth_kernel(g.fov_rad / n_cols, g.beamwidth_az_rad, cfg.side_lobe_extent_beamwidths,
+                           cfg.formation.side_lobe_floor_db),
             formation=formation_model(cfg.formation, g.bin_centres_m(), g.range_resolution_m, g.beam_spacing_rad,
                                       g.beamwidth_az_rad, g.absorption_db_per_m, cfg.side_lobe_extent_beamwidths))
         beam_az = g.beam_azimuths_rad()

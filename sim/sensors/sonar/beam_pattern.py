@@ -31,11 +31,21 @@ def two_way_beam_power(offset_rad: ArrayLike, beamwidth_rad: float) -> FloatArra
     return np.sinc(SINC_3DB * np.asarray(offset_rad) / beamwidth_rad) ** 4
 
 
-def azimuth_kernel(spacing_rad: float, beamwidth_rad: float, extent_beamwidths: float) -> NDArray[np.float32]:
+def azimuth_kernel(spacing_rad: float, beamwidth_rad: float, extent_beamwidths: float,
+                   side_lobe_floor_db: float | None = None) -> NDArray[np.float32]:
     """Two-way azimuth pattern sampled every ``spacing_rad`` out to ``+-extent_beamwidths``
-    beam widths, normalised to unit sum: (2K + 1,) float32, K = ceil(extent bw / spacing)."""
+    beam widths, normalised to unit sum: (2K + 1,) float32, K = ceil(extent bw / spacing).
+
+    ``side_lobe_floor_db`` (two-way, dB re the main lobe's peak): the pattern never falls below
+    this level outside the main lobe (its first nulls), the far side-lobe plateau of a real
+    array or lens (element errors, shading, scattering in the lens) where the ideal aperture's
+    lobes keep falling; None: the ideal pattern."""
     half = max(int(np.ceil(extent_beamwidths * beamwidth_rad / spacing_rad)), 0)
-    k = two_way_beam_power(np.arange(-half, half + 1) * spacing_rad, beamwidth_rad)
+    theta = np.arange(-half, half + 1) * spacing_rad
+    k = two_way_beam_power(theta, beamwidth_rad)
+    if side_lobe_floor_db is not None:
+        outside = np.abs(theta) >= beamwidth_rad / SINC_3DB  # beyond the first nulls
+        k = np.where(outside, np.maximum(k, 10.0 ** (0.1 * side_lobe_floor_db)), k)
     return (k / k.sum()).astype(np.float32)
 
 

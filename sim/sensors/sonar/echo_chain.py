@@ -9,6 +9,7 @@ single-beam scanning sonar one line per ping, a side-scan sonar one line per sid
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -63,6 +64,9 @@ class EchoChain:
         self.dynamic_range_db = float(dynamic_range_db)
         self.azimuth_kernel = np.ones(1, dtype=np.float32) if azimuth_kernel is None else azimuth_kernel
         self.formation = formation
+        rk = None if formation is None else formation.range_kernel.astype(np.float64)
+        self._range_psf = (None if rk is None or rk.size < 2
+                           else ((rk ** 2) / np.sum(rk ** 2)).astype(np.float32).reshape(1, -1))
         self._reverb = (None if formation is None or not np.any(formation.reverberation > 0)
                         else formation.reverberation.astype(np.float32))
 
@@ -76,10 +80,14 @@ class EchoChain:
         """Noise-free received power (n_lines, n_bins) of binned echo energy (n_lines, n_bins).
 
         Applies the per-bin spreading and absorption in place (``energy_lines`` is consumed),
-        then the azimuth pattern across lines.
+        then the azimuth pattern across lines and, with a formation model's pulse longer than
+        a bin, the range point-spread function (the pulse's power envelope, unit sum).
         """
         img = np.multiply(energy_lines, self._bin_gain32[None, :], out=energy_lines)
         img = apply_azimuth_pattern(img, self.azimuth_kernel)
+        if self._range_psf is not None:
+            # causal: an echo at range r is received from r to r + pulse length
+            img = cv2.filter2D(img, -1, self._range_psf, anchor=(0, 0), borderType=cv2.BORDER_CONSTANT)
         if self._reverb is not None:
             img = np.add(img, self._reverb[None, :], out=img)
         return img

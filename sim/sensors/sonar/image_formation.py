@@ -29,7 +29,7 @@ What each models, and its source (keys of ``docs/references.md``):
   the object's acoustic shadow and stretches the object along range, as in real frames.
 * **Power-law display** (an adjustable gamma on the amplitude, as sonar viewers offer
   beside the log display; the exponent a set calls for is estimated from its grey
-  histogram, ``docs/realism.md``). Grey
+  histogram, ``docs/studies/realism.md``). Grey
   ``255 (I g / I_0)^(gamma / 2)``: amplitude to the power ``gamma``; ``gamma -> 0``
   approaches a log display. Optionally through a soft limiter (``tanh``), as a receiver
   saturates gradually rather than clipping.
