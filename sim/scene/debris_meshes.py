@@ -32,8 +32,6 @@ from functools import lru_cache
 
 import numpy as np
 
-from sim.scene.target_meshes import TriangleMesh
-
 DEBRIS_SIZES_M: dict[str, tuple[float, float, float]] = {
     "bottle": (0.25, 0.08, 0.08), "can": (0.12, 0.066, 0.066), "chain": (0.45, 0.035, 0.035),
     "drink_carton": (0.2, 0.095, 0.07), "hook": (0.15, 0.08, 0.012), "propeller": (0.3, 0.3, 0.06),
@@ -169,9 +167,11 @@ _BUILDERS = {"bottle": _bottle, "can": _can, "chain": _chain, "drink_carton": _d
 
 
 @lru_cache(maxsize=64)
-def debris_mesh(shape: str, size_m: tuple[float, float, float]) -> TriangleMesh:
-    """The closed mesh of debris ``shape`` scaled to the box ``size_m`` (length, width, height, m),
-    base on z = 0, extending to z = -height (read-only arrays).
+def debris_mesh_arrays(shape: str, size_m: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices (n, 3) float64 and faces (m, 3) int64 (outward, counter-clockwise seen from
+    outside) of debris ``shape`` scaled to the box ``size_m`` (length, width, height, m), base
+    on z = 0, extending to z = -height (read-only arrays;
+    :func:`sim.scene.target_meshes.debris_mesh` wraps them).
 
     Raises:
         ValueError: not a debris shape, or a size that is not positive.
@@ -194,7 +194,7 @@ def debris_mesh(shape: str, size_m: tuple[float, float, float]) -> TriangleMesh:
     v[:, 0] -= 0.5 * size[0]
     v[:, 1] -= 0.5 * size[1]
     v[:, 2] = -v[:, 2]  # z up -> z down (NED): the mirror flips the winding back outward below
-    mesh = TriangleMesh(v, f[:, ::-1].copy())
-    mesh.vertices.setflags(write=False)
-    mesh.faces.setflags(write=False)
-    return mesh
+    f = f[:, ::-1].copy()
+    v.setflags(write=False)
+    f.setflags(write=False)
+    return v, f

@@ -102,6 +102,19 @@ def tyre(radius_m: float, tube_radius_m: float, sections: int = 32, tube_section
     return revolve(profile, sections).translated((0.0, 0.0, -tube_radius_m))
 
 
+def debris_mesh(shape: str, size_m: tuple[float, float, float]) -> TriangleMesh:
+    """The closed mesh of a marine-debris ``shape`` scaled to the box ``size_m`` (length, width,
+    height, m), built with trimesh by :mod:`sim.scene.debris_meshes` (imported on first use).
+
+    Raises:
+        ValueError: not a debris shape, or a size that is not positive.
+    """
+    from sim.scene.debris_meshes import debris_mesh_arrays
+
+    v, f = debris_mesh_arrays(shape, tuple(float(x) for x in size_m))
+    return TriangleMesh(v, f)
+
+
 def target_mesh(cfg: TargetConfig) -> TriangleMesh:
     """The mesh for a target config, before its pose is applied.
 
@@ -128,8 +141,6 @@ def _shape_mesh(shape: str, radius_m: float, top_radius_m: float, height_m: floa
     elif shape == "tyre":
         mesh = tyre(radius_m, tube_radius_m)
     elif shape in DEBRIS_TARGET_SHAPES:
-        from sim.scene.debris_meshes import debris_mesh
-
         return debris_mesh(shape, size_m)
     else:
         raise ValueError(f"unknown target shape {shape!r}")

@@ -7,7 +7,8 @@ import pytest
 
 from scenarios.config.world import DEBRIS_TARGET_SHAPES, SeabedConfig, TargetConfig, WorldConfig
 from scenarios.schema import Scenario
-from sim.scene.debris_meshes import DEBRIS_SHAPES, debris_default_size_m, debris_mesh
+from sim.scene.debris_meshes import DEBRIS_SHAPES, debris_default_size_m
+from sim.scene.target_meshes import debris_mesh
 from sim.scene.world import build_world
 from sim.sensors.raycast import MujocoRayCaster
 
