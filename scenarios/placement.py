@@ -16,6 +16,7 @@ import math
 
 import numpy as np
 
+from scenarios.config.world import DEBRIS_TARGET_SHAPES
 from scenarios.schema import Scenario
 from scenarios.vehicle_presets import surface_hull_span_m, vehicle_envelope_m, vehicle_half_height_m
 
@@ -47,13 +48,20 @@ def seabed_relief_m(scenario: Scenario) -> float:
 
 
 def _target_height_m(t) -> float:
-    """Height of a target above its base (upright), m."""
+    """Height of a target above its base (upright; a debris shape in its default pose), m."""
+    if t.shape in DEBRIS_TARGET_SHAPES:
+        return t.size_m[2]
     return {"half_sphere": t.radius_m, "truncated_cone": t.height_m, "cylinder": t.height_m,
             "box": t.size_m[2], "tyre": 2.0 * t.tube_radius_m}[t.shape]
 
 
 def _inscribed_radius_m(t) -> float:
-    """Radius of a circle about the base centre that lies inside the target's footprint, m."""
+    """Radius of a circle about the base centre that lies inside the target's footprint, m
+    (a debris shape's: a quarter of its box's smaller side, a hook's bar radius)."""
+    if t.shape == "hook":
+        return 0.5 * t.size_m[2]
+    if t.shape in DEBRIS_TARGET_SHAPES:
+        return 0.25 * min(t.size_m[0], t.size_m[1])
     return t.radius_m if t.shape != "box" else 0.5 * min(t.size_m[0], t.size_m[1])
 
 

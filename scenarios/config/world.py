@@ -82,8 +82,28 @@ DEBRIS_TARGET_SHAPES = ("bottle", "can", "chain", "drink_carton", "hook", "prope
 
 
 class TargetConfig(StrictModel):
-    """A seabed object built from a trimesh mesh. ``pos_ned`` is the centre of its base;
-    its z is the depth of the base (use the seabed depth to lay it on a flat bottom)."""
+    """A seabed object built from a closed mesh (:mod:`sim.scene.target_meshes`). ``pos_ned`` is
+    the centre of its base; its z is the depth of the base (use the seabed depth to lay it on a
+    flat bottom).
+
+    Shapes: ``half_sphere`` (``radius_m``), ``truncated_cone`` (``radius_m`` at the base,
+    ``top_radius_m``, ``height_m``), ``cylinder`` (upright: ``radius_m``, ``height_m``), ``box``
+    (``size_m``), ``tyre`` (a torus lying flat: outer ``radius_m``, ``tube_radius_m``), and the
+    marine debris of the real water-tank sonar set (:mod:`sim.scene.debris_meshes`, whose
+    docstring tables their default sizes, ``debris_default_size_m``), each scaled so that its box
+    in the default pose is exactly ``size_m`` (length along x, width along y, height):
+
+    * ``bottle``: a drink bottle (body, shoulder, neck, cap), lying along x, base end at -x;
+      stand it up with ``rpy_deg: [0, 90, yaw]`` and ``pos_ned`` half its length above the
+      bottom (its base end then rests on it);
+    * ``can``: a drink can with its rims, lying along x;
+    * ``chain``: a row of interlinked oval links along x, alternate links on edge;
+    * ``drink_carton``: a brick carton with its top seal and cap, lying on its broad face;
+    * ``hook``: a J-bent round bar with an eye on its shank, lying flat;
+    * ``propeller``: a hub and three twisted blades, lying flat on its hub;
+    * ``shampoo_bottle``: a bottle of flattened (elliptical) section with a cap, lying flat;
+    * ``valve``: a flanged gate valve on its flanges, stem and hand-wheel on top.
+    """
 
     name: str = Field(min_length=1)
     shape: TargetShape
@@ -93,7 +113,8 @@ class TargetConfig(StrictModel):
     top_radius_m: NonNegFloat = Field(0.2, le=20.0, description="truncated cone top radius")
     height_m: PositiveFloat = Field(0.5, le=20.0, description="cylinder/cone height")
     size_m: tuple[PositiveFloat, PositiveFloat, PositiveFloat] = Field(
-        (1.0, 0.5, 0.5), description="box, and debris shapes: (length, width, height), m")
+        (1.0, 0.5, 0.5), description="box, and debris shapes: (length, width, height), m (the default is "
+        "the box's; sim.scene.debris_meshes.debris_default_size_m gives each debris kind's)")
     tube_radius_m: PositiveFloat = Field(0.15, le=5.0, description="tyre tube radius")
     reflectivity: Probability = 0.9
     class_name: str = "opi"

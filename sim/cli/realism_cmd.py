@@ -52,13 +52,14 @@ def _cmd_realism(args: argparse.Namespace) -> int:
             (tmp / "realism.json").write_text(json.dumps(data, indent=1))
             (tmp / "realism.txt").write_text("\n".join(report_lines(rep)) + "\n")
             side_by_side_png(rep, tmp / "side_by_side.png")
+            side_by_side_png(rep, tmp / "simulated_only.png", include_real=False)
             staged.commit()
     if args.json:
         print(json.dumps(data, indent=1))
     else:
         print("\n".join(report_lines(rep)))
         if out is not None:
-            print(f"wrote {out}/realism.json, realism.txt, side_by_side.png")
+            print(f"wrote {out}/realism.json, realism.txt, side_by_side.png (with real frames), simulated_only.png")
     return 0
 
 
@@ -76,7 +77,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="image formation to simulate: before (the preset's), after (the tank estimate), both")
     p.add_argument("--limit-real", type=positive_int, default=None, help="read at most this many real frames")
     p.add_argument("--cnn", action="store_true", help="add a small CNN as a second judge (needs torch)")
-    p.add_argument("--out", default=None, help="folder for realism.json, realism.txt and side_by_side.png")
+    p.add_argument("--out", default=None, help="folder for realism.json, realism.txt, side_by_side.png and simulated_only.png")
     p.add_argument("--overwrite", action="store_true", help="replace an earlier realism output in --out")
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
     p.add_argument("--quiet", action="store_true", help="no progress bars")

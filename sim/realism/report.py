@@ -233,14 +233,16 @@ def report_lines(rep: RealismReport) -> list[str]:
     return lines
 
 
-def side_by_side_png(rep: RealismReport, path) -> None:
-    """A figure: a row of real frames, a row per formation's simulated frames (same scenes
-    for every formation), and the range profiles; written as a PNG."""
+def side_by_side_png(rep: RealismReport, path, *, include_real: bool = True) -> None:
+    """A figure: a row of real frames (unless ``include_real`` is False: a figure that may be
+    published without the real set's images), a row per formation's simulated frames (the
+    same scenes for every formation), and the range profiles; written as a PNG."""
     import cv2
 
-    rows = [("real", rep.real.examples)] + [(f"simulated: {f.name}", f.sim.examples) for f in rep.formations]
+    rows = ([("real", rep.real.examples)] if include_real else []) + [
+        (f"simulated: {f.name}", f.sim.examples) for f in rep.formations]
     n = max(len(ex) for _, ex in rows)
-    h, w = rep.real.examples[0].shape
+    h, w = rep.formations[0].sim.examples[0].shape if rep.formations else rep.real.examples[0].shape
     pad = 24
     canvas = np.zeros((len(rows) * (h + pad) + 200, n * w), dtype=np.uint8)
     for i, (label, ex) in enumerate(rows):

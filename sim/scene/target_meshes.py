@@ -8,6 +8,8 @@ Built with numpy alone (no trimesh, whose import with scipy's costs a dataset wo
 same solids (``revolve`` with its default 32 sections and duplicate-vertex merge, ``box``,
 ``torus``), so compiled scenes and rendered frames are unchanged; the tests check both against
 trimesh. :meth:`TriangleMesh.to_trimesh` gives a ``trimesh.Trimesh`` where one is wanted.
+The marine-debris shapes (``bottle``, ``can``, ``chain``, ...) are handed on to
+:mod:`sim.scene.debris_meshes`, which builds them with trimesh, imported only then.
 """
 
 from __future__ import annotations
@@ -104,15 +106,15 @@ def tyre(radius_m: float, tube_radius_m: float, sections: int = 32, tube_section
 
 def debris_mesh(shape: str, size_m: tuple[float, float, float]) -> TriangleMesh:
     """The closed mesh of a marine-debris ``shape`` scaled to the box ``size_m`` (length, width,
-    height, m), built with trimesh by :mod:`sim.scene.debris_meshes` (imported on first use).
+    height, m), built with trimesh by :mod:`sim.scene.debris_meshes` (imported on first use, so
+    scenes without debris import no trimesh); shared, read-only arrays.
 
     Raises:
-        ValueError: not a debris shape, or a size that is not positive.
+        ValueError: not a debris shape, or a size that is not three positive lengths.
     """
-    from sim.scene.debris_meshes import debris_mesh_arrays
+    from sim.scene.debris_meshes import debris_mesh as build
 
-    v, f = debris_mesh_arrays(shape, tuple(float(x) for x in size_m))
-    return TriangleMesh(v, f)
+    return build(shape, tuple(float(x) for x in size_m))
 
 
 def target_mesh(cfg: TargetConfig) -> TriangleMesh:
