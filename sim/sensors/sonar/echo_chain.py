@@ -86,8 +86,10 @@ class EchoChain:
         img = np.multiply(energy_lines, self._bin_gain32[None, :], out=energy_lines)
         img = apply_azimuth_pattern(img, self.azimuth_kernel)
         if self._range_psf is not None:
-            # causal: an echo at range r is received from r to r + pulse length
-            img = cv2.filter2D(img, -1, self._range_psf, anchor=(0, 0), borderType=cv2.BORDER_CONSTANT)
+            # causal: an echo at range r is received from r to r + pulse length (filter2D
+            # correlates: the kernel reversed, anchored on its last tap)
+            k = self._range_psf
+            img = cv2.filter2D(img, -1, k[:, ::-1].copy(), anchor=(k.shape[1] - 1, 0), borderType=cv2.BORDER_CONSTANT)
         if self._reverb is not None:
             img = np.add(img, self._reverb[None, :], out=img)
         return img

@@ -158,3 +158,22 @@ def test_box_muller_pairs_are_independent_standard_normals():
     for v in (x.ravel(), y.ravel()):
         assert stats.kstest(v, "norm").pvalue > 1e-3
     assert abs(np.corrcoef(x.ravel(), y.ravel())[0, 1]) < 0.01
+
+
+def test_range_psf_spreads_an_echo_over_the_pulse_behind_it():
+    """An echo in one bin is received over the pulse's length from that bin outwards, its
+    energy kept (the pulse's power envelope, unit sum)."""
+    from sim.sensors.sonar.echo_chain import EchoChain
+
+    bins = 0.7 + 0.003 * (np.arange(200) + 0.5)
+    form = formation_model(SonarFormationConfig(pulse_length_m=0.0105), bins, 0.003, 0.004, 0.004, 0.0, 3.0)
+    chain = EchoChain(bins, 0.0, 20.0, 0.0, -200.0, "rayleigh", 2.0, 0.0, 50.0, formation=form)
+    lines = np.zeros((3, 200), dtype=np.float32)
+    lines[1, 50] = 1.0
+    out = chain.mean_intensity(lines.copy()).astype(float)
+    expect_total = chain.bin_gain[50]
+    row = out[1] / expect_total
+    assert np.flatnonzero(row > 1e-9).tolist() == [50, 51, 52, 53]  # 3.5 bins: four taps, from the echo out
+    assert row.sum() == pytest.approx(1.0, rel=1e-5)
+    k = pulse_kernel(3.5).astype(float) ** 2
+    assert np.allclose(row[50:54], k / k.sum(), rtol=1e-5)
