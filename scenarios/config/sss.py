@@ -15,6 +15,7 @@ from pydantic import Field, model_validator
 
 from scenarios.config.base import Vec3
 from scenarios.config.sensor import SensorConfig, sensor_config
+from scenarios.config.sonar_formation import SonarFormationConfig
 
 
 @sensor_config
@@ -58,6 +59,9 @@ class SssConfig(SensorConfig):
     gain_db: float = Field(-25.0, ge=-100.0, le=200.0)
     dynamic_range_db: float = Field(50.0, gt=1.0, le=150.0)
     ground_range: bool = Field(False, description="also output ground-range lines")
+    formation: SonarFormationConfig = Field(
+        SonarFormationConfig(), description="correlated speckle along range, seabed texture, reverberation, "
+        "display law (the forward-looking sonar's beam, elevation and object-tail fields do not apply)")
 
     @model_validator(mode="before")
     @classmethod
@@ -73,6 +77,12 @@ class SssConfig(SensorConfig):
 
     @model_validator(mode="after")
     def _check(self) -> "SssConfig":
+        f = self.formation
+        if f.beam_correlated_speckle or f.elevation_span_beamwidths != 1.0 or f.object_tail_m is not None or (
+                f.side_lobe_floor_db is not None or f.object_rice_k != 0.0):
+            raise ValueError("formation: beam_correlated_speckle, elevation_span_beamwidths, object_tail_m, "
+                             "object_rice_k and side_lobe_floor_db are forward-looking sonar fields; a side-scan "
+                             "takes pulse_length_m, texture_*, reverberation_db and display_*")
         limit = self.sound_speed_mps / (2.0 * self.range_max_m)
         if self.rate_hz > limit * (1.0 + 1e-9):
             raise ValueError(f"rate_hz {self.rate_hz} exceeds the two-way travel-time limit "

@@ -32,6 +32,7 @@ from sim.sensors.raycast import BACKGROUND_ID, RayCaster
 from sim.sensors.registry import register_sensor
 from sim.sensors.sonar.beam_pattern import two_way_beam_power
 from sim.sensors.sonar.echo_chain import EchoChain
+from sim.sensors.sonar.image_formation import formation_model
 from sim.sensors.sonar.echo_lines import EchoSegments, echo_segments, ray_strength
 from sim.sensors.sonar.ground_truth import SceneObjectLike, label_bins
 from sim.sensors.sonar.object_rays import add_object_rays, sphere_in_window
@@ -159,7 +160,9 @@ class SssSensor(Sensor[SssRender]):
         bins = (np.arange(self.n_bins) + 0.5) * self.bin_size_m
         self.echo = EchoChain(bins, cfg.absorption_db_per_m, cfg.tvg_spreading_db_per_decade,
                               cfg.absorption_db_per_m if cfg.tvg_absorption else 0.0, cfg.noise_floor_db,
-                              cfg.speckle, cfg.k_shape, cfg.gain_db, cfg.dynamic_range_db)
+                              cfg.speckle, cfg.k_shape, cfg.gain_db, cfg.dynamic_range_db,
+                              formation=formation_model(cfg.formation, bins, self.bin_size_m, np.pi, atbw,
+                                                        cfg.absorption_db_per_m, 0.0))
 
     @classmethod
     def from_config(cls, name: str, cfg: SssConfig, mount: Mount | ArrayLike,
