@@ -9,7 +9,7 @@ from scenarios.config.base import StrictModel
 
 class OutputsConfig(StrictModel):
     """Optional outputs of ``auvsim run`` (its ``--rosbag`` / ``--rosbag-fls-every`` /
-    ``--ping360-log`` flags override these).
+    ``--ping360-log`` / ``--xtf`` flags override these).
 
     Attributes:
         rosbag: also write a ROS 2 bag (rosbag2 folder, MCAP storage) into ``OUT/rosbag``.
@@ -19,8 +19,11 @@ class OutputsConfig(StrictModel):
             ``PING360_DEVICE_DATA`` message into ``OUT/ping360/<sensor>.bin`` (with
             ``<sensor>.csv``: time, offset, angle; :mod:`sim.outputs.ping360_log`); needs a
             sensor of kind ``msis``.
+        xtf: also write each side-scan sonar's pings as an eXtended Triton Format file
+            ``OUT/xtf/<sensor>.xtf`` (:mod:`sim.outputs.xtf_log`); needs a sensor of kind ``sss``.
     """
 
     rosbag: bool = False
     rosbag_fls_every: int = Field(1, ge=1, le=1_000_000)
     ping360_log: bool = False
+    xtf: bool = False

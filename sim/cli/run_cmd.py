@@ -53,11 +53,21 @@ def _cmd_run(args: argparse.Namespace) -> int:
             import brping  # noqa: F401
         except ImportError:
             raise CliError(f"{what}: needs the bluerobotics-ping package (pip install 'auvsim[ping]')") from None
+    xtf = args.xtf or scenario.outputs.xtf
+    if xtf:
+        what = "--xtf" if args.xtf else "outputs.xtf"
+        if scenario.sensors.first_of_kind("sss") is None:
+            raise CliError(f"{what}: the scenario has no sensor of kind sss (a side-scan sonar) to export; "
+                           "shipped one with one: mcm_survey_full")
+        try:
+            import pyxtf  # noqa: F401
+        except ImportError:
+            raise CliError(f"{what}: needs the pyxtf package (pip install 'auvsim[xtf]')") from None
     fls_every = args.rosbag_fls_every if args.rosbag_fls_every is not None else scenario.outputs.rosbag_fls_every
     metrics = run_mission(scenario, args.out, nav_source=args.nav, rerun=not args.no_rerun,
                           overwrite=args.overwrite, progress=not args.quiet, rosbag=rosbag,
                           rosbag_fls_every=fls_every, score_detections=not args.no_scoring,
-                          workers=args.workers, ping360_log=ping360_log)
+                          workers=args.workers, ping360_log=ping360_log, xtf=xtf)
     print_summary(metrics, args.out)
     mission = metrics["mission"]
     if mission["aborted"]:
@@ -89,6 +99,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--ping360-log", action="store_true",
                    help="also write the scanning sonar's pings as Blue Robotics ping-protocol PING360_DEVICE_DATA "
                         "messages into OUT/ping360/ (needs a sensor of kind msis and the ping extra)")
+    p.add_argument("--xtf", action="store_true",
+                   help="also write the side-scan pings as an eXtended Triton Format file per sensor into OUT/xtf/ "
+                        "(needs a sensor of kind sss and the xtf extra)")
     p.add_argument("--overwrite", action="store_true",
                    help="replace an earlier run's output folder (only a folder written by auvsim run)")
     p.add_argument("--nav", choices=["estimate", "truth"], default="estimate",

@@ -166,7 +166,7 @@ def run_mission(
     scenario: Scenario, out: str | Path, *, nav_source: str = "estimate", rerun: bool = True,
     progress: bool = True, overwrite: bool = False, rosbag: bool | None = None, rosbag_fls_every: int | None = None,
     score_detections: bool = True, workers: int = 1, features: Sequence[type[MissionFeature]] = (),
-    ping360_log: bool | None = None,
+    ping360_log: bool | None = None, xtf: bool | None = None,
 ) -> dict[str, Any]:
     """Run ``scenario`` and write metrics.json, trajectory.csv, world_model.json (objects in NED
     and latitude / longitude / depth), map.png (with an acoustic link, also
@@ -177,7 +177,8 @@ def run_mission(
     every ``rosbag_fls_every``-th sonar frame; None takes the scenario's ``outputs.rosbag`` /
     ``outputs.rosbag_fls_every``; with ``ping360_log``, the scanning sonar's pings as Blue
     Robotics ping-protocol messages in ``ping360/``, :mod:`sim.outputs.ping360_log`; None: the
-    scenario's ``outputs.ping360_log``) into ``out``. ``score_detections``: score the ATR against the
+    scenario's ``outputs.ping360_log``; with ``xtf``, the side-scan pings as eXtended Triton Format
+    files in ``xtf/``, :mod:`sim.outputs.xtf_log`; None: the scenario's ``outputs.xtf``) into ``out``. ``score_detections``: score the ATR against the
     frames' ground truth (:class:`sim.evaluation.detection_scoring.DetectionScorer`; its figures
     go under ``perception`` in metrics.json). ``workers`` > 1 pipelines the sonar and its
     perception in worker processes (:class:`sim.mission.Mission`; same outputs). ``features``:
@@ -218,6 +219,12 @@ def run_mission(
             from sim.outputs.ping360_log import Ping360LogRecorder
 
             mission.observers.append(Ping360LogRecorder(partial / "ping360"))
+        if xtf is None:
+            xtf = scenario.outputs.xtf
+        if xtf:
+            from sim.outputs.xtf_log import XtfRecorder
+
+            mission.observers.append(XtfRecorder(partial / "xtf"))
         label = next((f.progress_label() for f in mission.features if f.progress_label() is not None), None)
         mission.observers.append(_ProgressObserver(MissionProgress(scenario.name, planned_length_s(mission),
                                                                    enabled=progress), label=label))

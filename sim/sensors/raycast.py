@@ -89,6 +89,12 @@ class MujocoRayCaster:
             acoustic = self.geom_object_id >= BACKGROUND_ID
             geomgroup[np.unique(np.clip(model.geom_group[acoustic], 0, 5))] = 1
         self.geomgroup = np.ascontiguousarray(geomgroup, dtype=np.uint8)
+        # MuJoCo 3.x culls a geom whose centre is farther than the cutoff less its bounding radius,
+        # and a plane's radius is 0: a seabed plane centred farther away than the range would be
+        # missed by every ray. The plane centres raise the cutoff; hits beyond the range are
+        # dropped afterwards either way, so the results do not depend on the version.
+        planes = np.flatnonzero(np.asarray(model.geom_type) == mujoco.mjtGeom.mjGEOM_PLANE)
+        self._plane_geoms = planes[self.geomgroup[np.clip(model.geom_group[planes], 0, 5)] > 0]
         # lookup tables with a trailing "no hit" entry, indexed by geom id (-1 -> last)
         self._obj_lut = np.append(self.geom_object_id, NO_HIT_ID)
         self._refl_lut = np.append(self.geom_reflectivity, 0.0)
@@ -103,9 +109,13 @@ class MujocoRayCaster:
         """``mj_multiRay`` into fresh result arrays: geom ids (N,), distances (N,), normals (N, 3)."""
         n = int(dirs_ned.shape[0])
         geomid, dist, normal = np.empty(n, dtype=np.int32), np.empty(n), np.empty((n, 3))
-        self._mj.mj_multiRay(self.model, self.data, np.ascontiguousarray(origin_ned, dtype=float).reshape(3),
-                             np.ascontiguousarray(dirs_ned, dtype=float).reshape(-1), geomgroup, 1, body_exclude,
-                             geomid, dist, normal.reshape(-1), n, float(max_range_m))
+        origin = np.ascontiguousarray(origin_ned, dtype=float).reshape(3)
+        cutoff = float(max_range_m)
+        if self._plane_geoms.size and geomgroup is self.geomgroup:
+            centre_m = np.sqrt(np.max(np.sum((self.data.geom_xpos[self._plane_geoms] - origin) ** 2, axis=1)))
+            cutoff = max(cutoff, float(centre_m) + 1.0)
+        self._mj.mj_multiRay(self.model, self.data, origin, np.ascontiguousarray(dirs_ned, dtype=float).reshape(-1),
+                             geomgroup, 1, body_exclude, geomid, dist, normal.reshape(-1), n, cutoff)
         return geomid, dist, normal
 
     def cast(self, origin_ned: FloatArray, dirs_ned: FloatArray, max_range_m: float) -> RayHits:

@@ -81,3 +81,15 @@ def test_fls_frame_digest_refuses(argv, culprits, capsys):
     render = FlsSensor.render
     script_refusal(load_script("fls_frame_digest"), argv, capsys, *culprits)
     assert FlsSensor.render is render  # its digest hook does not outlive the call
+
+
+@pytest.mark.parametrize("argv,culprits", [
+    (["--duration-s", "0"], ("xtf_waterfall.py: error:", "--duration-s")),
+    (["--scenario", "mcm_survey_ful"], ("mcm_survey_ful", "did you mean mcm_survey_full?")),
+    (["--scenario", "cssn_lawnmower"], ("--scenario cssn_lawnmower", "sss")),
+    (["--out", "{dir}"], ("--out", "is a folder")),
+    (["--out", "{missing}/x.png"], ("--out", "does not exist")),
+])
+def test_xtf_waterfall_refuses(argv, culprits, capsys, tmp_path):
+    argv = [a.format(missing=tmp_path / "nope", dir=tmp_path) for a in argv]
+    script_refusal(load_script("xtf_waterfall"), argv, capsys, *culprits)

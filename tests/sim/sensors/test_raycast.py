@@ -36,6 +36,18 @@ def scene():
     return MujocoRayCaster(m, d, obj, refl, hull_id)
 
 
+def test_a_seabed_plane_centred_beyond_the_range_is_still_hit():
+    """The plane's centre lies 100 m away, the plane itself 4 m below: the ray must hit it at
+    4 m whatever the range (MuJoCo 3.x culls geoms by centre distance, a plane's radius is 0),
+    and a range shorter than the plane's distance is still a miss."""
+    caster = scene()
+    o = np.array([100.0, 0.0, 2.0])
+    hits = caster.cast(o, np.array([[0.0, 0.0, 1.0], [-0.6, 0.0, 0.8]]), 20.0)
+    assert hits.dist_m == pytest.approx([DEPTH - 2.0, (DEPTH - 2.0) / 0.8])
+    assert list(hits.object_id) == [BACKGROUND_ID, BACKGROUND_ID]
+    assert np.isinf(caster.cast(o, np.array([[0.0, 0.0, 1.0]]), 3.5).dist_m[0])
+
+
 def analytic():
     return AnalyticCaster(DEPTH, 0.3, spheres=(AnalyticSphere(SPHERE_C, SPHERE_R, 0, 0.9),),
                           boxes=(AnalyticBox(BOX_C, BOX_H, 1, 0.8, BOX_R),))
