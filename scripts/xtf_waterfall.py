@@ -3,13 +3,15 @@ waterfall beside the simulator's own ground-range tile.
 
 Flies ``mcm_survey_full`` (or ``--scenario``) for ``--duration-s`` with the XTF recorder
 (``auvsim run ... --xtf``), then reads the file with the reader the tests write from the XTF
-specification's byte layout (``tests/sim/outputs/xtf_spec_reader.py``, not ``pyxtf``), finds each
+specification's byte layout (in ``tests/sim/outputs/test_xtf_log.py``, not ``pyxtf``), finds each
 ping's first bottom return in its samples, corrects both channels to ground range over a flat
 bed with that altitude, and draws the result next to the ground-range lines the simulator made
 itself (``sensors.sss.ground_range: true``), with the altitude from the samples against the
 simulated one. Prints the export's CPU cost per simulated minute.
 
-Example: ``python scripts/xtf_waterfall.py --out docs/xtf_waterfall.png --duration-s 120``
+Needs the ``xtf`` and ``test`` extras (pyxtf; pytest, which the test module imports).
+
+Example: ``python scripts/xtf_waterfall.py --out docs/xtf_waterfall.png --duration-s 180``
 """
 
 from __future__ import annotations
@@ -22,16 +24,28 @@ import time
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))  # the specification reader lives with the tests
+sys.path.insert(0, str(ROOT))
 
 from scenarios import load_scenario  # noqa: E402
+from sim.bench.export import TimedObserver  # noqa: E402
 from sim.cli.app import run_script, script_parser  # noqa: E402
 from sim.cli.args import positive_float  # noqa: E402
 from sim.cli.errors import CliError  # noqa: E402
 from sim.events.records import ObserverBase  # noqa: E402
 from sim.mission import Mission  # noqa: E402
 from sim.outputs.xtf_log import XtfRecorder  # noqa: E402
-from tests.sim.outputs import xtf_spec_reader as spec  # noqa: E402
+
+
+def _spec_reader():
+    """The XTF reader the tests write from the specification (``tests/sim/outputs/test_xtf_log.py``)."""
+    import importlib.util
+
+    path = ROOT / "tests" / "sim" / "outputs" / "test_xtf_log.py"
+    module_spec = importlib.util.spec_from_file_location("xtf_spec_reader", path)
+    module = importlib.util.module_from_spec(module_spec)
+    sys.modules[module_spec.name] = module  # its dataclasses look themselves up there
+    module_spec.loader.exec_module(module)
+    return module
 
 
 class _Own(ObserverBase):
@@ -70,8 +84,9 @@ def figure(args) -> int:
         raise CliError(f"--scenario {args.scenario}: has no enabled sensor of kind sss (a side-scan sonar); "
                        "the shipped one with one: mcm_survey_full")
     scn = load_scenario(args.scenario, [f"duration_s={args.duration_s}", f"sensors.{name}.ground_range=true"])
+    spec = _spec_reader()
     with tempfile.TemporaryDirectory() as tmp:
-        own, recorder = _Own(name), _TimedXtfRecorder(Path(tmp))
+        own, recorder = _Own(name), TimedObserver(XtfRecorder(Path(tmp)))
         cpu0 = time.process_time()
         Mission(scn, observers=[own, recorder]).run(progress=False)
         run_cpu = time.process_time() - cpu0
@@ -117,29 +132,6 @@ def figure(args) -> int:
     print(f"wrote {args.out}; bottom pick vs simulated altitude: max {err.max():.2f} bins, "
           f"mean {err.mean():.2f} bins ({bin_m * 100:.0f} cm bins)")
     return 0
-
-
-class _TimedXtfRecorder(XtfRecorder):
-    """The recorder, with the CPU time spent in its hooks added up."""
-
-    cpu_s = 0.0
-
-    def _timed(self, hook, *a) -> None:
-        t0 = time.process_time()
-        hook(*a)
-        self.cpu_s += time.process_time() - t0
-
-    def on_start(self, info) -> None:
-        self._timed(super().on_start, info)
-
-    def on_message(self, name, msg) -> None:
-        self._timed(super().on_message, name, msg)
-
-    def on_step(self, record) -> None:
-        self._timed(super().on_step, record)
-
-    def on_end(self, summary) -> None:
-        self._timed(super().on_end, summary)
 
 
 if __name__ == "__main__":

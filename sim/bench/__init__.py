@@ -19,4 +19,5 @@ BENCHES: dict[str, tuple[str, str, str]] = {
     "link": ("sim.bench.link", "run", "acoustic modem link and message codec: cost per message and per tick"),
     "dataset": ("sim.bench.dataset", "run", "labelled FLS dataset frames per second, one worker process against N"),
     "atr": ("sim.evaluation.atr_metrics", "bench_atr", "ATR inference frame rate (CNN and classical)"),
+    "export": ("sim.bench.export", "run", "CPU per simulated minute of the ROS 2 bag, XTF and ping-protocol writers"),
 }

@@ -143,10 +143,10 @@ def _profile(env: gym.Env, n_steps: int, top: int = 8) -> list[dict[str, Any]]:
     rows = sorted(stats.stats.items(), key=lambda kv: kv[1][3], reverse=True)
     out = []
     for (path, line, name), (_, _, tt, ct, _) in rows:
-        own_step = name == "step" and path.endswith(("survey_env.py", "survey_task.py", "waypoint_env.py",
+        own_step = name in ("step", "begin_step", "advance", "end_step") and path.endswith(("survey_env.py", "survey_task.py", "waypoint_env.py",
                                                      "waypoint_task.py"))
         if name == "<module>" or own_step:
-            continue  # the env's own step is 100 %
+            continue  # the env's own step (and its phases) is 100 %
         out.append({"function": f"{os.path.relpath(path) if os.path.isabs(path) else path}:{line}({name})",
                     "cumulative_fraction": round(ct / total, 3), "self_fraction": round(tt / total, 3)})
         if len(out) >= top:

@@ -1,7 +1,7 @@
 """``auvsim/Survey-v1``: the Survey task (:mod:`sim.envs.survey_task`) as a gymnasium env.
 
-The task logic lives in :class:`sim.envs.survey_task.SurveyTask`, shared with the dm_env
-interface (:mod:`sim.envs.dm`); this module only maps it onto gymnasium's API and spaces.
+The task logic lives in :class:`sim.envs.survey_task.SurveyTask`, shared with the dm_control
+environment (:mod:`sim.envs.dm`); this module only maps it onto gymnasium's API and spaces.
 Each episode draws from the env's generator (``reset(seed=...)``).
 """
 

@@ -1,7 +1,10 @@
 """The Survey task: find and localise the targets of an area with high-level setpoints.
 
 One implementation behind both interfaces: the gymnasium env ``auvsim/Survey-v1``
-(:mod:`sim.envs.survey_env`) and the dm_env one (:mod:`sim.envs.dm`).
+(:mod:`sim.envs.survey_env`) and the dm_control one (:mod:`sim.envs.dm`), both through
+the phases :meth:`SurveyTask.begin_step`, :meth:`SurveyTask.advance` and
+:meth:`SurveyTask.end_step` in the same order (:meth:`SurveyTask.step` runs them for
+gymnasium).
 
 Each episode (:mod:`sim.envs.survey_layout`) surveys a square area larger than the sonar's
 reach (``area_size_ne_m``, 80 m x 80 m by default, centred on the scenario's survey plan),
@@ -40,13 +43,15 @@ from autonomy.control.setpoint import Setpoint
 from autonomy.frames import wrap_angle
 from autonomy.messages import NavEstimate
 from scenarios.schema import Scenario
-from sim.envs.area import OperatingArea, survey_area
+from sim.envs.area import OperatingArea
 from sim.envs.coverage import CoverageGrid
 from sim.envs.scenario_arg import resolve_scenario
+from sim.envs.time_limit import reached_time_limit, time_limit_steps
 from sim.envs.survey_layout import SurveyLayout, episode_scenario, episode_seabed, make_layout
 from sim.envs.world_model_obs import anchor_bounds, anchor_table, match_new_targets
 from sim.mission import Mission
 from sim.events.records import MissionInfo, MissionSummary, ObserverBase
+from sim.scene.physics import Physics
 from sim.scene.seabed import Seabed
 from sim.sensors.base import Mount
 from sim.sensors.fls import FlsRender
@@ -229,7 +234,7 @@ class ObsField:
 
 class SurveyTask:
     """Survey an area for targets (see the module docstring): the task logic, free of any RL
-    interface. The gymnasium and dm_env wrappers hold one instance and only translate its
+    interface. The gymnasium and dm_control wrappers hold one instance and only translate its
     results, so both give the same trajectory for the same seed and actions, bit for bit.
 
     Action (shape ``(3,)``, in [-1, 1], clipped): surge speed (mapped to
@@ -311,8 +316,23 @@ class SurveyTask:
     # ------------------------------------------------------------------ state views
     @property
     def t_s(self) -> float:
-        """Time since the episode's start, s."""
+        """Time since the episode's start, s: the decision clock, decisions x
+        ``decision_interval_s``."""
         return self._n_steps * self.decision_interval_s
+
+    @property
+    def sim_physics(self) -> Physics:
+        """The simulation this task advances now, the episode's mission's
+        (``mission.physics``): its MuJoCo ``model`` / ``data`` are what the dm_control
+        physics :class:`sim.envs.dm_physics.AuvPhysics` wraps. A new object every episode
+        (:meth:`reset` builds the episode's mission)."""
+        return self.mission.physics
+
+    @property
+    def time_limit_steps(self) -> int:
+        """The decision at which an episode is truncated (``max_episode_s`` reached,
+        :func:`sim.envs.time_limit.reached_time_limit`)."""
+        return time_limit_steps(self.decision_interval_s, self.max_episode_s)
 
     @property
     def seabed(self) -> Seabed:
@@ -356,23 +376,29 @@ class SurveyTask:
         self._build(episode_scenario(self.base_scenario, self.layout, self._seabed, rng))
         mission_seed = int(rng.integers(0, 2**63 - 1))
         rec = self.mission.reset(mission_seed)
+        self._rec = rec
         self._nav = rec.nav
         self._heading_sp_rad = float(rec.nav.rpy_rad[2])
         self._n_steps = 0
+        self._hold(np.zeros(3))
+        self._collided, self._effort, self._new_cells = False, 0.0, 0
         self.coverage.reset()
         self.coverage.observe(rec.nav.pos_ned, rec.nav.rpy_rad)
         self._found[:] = False
         return self._observation(), self._info(False, False, 0)
 
     def step(self, action: np.ndarray) -> tuple[dict[str, np.ndarray], float, bool, bool, dict[str, Any]]:
-        """Hold ``action`` (shape ``(3,)``, clipped to [-1, 1]) for one decision interval.
+        """Hold ``action`` (shape ``(3,)``, clipped to [-1, 1]) for one decision interval:
+        :meth:`begin_step`, :meth:`advance`, :meth:`end_step`, the phases the dm_control
+        task (:mod:`sim.envs.dm`) calls in the same order.
 
         Returns:
             ``(observation, reward, terminated, truncated, info)``: terminated when the
             mission completes (coverage reaches ``complete_coverage_fraction``, or every
             target is found with sonar), on a collision, or on leaving the area
-            (``area_margin_m`` past it); truncated at ``max_episode_s``. The hull cannot
-            leave the water (:class:`sim.envs.waypoint_task.WaypointTask`). info: ``t_s``, ``coverage_fraction``,
+            (``area_margin_m`` past it); truncated at ``max_episode_s`` (decision
+            :attr:`time_limit_steps`). The hull cannot leave the water
+            (:class:`sim.envs.waypoint_task.WaypointTask`). info: ``t_s``, ``coverage_fraction``,
             ``targets_found``, ``new_targets``, ``collision``, ``left_area``,
             ``nav_pos_ned`` (3,) NED m, ``energy`` (integral of the mean squared normalised
             thruster command, s), ``complete``.
@@ -380,21 +406,53 @@ class SurveyTask:
         Raises:
             ValueError: a non-finite action.
         """
+        self.begin_step(action)
+        self.advance()
+        return self.end_step()
+
+    def begin_step(self, action: np.ndarray) -> None:
+        """Phase 1 of :meth:`step`: check and clip ``action`` (shape ``(3,)``, to [-1, 1]),
+        hold its setpoint (surge speed m/s, yaw rate, altitude m) and zero the step's
+        collision flag, energy and newly covered cells.
+
+        Raises:
+            ValueError: a non-finite action (nothing is changed then).
+        """
         a = np.clip(np.asarray(action, dtype=float).reshape(3), -1.0, 1.0)
         if not np.all(np.isfinite(a)):
             raise ValueError(f"SurveyTask.step: action must be finite, got {action!r}")
-        opts, w, m = self.options, self.options.reward, self.mission
+        self._hold(a)
+        self._collided = False
+        self._effort = 0.0
+        self._new_cells = 0
+
+    def _hold(self, a: np.ndarray) -> None:
+        """The setpoint that :meth:`advance` holds for action ``a`` (clipped, finite)."""
+        opts = self.options
         s_lo, s_hi = opts.speed_range_mps
         h_lo, h_hi = opts.altitude_range_m
         speed = s_lo + 0.5 * (a[0] + 1.0) * (s_hi - s_lo)
         altitude = h_lo + 0.5 * (a[2] + 1.0) * (h_hi - h_lo)
+        self._yaw_step = a[1] * self.max_yaw_rate_radps * self.mission.autonomy_dt_s
+        self._speed, self._altitude = float(speed), float(altitude)
+
+    def advance(self) -> None:
+        """Phase 2 of :meth:`step`: one decision interval of the closed-loop mission
+        (``ticks_per_step`` autonomy ticks of :meth:`sim.mission.Mission.step`: physics with
+        thrusters and Fossen wrench, sensors, navigation filter, with sonar the FLS and
+        perception, autopilots), holding the setpoint of the latest :meth:`begin_step`
+        (action zeros after :meth:`reset`), the heading setpoint integrating the yaw rate
+        tick by tick. Marks the coverage swept at the navigation poses, advances the
+        decision clock :attr:`t_s` by ``decision_interval_s``, accumulates contact and
+        energy for :meth:`end_step`."""
+        m = self.mission
         dt = m.autonomy_dt_s
-        collided = False
+        collided = self._collided
         n_ticks = self.ticks_per_step
         poses = np.empty((n_ticks, 2, 3))  # per tick: navigation position (NED m) and attitude (rad)
         cmds = np.empty((n_ticks, len(m.thruster_cmd)))
-        yaw_step = a[1] * self.max_yaw_rate_radps * dt
-        speed, altitude = float(speed), float(altitude)
+        yaw_step = self._yaw_step
+        speed, altitude = self._speed, self._altitude
         for k in range(n_ticks):
             self._heading_sp_rad = float(wrap_angle(self._heading_sp_rad + yaw_step))
             rec = m.step(Setpoint(speed, self._heading_sp_rad, altitude_m=altitude))
@@ -403,21 +461,32 @@ class SurveyTask:
             poses[k, 1] = rec.nav.rpy_rad
             if m.physics.data.ncon and m.physics.vehicle_in_contact():
                 collided = True
-        effort = 0.0  # integral of mean(cmd^2), summed tick by tick
+        effort = self._effort  # integral of mean(cmd^2), summed tick by tick
         for sq in np.mean(np.square(cmds), axis=1).tolist():
             effort += sq * dt
-        n_new_cells = self.coverage.observe_many(poses[:, 0], poses[:, 1])
+        self._new_cells += self.coverage.observe_many(poses[:, 0], poses[:, 1])
+        self._collided = collided
+        self._effort = effort
+        self._rec = rec
         self._nav = rec.nav
         self._n_steps += 1
-        t_s = self._n_steps * self.decision_interval_s
 
+    def end_step(self) -> tuple[dict[str, np.ndarray], float, bool, bool, dict[str, Any]]:
+        """Phase 3 of :meth:`step`: targets found, reward, termination, observation and info
+        of the decision intervals advanced since :meth:`begin_step` (one in :meth:`step`).
+
+        Returns:
+            as :meth:`step`.
+        """
+        opts, w, m = self.options, self.options.reward, self.mission
+        collided, effort, n_new_cells = self._collided, self._effort, self._new_cells
         n_new_targets = 0
         if m.perception is not None:
             n_new_targets = match_new_targets(m.perception.pmha.world_model(), self.targets_ned, self._found,
                                               opts.match_radius_m)
         reward = (w.target * n_new_targets + w.coverage * n_new_cells / self.coverage.covered.size
                   - w.energy_per_s * effort)
-        pos = rec.truth.pos_ned
+        pos = self._rec.truth.pos_ned
         left = bool(not self.area.contains(pos) or pos[2] < 0.0)
         complete = self.coverage.fraction >= opts.complete_coverage_fraction or (
             m.perception is not None and len(self._found) > 0 and bool(np.all(self._found)))
@@ -428,7 +497,8 @@ class SurveyTask:
         if complete and not (collided or left):
             reward += w.complete
         terminated = complete or collided or left
-        truncated = (not terminated) and t_s >= self.max_episode_s - 1e-9
+        truncated = (not terminated) and reached_time_limit(self._n_steps, self.decision_interval_s,
+                                                            self.max_episode_s)
         info = self._info(collided, left, n_new_targets)
         info.update(energy=effort, complete=complete)
         return self._observation(), float(reward), terminated, truncated, info

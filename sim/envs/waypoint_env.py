@@ -1,7 +1,7 @@
 """``auvsim/Waypoint-v1``: the Waypoint task (:mod:`sim.envs.waypoint_task`) as a gymnasium env.
 
-The task logic lives in :class:`sim.envs.waypoint_task.WaypointTask`, shared with the dm_env
-interface (:mod:`sim.envs.dm`); this module only maps it onto gymnasium's API and spaces.
+The task logic lives in :class:`sim.envs.waypoint_task.WaypointTask`, shared with the dm_control
+environment (:mod:`sim.envs.dm`); this module only maps it onto gymnasium's API and spaces.
 Each episode draws from the env's generator (``reset(seed=...)``).
 """
 

@@ -1,7 +1,12 @@
 """The Waypoint task: reach a sequence of 3-D waypoints under a random current.
 
 One implementation behind both interfaces: the gymnasium env ``auvsim/Waypoint-v1``
-(:mod:`sim.envs.waypoint_env`) and the dm_env one (:mod:`sim.envs.dm`).
+(:mod:`sim.envs.waypoint_env`) and the dm_control one (:mod:`sim.envs.dm`). A decision is
+three phases, :meth:`WaypointTask.begin_step` (action in), :meth:`WaypointTask.advance`
+(the simulation over one decision interval) and :meth:`WaypointTask.end_step` (reward,
+termination, observation): the gymnasium env calls them through
+:meth:`WaypointTask.step`, the dm_control task from ``before_step``, the physics' ``step``
+and ``after_step``, in the same order, so both give the same trajectory bit for bit.
 
 A light loop without sonar, sensors or navigation filter, for fast RL baselines: MuJoCo
 physics with the Fossen wrench (:class:`sim.dynamics.vehicle.VehicleDynamics`) and thruster
@@ -32,6 +37,7 @@ from scenarios.config.world import CurrentConfig
 from scenarios.schema import Scenario
 from sim.envs.area import OperatingArea, survey_area
 from sim.envs.scenario_arg import resolve_scenario
+from sim.envs.time_limit import reached_time_limit, time_limit_steps
 from sim.scene.physics import Physics
 
 ACTION_MODES = ("wrench", "setpoint")
@@ -126,7 +132,8 @@ def _options(options: WaypointEnvOptions | dict | None) -> WaypointEnvOptions:
 class WaypointTask:
     """Reach waypoints under currents (no sonar): the task logic, free of any RL interface.
 
-    The gymnasium and dm_env wrappers hold one instance and only translate its results, so
+    The gymnasium and dm_control wrappers hold one instance and only translate its results
+    (both through the phases :meth:`begin_step`, :meth:`advance`, :meth:`end_step`), so
     both give the same trajectory for the same seed and actions, bit for bit.
 
     Observation (float32 vector, shape ``(obs_size,)`` = ``(20 + n_act,)``): current waypoint
@@ -206,13 +213,29 @@ class WaypointTask:
         self._wp_index = 0
         self._prev_action = np.zeros(self.n_act)
         self._thruster_cmd = np.zeros(self.params.n_thrusters)
+        self._action = np.zeros(self.n_act)
+        self._collided, self._effort, self._n_advanced = False, 0.0, 0
         self._heading_sp_rad = 0.0
 
     # ------------------------------------------------------------------ state views
     @property
     def t_s(self) -> float:
-        """Time since the episode's start, s."""
+        """Time since the episode's start, s: the decision clock, decisions x
+        ``decision_interval_s``."""
         return self._t_s
+
+    @property
+    def sim_physics(self) -> Physics:
+        """The simulation this task advances (its MuJoCo ``model`` / ``data`` are what the
+        dm_control physics :class:`sim.envs.dm_physics.AuvPhysics` wraps); the same object
+        for every episode."""
+        return self.physics
+
+    @property
+    def time_limit_steps(self) -> int:
+        """The decision at which an episode is truncated (``max_episode_s`` reached,
+        :func:`sim.envs.time_limit.reached_time_limit`)."""
+        return time_limit_steps(self.decision_interval_s, self.options.max_episode_s)
 
     @property
     def pos_ned(self) -> np.ndarray:
@@ -264,6 +287,8 @@ class WaypointTask:
         self._wp_index = 0
         self._prev_action = np.zeros(self.n_act)
         self._thruster_cmd = np.zeros(self.params.n_thrusters)
+        self._action = np.zeros(self.n_act)
+        self._collided, self._effort, self._n_advanced = False, 0.0, 0
         self._pos, self._R, self._rpy, self._nu = self._state()
         self._dist = float(np.linalg.norm(self._waypoints[0] - self._pos))
         return self._observation(), self._info(False, False)
@@ -273,29 +298,56 @@ class WaypointTask:
         return truth.pos_ned, truth.R_nb, truth.rpy_rad, truth.nu
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
-        """Hold ``action`` (shape ``(n_act,)``, clipped to [-1, 1]) for one decision interval.
+        """Hold ``action`` (shape ``(n_act,)``, clipped to [-1, 1]) for one decision interval:
+        :meth:`begin_step`, :meth:`advance`, :meth:`end_step`, the phases the dm_control
+        task (:mod:`sim.envs.dm`) calls in the same order.
 
         Returns:
             ``(observation, reward, terminated, truncated, info)``: terminated when every
             waypoint is reached, on a collision, or on leaving the area (``area_margin_m``
-            past it); truncated at ``max_episode_s``. The hull cannot leave the water
-            (see the class docstring). info: ``t_s``, ``waypoints_reached``,
-            ``distance_m``, ``collision``, ``left_area``, ``pos_ned`` (3,) m, ``energy``
-            (integral of the mean squared normalised thruster command, s).
+            past it); truncated at ``max_episode_s`` (decision :attr:`time_limit_steps`).
+            The hull cannot leave the water (see the class docstring). info: ``t_s``,
+            ``waypoints_reached``, ``distance_m``, ``collision``, ``left_area``, ``pos_ned``
+            (3,) m, ``energy`` (integral of the mean squared normalised thruster command, s).
 
         Raises:
             ValueError: a non-finite action.
         """
+        self.begin_step(action)
+        self.advance()
+        return self.end_step()
+
+    def begin_step(self, action: np.ndarray) -> None:
+        """Phase 1 of :meth:`step`: check and clip ``action`` (shape ``(n_act,)``, to [-1, 1]),
+        hold it (wrench mode: allocate the thruster commands now) and zero the step's
+        collision flag and energy.
+
+        Raises:
+            ValueError: a non-finite action (nothing is changed then).
+        """
         a = np.clip(np.asarray(action, dtype=float).reshape(self.n_act), -1.0, 1.0)
         if not np.all(np.isfinite(a)):
             raise ValueError(f"WaypointEnv.step: action must be finite, got {action!r}")
-        opts, w = self.options, self.options.reward
-        if opts.action_mode == "wrench":
+        if self.options.action_mode == "wrench":
             wrench = np.zeros(6)
             wrench[[0, 1, 2, 5]] = a * self.wrench_scale
             self._thruster_cmd = self.allocator.allocate(wrench)
-        collided = False
-        effort = 0.0
+        self._action = a
+        self._collided = False
+        self._effort = 0.0
+        self._n_advanced = 0
+
+    def advance(self) -> None:
+        """Phase 2 of :meth:`step`: one decision interval of simulation (``substeps`` physics
+        steps of :meth:`sim.scene.physics.Physics.advance`: thrusters, Fossen wrench, MuJoCo,
+        current) holding the action of the latest :meth:`begin_step` (zeros after
+        :meth:`reset`); setpoint mode runs the autopilots at the autonomy rate. Advances
+        the decision clock :attr:`t_s` by ``decision_interval_s``, accumulates contact and
+        energy for :meth:`end_step`."""
+        opts = self.options
+        a = self._action
+        collided = self._collided
+        effort = self._effort
         ticks_per_control = max(int(round(self.autopilot_dt_s / self.dt_s)), 1)
         ticks = self.substeps if opts.action_mode == "wrench" else ticks_per_control
         for k in range(0, self.substeps, ticks):
@@ -304,11 +356,23 @@ class WaypointTask:
             n = min(ticks, self.substeps - k)
             collided |= self.physics.advance(self._thruster_cmd, n)
             effort += float(np.mean(np.square(self._thruster_cmd))) * self.dt_s * n
+        self._collided = collided
+        self._effort = effort
+        self._n_advanced += 1
         self._n_steps += 1
         self._t_s = self._n_steps * self.decision_interval_s
         self._pos, self._R, self._rpy, self._nu = self._state()
 
-        reward = -w.energy_per_s * effort - w.time_per_s * self.decision_interval_s
+    def end_step(self) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        """Phase 3 of :meth:`step`: reward, termination, observation and info of the
+        decision intervals advanced since :meth:`begin_step` (one in :meth:`step`).
+
+        Returns:
+            as :meth:`step`.
+        """
+        opts, w = self.options, self.options.reward
+        collided, effort = self._collided, self._effort
+        reward = -w.energy_per_s * effort - w.time_per_s * (self._n_advanced * self.decision_interval_s)
         dist = float(np.linalg.norm(self._waypoints[self._wp_index] - self._pos))
         reward += w.progress_per_m * (self._dist - dist)
         if dist <= opts.acceptance_radius_m:
@@ -324,8 +388,9 @@ class WaypointTask:
         if left:
             reward -= w.leave_area
         terminated = finished or collided or left
-        truncated = (not terminated) and self._t_s >= opts.max_episode_s - 1e-9
-        self._prev_action = a
+        truncated = (not terminated) and reached_time_limit(self._n_steps, self.decision_interval_s,
+                                                            opts.max_episode_s)
+        self._prev_action = self._action
         info = self._info(collided, left)
         info["energy"] = effort
         return self._observation(), float(reward), terminated, truncated, info

@@ -137,14 +137,22 @@ class XtfWriter:
         self._file.write(bytes(header))
 
     # ------------------------------------------------------------------ packets
-    def _geodetic(self, nav: NavSample) -> tuple[np.ndarray, float]:
-        """(lat deg, lon deg) of the transducers and their depth, m."""
-        pos = nav.pos_ned + rot_from_euler(*nav.rpy_rad) @ self.mount_pos_body_m
-        lat, lon, _ = ned_to_geodetic(pos, self.origin)
-        return np.array([lat, lon]), float(pos[2])
+    def transducer_ned(self, nav: NavSample) -> np.ndarray:
+        """(3,) NED position of the transducers, m: the navigation position plus the mount offset."""
+        return nav.pos_ned + rot_from_euler(*nav.rpy_rad) @ self.mount_pos_body_m
 
-    def write_ping(self, ping: Any, nav: NavSample) -> None:
-        """Append one :class:`autonomy.messages.SssPing` with the navigation at its time."""
+    def write_tick(self, pings: list[tuple[Any, NavSample]], nav: NavSample) -> None:
+        """Append ``pings`` (each with the navigation at its time), then one navigation packet
+        of ``nav``; the geodetic conversions of a tick are done in one call."""
+        points = np.array([self.transducer_ned(n) for _, n in pings] + [nav.pos_ned])
+        geo = ned_to_geodetic(points, self.origin)
+        for (ping, at), g, pos in zip(pings, geo, points):
+            self.write_ping(ping, at, (g, float(pos[2])))
+        self.write_navigation(nav, geo[-1])
+
+    def write_ping(self, ping: Any, nav: NavSample, geodetic: tuple[np.ndarray, float] | None = None) -> None:
+        """Append one :class:`autonomy.messages.SssPing` with the navigation at its time
+        (``geodetic``: the transducers' (3,) latitude, longitude, height and depth, if known)."""
         from pyxtf import XTFPingChanHeader, XTFPingHeader
 
         lines = np.ascontiguousarray(ping.lines_u8, dtype=np.uint8)
@@ -158,7 +166,10 @@ class XtfWriter:
         _set_time(head, self.start_utc + timedelta(seconds=float(ping.t_s)), hundredths=True)
         head.PingNumber = self.n_pings
         head.SoundVelocity = float(cfg.sound_speed_mps)
-        (lat, lon), depth = self._geodetic(nav)
+        if geodetic is None:
+            pos = self.transducer_ned(nav)
+            geodetic = (ned_to_geodetic(pos, self.origin), float(pos[2]))
+        (lat, lon, _), depth = geodetic
         head.SensorYcoordinate = head.ShipYcoordinate = float(lat)
         head.SensorXcoordinate = head.ShipXcoordinate = float(lon)
         head.SensorDepth = depth
@@ -188,14 +199,15 @@ class XtfWriter:
         self._file.write(packet + bytes(size - len(packet)))
         self.n_pings += 1
 
-    def write_navigation(self, nav: NavSample) -> None:
-        """Append one raw navigation packet (``HeaderType`` 107) of the vehicle's reference point."""
+    def write_navigation(self, nav: NavSample, geodetic: np.ndarray | None = None) -> None:
+        """Append one raw navigation packet (``HeaderType`` 107) of the vehicle's reference point
+        (``geodetic``: its (3,) latitude, longitude, height, if known)."""
         from pyxtf import XTFPosRawNavigation
 
         p = XTFPosRawNavigation()
         p.NumBytesThisRecord = ctypes.sizeof(XTFPosRawNavigation)
         _set_time(p, self.start_utc + timedelta(seconds=nav.t_s), hundredths=False)
-        lat, lon, height = ned_to_geodetic(nav.pos_ned, self.origin)
+        lat, lon, height = ned_to_geodetic(nav.pos_ned, self.origin) if geodetic is None else geodetic
         p.RawYcoordinate, p.RawXcoordinate, p.RawAltitude = float(lat), float(lon), float(height)
         p.Roll, p.Pitch = (float(np.degrees(v)) for v in nav.rpy_rad[:2])
         p.Heading = float(np.degrees(nav.rpy_rad[2])) % 360.0
@@ -253,11 +265,9 @@ class XtfRecorder(ObserverBase):
     def on_step(self, record: StepRecord) -> None:
         nav = NavSample.of(record.nav, record.t_s)
         prev = self._prev if self._prev is not None else nav
-        for name, ping in self._pending:
-            self._writers[name].write_ping(ping, prev.at(nav, ping.t_s))
+        for name, writer in self._writers.items():
+            writer.write_tick([(ping, prev.at(nav, ping.t_s)) for n, ping in self._pending if n == name], nav)
         self._pending.clear()
-        for writer in self._writers.values():
-            writer.write_navigation(nav)
         self._prev = nav
 
     def on_end(self, summary: MissionSummary) -> None:

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-dm_env = pytest.importorskip("dm_env")  # the `dm` extra
+dm_env = pytest.importorskip("dm_env")  # with dm-control, a core dependency
 
 from absl.testing import absltest  # noqa: E402  (absl-py comes with dm-env)
 from dm_env import test_utils  # noqa: E402

@@ -15,6 +15,7 @@ pytest.importorskip("rosbags")  # the writer
 mcap_reader = pytest.importorskip("mcap.reader")
 mcap_ros2_decoder = pytest.importorskip("mcap_ros2.decoder")
 
+from rosbags.rosbag2 import Reader  # noqa: E402
 from scenarios import load_scenario  # noqa: E402
 from scenarios.fls_presets import resolve_geometry  # noqa: E402
 from sim.events.records import ObserverBase  # noqa: E402
@@ -66,7 +67,11 @@ def mcap_run(tmp_path_factory):
         summary = reader.get_summary()
         for schema, channel, message, msg in reader.iter_decoded_messages(log_time_order=False):
             decoded.setdefault(channel.topic, []).append((message.log_time, msg, schema.name))
-    return scn, frames, summary, decoded
+    with Reader(path) as reader:  # the writer's library, for the counts
+        rosbags_counts = {}
+        for connection, _, _ in reader.messages():
+            rosbags_counts[connection.topic] = rosbags_counts.get(connection.topic, 0) + 1
+    return scn, frames, summary, decoded, rosbags_counts
 
 
 PRIMITIVES = {"bool", "byte", "char", "float32", "float64", "int8", "uint8", "int16", "uint16", "int32", "uint32",
@@ -89,8 +94,14 @@ def _fields(definition: str, package: str | None = None) -> list[tuple[str, str]
     return out
 
 
+def test_message_counts_equal_what_rosbags_reads(mcap_run):
+    *_, decoded, rosbags_counts = mcap_run
+    assert {t: len(v) for t, v in decoded.items()} == rosbags_counts
+    assert sum(rosbags_counts.values()) > 50
+
+
 def test_every_message_decodes_from_the_stored_schema(mcap_run):
-    _, _, summary, decoded = mcap_run
+    _, _, summary, decoded, _ = mcap_run
     counts = summary.statistics.channel_message_counts
     assert len(summary.channels) == len(decoded) >= 10
     for cid, channel in summary.channels.items():
@@ -100,7 +111,7 @@ def test_every_message_decodes_from_the_stored_schema(mcap_run):
 
 
 def test_schemas_are_the_ros2_message_definitions(mcap_run):
-    _, _, summary, _ = mcap_run
+    _, _, summary, _, _ = mcap_run
     by_name = {s.name: s.data.decode() for s in summary.schemas.values()}
     shipped = {f"{p.parent.parent.name}/msg/{p.stem}": p for p in MSG_DIR.glob("*/msg/*.msg")}
     checked = 0
@@ -117,7 +128,7 @@ def test_schemas_are_the_ros2_message_definitions(mcap_run):
 
 
 def test_time_stamps_are_monotonic(mcap_run):
-    _, _, _, decoded = mcap_run
+    _, _, _, decoded, _ = mcap_run
     for topic, items in decoded.items():
         log_ns = [t for t, _, _ in items]
         assert log_ns == sorted(log_ns), topic
@@ -133,7 +144,7 @@ def test_time_stamps_are_monotonic(mcap_run):
 
 
 def test_sonar_images_decode_to_the_runs_frames(mcap_run):
-    scn, frames, _, decoded = mcap_run
+    scn, frames, _, decoded, _ = mcap_run
     images = decoded["/auvsim/fls/image"]
     geo = resolve_geometry(scn.sensors["fls"])
     assert len(images) == len(frames.polar) >= 5
