@@ -78,11 +78,15 @@ class SssConfig(SensorConfig):
     @model_validator(mode="after")
     def _check(self) -> "SssConfig":
         f = self.formation
-        if f.beam_correlated_speckle or f.elevation_span_beamwidths != 1.0 or f.object_tail_m is not None or (
-                f.side_lobe_floor_db is not None or f.object_rice_k != 0.0):
-            raise ValueError("formation: beam_correlated_speckle, elevation_span_beamwidths, object_tail_m, "
-                             "object_rice_k and side_lobe_floor_db are forward-looking sonar fields; a side-scan "
-                             "takes pulse_length_m, texture_*, reverberation_db and display_*")
+        fls_only = {"beam_correlated_speckle": f.beam_correlated_speckle,
+                    "elevation_span_beamwidths": f.elevation_span_beamwidths != 1.0,
+                    "object_tail_m": f.object_tail_m is not None, "object_tail_ratio": f.object_tail_ratio != 0.0,
+                    "object_rice_k": f.object_rice_k != 0.0, "side_lobe_floor_db": f.side_lobe_floor_db is not None}
+        set_here = [k for k, v in fls_only.items() if v]
+        if set_here:
+            raise ValueError(f"formation.{set_here[0]}: a forward-looking sonar field (so are "
+                             f"{', '.join(k for k in fls_only if k != set_here[0])}); a side-scan takes "
+                             "pulse_length_m, texture_*, reverberation_db and display_*")
         limit = self.sound_speed_mps / (2.0 * self.range_max_m)
         if self.rate_hz > limit * (1.0 + 1e-9):
             raise ValueError(f"rate_hz {self.rate_hz} exceeds the two-way travel-time limit "

@@ -79,6 +79,13 @@ TargetShape = Literal["half_sphere", "truncated_cone", "cylinder", "box", "tyre"
                       "drink_carton", "hook", "propeller", "shampoo_bottle", "valve"]
 #: Marine-debris shapes (:mod:`sim.scene.debris_meshes`): sized by ``size_m`` (length, width, height).
 DEBRIS_TARGET_SHAPES = ("bottle", "can", "chain", "drink_carton", "hook", "propeller", "shampoo_bottle", "valve")
+#: Default (length, width, height) of each debris shape lying in its default pose, m: an estimate
+#: of a common real object (:mod:`sim.scene.debris_meshes` builds them to this box).
+DEBRIS_DEFAULT_SIZES_M: dict[str, tuple[float, float, float]] = {
+    "bottle": (0.25, 0.08, 0.08), "can": (0.12, 0.066, 0.066), "chain": (0.45, 0.052, 0.052),
+    "drink_carton": (0.2, 0.095, 0.07), "hook": (0.15, 0.08, 0.012), "propeller": (0.24, 0.266, 0.06),
+    "shampoo_bottle": (0.2, 0.08, 0.045), "valve": (0.2, 0.1, 0.12)}
+BOX_DEFAULT_SIZE_M = (1.0, 0.5, 0.5)
 
 
 class TargetConfig(StrictModel):
@@ -113,12 +120,20 @@ class TargetConfig(StrictModel):
     top_radius_m: NonNegFloat = Field(0.2, le=20.0, description="truncated cone top radius")
     height_m: PositiveFloat = Field(0.5, le=20.0, description="cylinder/cone height")
     size_m: tuple[PositiveFloat, PositiveFloat, PositiveFloat] = Field(
-        (1.0, 0.5, 0.5), description="box, and debris shapes: (length, width, height), m (the default is "
-        "the box's; sim.scene.debris_meshes.debris_default_size_m gives each debris kind's)")
+        BOX_DEFAULT_SIZE_M, description="box, and debris shapes: (length, width, height), m (left out: "
+        "(1.0, 0.5, 0.5) for a box, DEBRIS_DEFAULT_SIZES_M for a debris shape)")
     tube_radius_m: PositiveFloat = Field(0.15, le=5.0, description="tyre tube radius")
     reflectivity: Probability = 0.9
     class_name: str = "opi"
     is_target: bool = True
+
+    @model_validator(mode="after")
+    def _debris_size(self) -> "TargetConfig":
+        # an after-validator: a before one would turn the strict JSON validation of a scenario
+        # file into Python validation, where a list is not a tuple
+        if "size_m" not in self.model_fields_set and self.shape in DEBRIS_DEFAULT_SIZES_M:
+            object.__setattr__(self, "size_m", DEBRIS_DEFAULT_SIZES_M[self.shape])  # the model is frozen
+        return self
 
     @model_validator(mode="after")
     def _tyre_fits(self) -> "TargetConfig":

@@ -35,13 +35,27 @@ def _cmd_realism(args: argparse.Namespace) -> int:
         bar = tqdm(total=total, desc=label, unit="frame", disable=args.quiet or args.json, file=sys.stderr,
                    mininterval=1.0)
         bars.append(bar)
-        return bar.update
+
+        def step(n: int = 1) -> None:
+            bar.update(n)
+            if bar.n >= total:
+                bar.close()  # done: its rate and time stay those of its own frames
+                if not (args.quiet or args.json):
+                    print(f"{label}: done; measuring and judging", file=sys.stderr, flush=True)
+        return step
 
     try:
         rep = realism_report(args.real, n_sim=args.frames, seed=args.seed, near_m=args.near_m,
                              formations=formations, cnn=args.cnn, limit_real=args.limit_real, progress=progress)
     except RealDataError as exc:
-        raise CliError(str(exc)) from None
+        msg = str(exc)
+        raise CliError(msg if msg.startswith(("--real", "/")) or str(args.real) in msg
+                       else f"--real {args.real}: {msg}") from None
+    except ValueError as exc:
+        msg = str(exc)
+        if msg.startswith("near_m"):
+            raise CliError("--near-m" + msg[len("near_m"):]) from None
+        raise
     finally:
         for b in bars:
             b.close()
@@ -55,7 +69,7 @@ def _cmd_realism(args: argparse.Namespace) -> int:
             side_by_side_png(rep, tmp / "simulated_only.png", include_real=False)
             staged.commit()
     if args.json:
-        print(json.dumps(data, indent=1))
+        print(json.dumps(data))  # one line, the last
     else:
         print("\n".join(report_lines(rep)))
         if out is not None:
@@ -68,17 +82,21 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                        description="Fit the real frames' fan, render matched water-tank scenes with the ARIS 3000 "
                                    "preset (fixed seed), and print image statistics, range profiles and classifier "
                                    "two-sample tests for real against simulated (docs/studies/realism.md).")
-    p.add_argument("--real", required=True, help="folder of real frames (images/*.png, optional masks/ and boxes/)")
+    p.add_argument("--real", required=True,
+                   help="folder of real frames (images/*.png, optional masks/ and boxes/; without masks the object "
+                        "measures are left out)")
     p.add_argument("--frames", type=positive_int, default=200, help="simulated frames per formation (default 200)")
-    p.add_argument("--seed", type=non_negative_int, default=0, help="root seed of scenes, noise and patches")
+    p.add_argument("--seed", type=non_negative_int, default=0, help="root seed of scenes, noise and patches (default 0)")
     p.add_argument("--near-m", type=positive_float, default=0.7,
                    help="near range of the real window, m (sets the metric scale; default 0.7, the ARIS 3000's)")
     p.add_argument("--formation", choices=["before", "after", "both"], default="both",
-                   help="image formation to simulate: before (the preset's), after (the tank estimate), both")
+                   help="image formation to simulate: before (the preset's), after (the tank estimate), both (default)")
     p.add_argument("--limit-real", type=positive_int, default=None, help="read at most this many real frames")
     p.add_argument("--cnn", action="store_true", help="add a small CNN as a second judge (needs torch)")
     p.add_argument("--out", default=None, help="folder for realism.json, realism.txt, side_by_side.png and simulated_only.png")
     p.add_argument("--overwrite", action="store_true", help="replace an earlier realism output in --out")
-    p.add_argument("--json", action="store_true", help="print the figures as JSON")
+    p.add_argument("--json", action="store_true",
+                   help="print the figures as one JSON object on the last line (no progress bars; null where "
+                        "nothing was measured)")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     p.set_defaults(func=_cmd_realism)

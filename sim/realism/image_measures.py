@@ -49,7 +49,7 @@ MEASURES: tuple[Measure, ...] = (
     Measure("bg_skewness", "background patch skewness"),
     Measure("grey_p10", "normalised grey p10 (background patches)"),
     Measure("grey_p90", "normalised grey p90 (background patches)"),
-    Measure("low_freq_share", "share of patch energy at low spatial frequency (< 1/8 cycle/px)"),
+    Measure("low_freq_share", "patch energy share below 1/8 cycle/px (floor texture)"),
     Measure("arc_rows", "range rows that are thin arcs", "%"),
     Measure("streak_beams", "beams that are radial streaks", "%"),
     Measure("dark_far_near", "dark level (p10 grey) far / near"),

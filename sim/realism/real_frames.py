@@ -11,6 +11,12 @@ The fan outline (apex, near and far arc radii, half-angle) is fitted to the pixe
 non-zero in most frames: two straight edges through the apex (least squares on each row's
 first and last lit pixel), then the arcs' radii from the apex (medians over the columns the
 arcs span). A metric scale needs one range: the near edge of the window (``near_m``).
+
+A set may mix recordings made with different range windows, whose fans differ in the
+exported image (the Marine Debris development split holds two: 367 and 233 of its 600
+frames). :func:`fan_groups` sorts the frames by their own fan's outline (top and bottom of
+the centre columns, left and right edges at mid height), so that a fit and every measure
+use frames of one fan.
 """
 
 from __future__ import annotations
@@ -99,7 +105,7 @@ def load_real_frames(folder: str | Path, *, limit: int | None = None) -> RealFra
         images.append(img)
         if has_masks:
             mp = mask_dir / p.name
-            m = cv2.imread(str(mp), cv2.IMREAD_GRAYSCALE)
+            m = cv2.imread(str(mp), cv2.IMREAD_GRAYSCALE) if mp.is_file() else None
             if m is None or m.shape != img.shape:
                 raise RealDataError(f"{mp}: missing, unreadable or not the size of its image")
             masks.append(m)
@@ -156,18 +162,52 @@ class FanOutline:
                            float(2.0 * self.half_angle_rad), float(m_per_px), self.apex_x_px, self.apex_y_px)
 
 
+#: Frames whose outline signatures differ by at most this (px, each of the four) share a fan.
+FAN_GROUP_TOL_PX = 6
+
+
+def fan_signature(image: NDArray[np.uint8]) -> NDArray[np.int64]:
+    """(4,) the lit outline of one frame, px: first and last lit row of the centre columns,
+    first and last lit column of the middle row (-1 where nothing is lit)."""
+    lit = image > 0
+    h, w = lit.shape
+    rows = np.flatnonzero(lit[:, max(w // 2 - 10, 0):w // 2 + 10].any(axis=1))
+    cols = np.flatnonzero(lit[h // 2 - 2:h // 2 + 3].any(axis=0))
+    return np.array([rows[0] if rows.size else -1, rows[-1] if rows.size else -1,
+                     cols[0] if cols.size else -1, cols[-1] if cols.size else -1], dtype=np.int64)
+
+
+def fan_groups(images: NDArray[np.uint8], tol_px: int = FAN_GROUP_TOL_PX) -> list[NDArray[np.intp]]:
+    """Frame indices grouped by fan outline (:func:`fan_signature`), largest group first:
+    each group gathers the frames within ``tol_px`` of the most common remaining signature."""
+    sig = np.array([fan_signature(im) for im in images])
+    left = np.arange(len(images))
+    groups = []
+    while left.size:
+        keys, counts = np.unique(sig[left] // 2, axis=0, return_counts=True)
+        seed = keys[np.argmax(counts)] * 2
+        near = np.all(np.abs(sig[left] - seed) <= tol_px, axis=1)
+        groups.append(left[near])
+        left = left[~near]
+    return sorted(groups, key=len, reverse=True)
+
+
 def fit_fan_outline(images: NDArray[np.uint8], *, lit_share: float = 0.5) -> FanOutline:
-    """Fit the fan outline to ``images`` (N, H, W): the pixels non-zero in more than
-    ``lit_share`` of the frames.
+    """Fit the fan outline to ``images`` (N, H, W) of one fan (:func:`fan_groups`): the pixels
+    non-zero in more than ``lit_share`` of the frames.
 
     Raises:
-        RealDataError: fewer than 20 lit rows (not a fan image).
+        RealDataError: the lit pixels do not form a fan: fewer than 20 lit rows, edges that
+            do not meet below the top of the image, a half-angle outside 2-80 deg, a near
+            arc not inside the far one, or edges that are not straight (rms above 3 px).
     """
     lit = (images > 0).mean(axis=0) > lit_share
     h, w = lit.shape
     rows = np.flatnonzero(lit.any(axis=1))
+    not_fan = "real frames: no sonar fan found (the pixels lit in most frames must form a fan: apex below, " \
+              "far arc above, black outside)"
     if rows.size < 20:
-        raise RealDataError("real frames: fewer than 20 rows are lit in most frames; not sonar fan images")
+        raise RealDataError(f"{not_fan}; fewer than 20 rows are lit")
     top, bottom = rows[0], rows[-1]
     span = bottom - top
     ys = np.arange(top + span // 8, bottom - span // 8)
@@ -175,6 +215,8 @@ def fit_fan_outline(images: NDArray[np.uint8], *, lit_share: float = 0.5) -> Fan
     left = np.array([np.flatnonzero(lit[y])[0] - 0.5 for y in ys])
     right = np.array([np.flatnonzero(lit[y])[-1] + 0.5 for y in ys])
     pl, pr = np.polyfit(ys, left, 1), np.polyfit(ys, right, 1)
+    if not (pl[0] > 1e-3 and pr[0] < -1e-3):  # going down the image, both edges close in on the apex
+        raise RealDataError(f"{not_fan}; its side edges do not converge downwards")
     apex_y = (pr[1] - pl[1]) / (pl[0] - pr[0])
     apex_x = 0.5 * (np.polyval(pl, apex_y) + np.polyval(pr, apex_y))
     half = 0.5 * (abs(np.arctan(pl[0])) + abs(np.arctan(pr[0])))
@@ -194,5 +236,8 @@ def fit_fan_outline(images: NDArray[np.uint8], *, lit_share: float = 0.5) -> Fan
     near_px = float(np.median(near_pts[on_near, 1]))
     res = np.concatenate([res, far_pts[:, 1][np.abs(far_pts[:, 0] - apex_x) < 0.8 * far_px * np.sin(half)] - far_px,
                           near_pts[on_near, 1] - near_px])
-    return FanOutline(int(w), int(h), float(apex_x), float(apex_y), near_px, far_px, float(half),
-                      float(np.sqrt(np.mean(res ** 2))))
+    rms = float(np.sqrt(np.mean(res ** 2)))
+    if not (np.radians(2.0) <= half <= np.radians(80.0) and apex_y > top and 0.0 < near_px < far_px and rms <= 3.0):
+        raise RealDataError(f"{not_fan}; the fit gives half-angle {np.degrees(half):.1f} deg, near/far "
+                            f"{near_px:.0f}/{far_px:.0f} px, edge rms {rms:.1f} px")
+    return FanOutline(int(w), int(h), float(apex_x), float(apex_y), near_px, far_px, float(half), rms)

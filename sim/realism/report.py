@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sim.realism.image_measures import MEASURES, FrameSetMeasures
-from sim.realism.real_frames import RealFrames, fit_fan_outline, load_real_frames
+from sim.realism.real_frames import RealFrames, fan_groups, fit_fan_outline, load_real_frames
 from sim.realism.tank_scenes import (TANK, TANK_FORMATION, TankGeometry, background_grey, calibrate_gain_db,
                                      draw_scenes, render_tank_frames)
 from sim.realism.two_sample import (TwoSampleResult, balanced_sets, cnn_judge, feature_judges,
@@ -38,6 +38,11 @@ GOAL_ACCURACY = {"background": 0.75, "object": 0.80}
 GOAL_RELATIVE = 0.20
 GOAL_PROFILE_CORR = 0.80
 N_BEAMS = 128  # the ARIS 3000's beams across the fan
+#: Fewer patches than this per set and kind: the accuracies are reported, not judged.
+MIN_JUDGED_PATCHES = 200
+#: Fewer real frames of one fan than this: the report warns that the fan fit is unreliable.
+MIN_FIT_FRAMES = 50
+PRESET = "aris3000"
 
 
 @dataclass
@@ -75,8 +80,13 @@ class RealismReport:
     outline: dict
     real: SetResult
     formations: list[FormationResult]
+    notes: list[str] = field(default_factory=list)
 
     def to_json(self) -> dict:
+        """The report as JSON-ready data (NaN, where nothing was measured, as None)."""
+        return _finite_or_none(self._json())
+
+    def _json(self) -> dict:
         def judges(d):
             return {k: [{"judge": j.judge, "accuracy": j.accuracy, "n_scored": j.n_scored, "ci95": list(j.ci95)}
                         for j in v] for k, v in d.items()}
@@ -90,8 +100,52 @@ class RealismReport:
                                    "within_20pct": within_goal(self.real.measures, f.sim.measures)}
                           for f in self.formations},
             "goals": {"accuracy_at_most": GOAL_ACCURACY, "relative_error_at_most": GOAL_RELATIVE,
-                      "profile_corr_at_least": GOAL_PROFILE_CORR},
+                      "profile_corr_at_least": GOAL_PROFILE_CORR, "min_judged_patches": MIN_JUDGED_PATCHES},
+            "measure_labels": {m.key: {"label": m.label, "unit": m.unit} for m in MEASURES},
+            "notes": list(self.notes),
         }
+
+
+def _finite_or_none(x):
+    if isinstance(x, dict):
+        return {k: _finite_or_none(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_finite_or_none(v) for v in x]
+    if isinstance(x, (float, np.floating)):
+        return float(x) if np.isfinite(x) else None
+    return x
+
+
+def _check_args(real_dir, n_sim, seed, near_m, formations, limit_real) -> tuple[str, ...]:
+    """The formations as a tuple of known names; ValueError naming the first bad argument."""
+    import os
+
+    if not isinstance(real_dir, (str, os.PathLike)):
+        raise ValueError(f"real_dir must be a folder path (str or Path), got {real_dir!r}")
+    for name, value, lo in (("n_sim", n_sim, 1), ("seed", seed, 0)):
+        if not isinstance(value, (int, np.integer)) or isinstance(value, bool) or value < lo:
+            raise ValueError(f"{name} must be a whole number >= {lo}, got {value!r}")
+    if limit_real is not None and (not isinstance(limit_real, (int, np.integer)) or isinstance(limit_real, bool)
+                                   or limit_real < 1):
+        raise ValueError(f"limit_real must be None or a whole number >= 1, got {limit_real!r}")
+    if isinstance(near_m, bool) or not isinstance(near_m, (int, float, np.floating, np.integer)) or not (
+            np.isfinite(near_m) and near_m > 0):
+        raise ValueError(f"near_m must be a finite number > 0 (m), got {near_m!r}")
+    if isinstance(formations, str) or not all(isinstance(f, str) for f in formations):
+        raise ValueError(f"formations must be a sequence of names from {sorted(FORMATIONS)}, got {formations!r}")
+    bad = [f for f in formations if f not in FORMATIONS]
+    if bad or not formations:
+        raise ValueError(f"formations: unknown {bad or formations!r}; allowed: {sorted(FORMATIONS)}")
+    return tuple(formations)
+
+
+def near_range_limits_m(near_far_ratio: float) -> tuple[float, float]:
+    """The near ranges (m) the ``aris3000`` preset can render for a fan of this near/far
+    ratio: its minimum range up to the one whose far range is its maximum."""
+    from scenarios.fls_presets import PRESETS
+
+    p = PRESETS[PRESET]
+    return float(p.range_min_m), float(p.range_max_m * near_far_ratio)
 
 
 def within_goal(real: dict[str, float], sim: dict[str, float]) -> dict[str, bool | None]:
@@ -162,20 +216,41 @@ def realism_report(real_dir: str, *, n_sim: int = 200, seed: int = 0, near_m: fl
         limit_real: read at most this many real frames.
         progress: ``progress(label, total)`` returns a per-item callback (a progress bar).
 
+    The real frames are sorted by fan outline (:func:`sim.realism.real_frames.fan_groups`):
+    the largest group is measured and matched, the others (recorded with another window or
+    exported at another aspect) are left out and named in ``notes``.
+
     Raises:
-        sim.realism.real_frames.RealDataError: the folder cannot be read.
-        KeyError: an unknown formation name.
+        sim.realism.real_frames.RealDataError: the folder cannot be read, or its frames hold
+            no sonar fan.
+        ValueError: a bad argument (named in the message), or a ``near_m`` outside
+            :func:`near_range_limits_m` for the fitted fan.
     """
-    for f in formations:
-        if f not in FORMATIONS:
-            raise KeyError(f)
-    real: RealFrames = load_real_frames(real_dir, limit=limit_real)
-    outline = fit_fan_outline(real.images)
+    formations = _check_args(real_dir, n_sim, seed, near_m, formations, limit_real)
+    loaded: RealFrames = load_real_frames(real_dir, limit=limit_real)
+    groups = fan_groups(loaded.images)
+    used = groups[0]
+    outline = fit_fan_outline(loaded.images[used])
+    lo, hi = near_range_limits_m(outline.near_far_ratio)
+    if not lo <= near_m <= hi:
+        raise ValueError(f"near_m {near_m:g} m: the {PRESET} preset renders ranges {lo:g}-"
+                         f"{hi / outline.near_far_ratio:g} m, so with this fan's near/far ratio "
+                         f"{outline.near_far_ratio:.3f} the near range must lie in [{lo:g}, {hi:.3f}] m")
+    notes = []
+    if len(groups) > 1:
+        notes.append(f"fan outlines: {len(groups)} groups of {', '.join(str(len(g)) for g in groups)} frames; "
+                     f"the largest ({len(used)} frames) is measured, the others are left out")
+    if len(used) < MIN_FIT_FRAMES:
+        notes.append(f"the fan is fitted on {len(used)} frames (fewer than {MIN_FIT_FRAMES}): its outline, and so "
+                     "the matched geometry, may be off")
+    images = loaded.images[used]
+    if loaded.masks is None:
+        notes.append("no masks/ in the folder: the object measures and object patches are left out")
+    masks = loaded.masks[used] if loaded.masks is not None else np.zeros_like(images)
     geom = outline.geometry(near_m)
-    masks = real.masks if real.masks is not None else np.zeros_like(real.images)
-    bar = progress("real frames", len(real.images)) if progress else None
-    real_set = _measure_set("real", zip(real.images, masks), geom, N_BEAMS, np.random.default_rng(seed), progress=bar)
-    target_grey = background_grey(list(zip(real.images, masks)), geom)
+    bar = progress("real frames", len(images)) if progress else None
+    real_set = _measure_set("real", zip(images, masks), geom, N_BEAMS, np.random.default_rng(seed), progress=bar)
+    target_grey = background_grey(list(zip(images, masks)), geom)
     scenes = draw_scenes(n_sim, seed, tank)
     results = []
     for name in formations:
@@ -191,15 +266,23 @@ def realism_report(real_dir: str, *, n_sim: int = 200, seed: int = 0, near_m: fl
         results.append(FormationResult(name, sim_set, corr, _judge(real_set, sim_set, seed, cnn)))
     od = {k: getattr(outline, k) for k in ("width_px", "height_px", "apex_x_px", "apex_y_px", "near_px", "far_px",
                                            "half_angle_rad", "edge_rms_px")}
-    od.update(near_m=geom.range_min_m, far_m=geom.range_max_m, m_per_px=geom.m_per_px)
-    return RealismReport(str(real_dir), int(seed), od, real_set, results)
+    od.update(near_m=geom.range_min_m, far_m=geom.range_max_m, m_per_px=geom.m_per_px,
+              fan_groups=[len(g) for g in groups], frames_read=int(len(loaded.images)))
+    small = [f"{f.name} {kind}" for f in results for kind, res in f.judges.items()
+             if res and res[0].n_scored < MIN_JUDGED_PATCHES]
+    if small:
+        notes.append(f"fewer than {MIN_JUDGED_PATCHES} patches ({', '.join(small)}): those accuracies are "
+                     "not judged against the goal (more frames: --frames, and more real frames)")
+    return RealismReport(str(real_dir), int(seed), od, real_set, results, notes)
 
 
 def report_lines(rep: RealismReport) -> list[str]:
     """The report as console lines: the fan fit, the table (real, then each formation, a
     ``*`` where within the goal), the range profiles and the two-sample accuracies."""
     o = rep.outline
-    lines = [f"real frames: {rep.real_dir} ({rep.real.frames} frames); fan apex ({o['apex_x_px']:.1f}, "
+    read = o.get("frames_read", rep.real.frames)
+    used = f"{rep.real.frames} frames" if read == rep.real.frames else f"{rep.real.frames} of {read} frames"
+    lines = [f"real frames: {rep.real_dir} ({used}); fan apex ({o['apex_x_px']:.1f}, "
              f"{o['apex_y_px']:.1f}) px, near/far {o['near_px']:.1f}/{o['far_px']:.1f} px, half-angle "
              f"{np.degrees(o['half_angle_rad']):.2f} deg, fit rms {o['edge_rms_px']:.2f} px; window "
              f"{o['near_m']:.2f}-{o['far_m']:.2f} m at {1000 * o['m_per_px']:.2f} mm/px",
@@ -222,14 +305,21 @@ def report_lines(rep: RealismReport) -> list[str]:
                      + f"  (correlation {f.profile_corr:+.2f}{'*' if f.profile_corr >= GOAL_PROFILE_CORR else ''})")
     lines.append("")
     lines.append("two-sample classifier, held-out accuracy (0.5: indistinguishable; goal: background <= 0.75, "
-                 "object <= 0.80)")
+                 f"object <= 0.80; judged from {MIN_JUDGED_PATCHES} patches)")
     for f in rep.formations:
         for kind, res in f.judges.items():
+            judged = bool(res) and res[0].n_scored >= MIN_JUDGED_PATCHES
             txt = ", ".join(f"{j.judge} {j.accuracy:.3f} [{j.ci95[0]:.2f}, {j.ci95[1]:.2f}]"
-                            f"{'*' if j.accuracy <= GOAL_ACCURACY[kind] else ''}" for j in res) or "too few patches"
-            lines.append(f"  {f.name:>6s} {kind:10s} ({res[0].n_scored if res else 0} patches): {txt}")
-    lines.append("(* within the goal; gain matched on the mid-range background: "
+                            f"{'*' if judged and j.accuracy <= GOAL_ACCURACY[kind] else ''}" for j in res)
+            lines.append(f"  {f.name:>6s} {kind:10s} ({res[0].n_scored if res else 0} patches): "
+                         f"{txt or 'too few patches'}{'' if judged or not res else ' (too few to judge)'}")
+    lines.append(f"(* within the goal: a statistic within {GOAL_RELATIVE:.0%} of the real value with its sign, the "
+                 f"range profile's correlation >= {GOAL_PROFILE_CORR}, an accuracy at most its goal; "
+                 "docs/studies/realism.md says what each measures)")
+    lines.append("(gain matched on the mid-range background: "
                  + ", ".join(f"{f.name} {f.sim.gain_db:+.1f} dB" for f in rep.formations) + ")")
+    for note in rep.notes:
+        lines.append(f"note: {note}")
     return lines
 
 

@@ -64,12 +64,10 @@ from functools import lru_cache
 import numpy as np
 from numpy.typing import NDArray
 
+from scenarios.config.world import DEBRIS_DEFAULT_SIZES_M
 from sim.scene.triangle_mesh import TriangleMesh
 
-DEBRIS_SIZES_M: dict[str, tuple[float, float, float]] = {
-    "bottle": (0.25, 0.08, 0.08), "can": (0.12, 0.066, 0.066), "chain": (0.45, 0.052, 0.052),
-    "drink_carton": (0.2, 0.095, 0.07), "hook": (0.15, 0.08, 0.012), "propeller": (0.24, 0.266, 0.06),
-    "shampoo_bottle": (0.2, 0.08, 0.045), "valve": (0.2, 0.1, 0.12)}
+DEBRIS_SIZES_M: dict[str, tuple[float, float, float]] = DEBRIS_DEFAULT_SIZES_M  # the scenario's defaults
 DEBRIS_SHAPES = tuple(DEBRIS_SIZES_M)
 
 

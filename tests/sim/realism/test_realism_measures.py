@@ -10,7 +10,7 @@ import pytest
 
 from autonomy.sonar_geometry import FanGeometry
 from sim.realism.image_measures import FrameSetMeasures, _fwhm
-from sim.realism.real_frames import RealDataError, fit_fan_outline, load_real_frames
+from sim.realism.real_frames import RealDataError, fan_groups, fit_fan_outline, load_real_frames
 from sim.realism.two_sample import PATCH_FEATURES, balanced_sets, feature_judges, patch_features
 from tests.support import assert_clean_error, run_cli
 
@@ -109,3 +109,81 @@ def test_cli_refuses_bad_input(tmp_path: Path, capsys):
     code, err = run_cli(["realism", "--real", str(tmp_path), "--out", str(other)], capsys)
     assert_clean_error(code, err, "--out")
     assert (other / "keep.txt").read_text() == "mine"
+
+
+def test_frames_of_two_fans_are_grouped_and_each_fits_its_own():
+    other = FanGeometry(320, 480, 1.5, 3.75, np.deg2rad(24.4), 0.0052, 159.5, 749.0)  # a narrower, farther fan
+    rng = np.random.default_rng(1)
+    imgs = np.concatenate([_fan_images(GEOM, 6, rng), _fan_images(other, 4, rng)])
+    order = rng.permutation(len(imgs))
+    groups = fan_groups(imgs[order])
+    assert [len(g) for g in groups] == [6, 4]
+    assert set(order[groups[0]]) == set(range(6))
+    fit_a, fit_b = fit_fan_outline(imgs[order][groups[0]]), fit_fan_outline(imgs[order][groups[1]])
+    assert np.degrees(fit_a.half_angle_rad) == pytest.approx(15.0, abs=0.1)
+    assert np.degrees(fit_b.half_angle_rad) == pytest.approx(12.2, abs=0.1)
+    assert fit_b.apex_y_px == pytest.approx(749.0, abs=2.0)
+
+
+def test_images_without_a_fan_are_refused_in_one_line():
+    rng = np.random.default_rng(0)
+    noise = rng.integers(1, 255, (3, 480, 320)).astype(np.uint8)  # lit everywhere: a rectangle, not a fan
+    with pytest.raises(RealDataError, match="no sonar fan found"):
+        fit_fan_outline(noise)
+    with pytest.raises(RealDataError, match="no sonar fan found"):
+        fit_fan_outline(np.zeros((3, 480, 320), np.uint8))
+
+
+def test_the_report_refuses_bad_arguments_by_name(tmp_path: Path):
+    from sim.realism.report import realism_report
+
+    for kwargs, name in (({"real_dir": 123}, "real_dir"), ({"n_sim": 0}, "n_sim"), ({"n_sim": "3"}, "n_sim"),
+                         ({"seed": -1}, "seed"), ({"near_m": "0.7"}, "near_m"), ({"near_m": 0.0}, "near_m"),
+                         ({"formations": "after"}, "formations"), ({"formations": ("tank",)}, "formations"),
+                         ({"limit_real": 0}, "limit_real")):
+        args = {"real_dir": tmp_path, **kwargs}
+        with pytest.raises(ValueError, match=name):
+            realism_report(args.pop("real_dir"), **args)
+
+
+def _write_fan_folder(root: Path, n: int = 12, masks: bool = False) -> Path:
+    (root / "images").mkdir(parents=True)
+    if masks:
+        (root / "masks").mkdir()
+    for i, img in enumerate(_fan_images(GEOM, n, np.random.default_rng(2))):
+        cv2.imwrite(str(root / "images" / f"f{i}.png"), img)
+        if masks:
+            cv2.imwrite(str(root / "masks" / f"f{i}.png"), np.zeros_like(img))
+    return root
+
+
+def test_cli_names_a_near_range_the_preset_cannot_render(tmp_path: Path, capsys):
+    real = _write_fan_folder(tmp_path / "fans")
+    for near in ("3", "0.01"):
+        code, err = run_cli(["realism", "--real", str(real), "--near-m", near, "--frames", "2", "--quiet"], capsys)
+        assert_clean_error(code, err, "--near-m", "[0.7, 1.2")
+
+
+def test_cli_refuses_frames_without_a_fan(tmp_path: Path, capsys):
+    (tmp_path / "noise" / "images").mkdir(parents=True)
+    rng = np.random.default_rng(0)
+    for i in range(3):
+        cv2.imwrite(str(tmp_path / "noise" / "images" / f"n{i}.png"), rng.integers(1, 255, (48, 32)).astype(np.uint8))
+    code, err = run_cli(["realism", "--real", str(tmp_path / "noise"), "--frames", "2", "--quiet"], capsys)
+    assert_clean_error(code, err, "--real", "no sonar fan found")
+    assert len(err.strip().splitlines()) == 1
+
+
+def test_json_is_one_line_with_null_where_nothing_was_measured(tmp_path: Path, capsys):
+    import json
+
+    real = _write_fan_folder(tmp_path / "fans", n=6)  # no masks: no object measures
+    capsys.readouterr()
+    from sim.cli import main
+
+    assert main(["realism", "--real", str(real), "--frames", "2", "--formation", "after", "--json"]) == 0
+    out = capsys.readouterr().out.strip().splitlines()
+    data = json.loads(out[-1], parse_constant=lambda c: pytest.fail(f"bare {c} in the JSON"))
+    assert data["real"]["measures"]["object_p99_bg"] is None
+    assert any("no masks" in n for n in data["notes"])
+    assert any("fewer than 50" in n for n in data["notes"])

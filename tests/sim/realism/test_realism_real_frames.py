@@ -45,3 +45,14 @@ def test_the_tank_formation_is_closer_to_real_than_the_preset(tmp_path):
     assert any("two-sample" in line for line in lines)
     side_by_side_png(rep, tmp_path / "f.png")
     assert (tmp_path / "f.png").stat().st_size > 10_000
+
+
+def test_the_development_split_holds_two_fans_and_the_report_measures_the_larger():
+    from sim.realism.real_frames import fan_groups, fit_fan_outline, load_real_frames
+
+    real = load_real_frames(REAL_DIR)
+    groups = fan_groups(real.images)
+    assert [len(g) for g in groups][:2] == [367, 233]
+    a, b = (fit_fan_outline(real.images[g]) for g in groups[:2])
+    assert np.degrees(a.half_angle_rad) == pytest.approx(15.0, abs=0.2)  # the ARIS 3000's 30 deg, equal scales
+    assert np.degrees(b.half_angle_rad) < 13.0  # the other window's export is squeezed across

@@ -153,3 +153,15 @@ def test_a_bottle_pitched_90_deg_stands_on_its_base(yaw_deg):
     assert oid == world.objects[0].id
     assert depth == pytest.approx(FLOOR_M - length, abs=5e-3)
     assert world.objects[0].centroid_ned[2] < FLOOR_M - 0.3 * length
+
+
+def test_a_debris_target_without_a_size_takes_its_kind_s_default_size():
+    from scenarios import load_scenario
+    from scenarios.config.world import DEBRIS_DEFAULT_SIZES_M
+
+    scn = load_scenario("cssn_lawnmower", ["world.targets=[{name: B1, shape: bottle, pos_ned: [4.0, 12.0, 4.0]}, "
+                                           "{name: V1, shape: valve, pos_ned: [6.0, 12.0, 4.0], size_m: [0.3, 0.2, 0.2]}, "
+                                           "{name: X1, shape: box, pos_ned: [8.0, 12.0, 4.0]}]"])
+    b, v, x = scn.world.targets
+    assert b.size_m == DEBRIS_DEFAULT_SIZES_M["bottle"] == (0.25, 0.08, 0.08)
+    assert v.size_m == (0.3, 0.2, 0.2) and x.size_m == (1.0, 0.5, 0.5)
