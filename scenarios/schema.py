@@ -191,6 +191,14 @@ class Scenario(StrictModel):
         return value
 
     @model_validator(mode="after")
+    def _outputs_have_their_sonar(self) -> "Scenario":
+        for key, kind, what in (("xtf", "sss", "a side-scan sonar"), ("ping360_log", "msis", "a scanning sonar")):
+            if getattr(self.outputs, key) and self.sensors.first_of_kind(kind) is None:
+                raise ValueError(f"outputs.{key}: the scenario has no enabled sensor of kind {kind} ({what}) to "
+                                 "write; set it false or add one")
+        return self
+
+    @model_validator(mode="after")
     def _mcm_needs_its_sonar(self) -> "Scenario":
         if self.mcm.mode == "full":
             cfg = self.sensors.enabled().get(self.mcm.sensor)

@@ -28,9 +28,16 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def check(args) -> int:
-    files = sorted(args.bag.glob("*.mcap")) if args.bag.is_dir() else []
+    bag = args.bag
+    if not bag.exists():
+        raise CliError(f"bag {bag}: no such file or folder")
+    if bag.is_file() and bag.suffix == ".mcap":
+        bag = bag.parent  # the .mcap file itself: its rosbag2 folder
+    if bag.is_dir() and (bag / "rosbag").is_dir() and not list(bag.glob("*.mcap")):
+        raise CliError(f"bag {bag}: a run folder; give its bag folder, {bag / 'rosbag'}")
+    files = sorted(bag.glob("*.mcap")) if bag.is_dir() else []
     if len(files) != 1:
-        raise CliError(f"bag {args.bag}: expected a rosbag2 folder holding one .mcap file, found {len(files)}")
+        raise CliError(f"bag {bag}: expected a rosbag2 folder holding one .mcap file, found {len(files)}")
     try:
         from mcap.reader import make_reader
         from mcap_ros2.decoder import DecoderFactory
@@ -39,15 +46,21 @@ def check(args) -> int:
         raise CliError(f"needs mcap, mcap-ros2-support and rosbags (pip install 'auvsim[test,rosbag]'): {exc}") from None
     t0 = time.process_time()
     by_mcap: dict[str, int] = {}
-    with open(files[0], "rb") as f:
-        reader = make_reader(f, decoder_factories=[DecoderFactory()])
-        for _, channel, _, _ in reader.iter_decoded_messages(log_time_order=False):
-            by_mcap[channel.topic] = by_mcap.get(channel.topic, 0) + 1
+    try:
+        with open(files[0], "rb") as f:
+            reader = make_reader(f, decoder_factories=[DecoderFactory()])
+            for _, channel, _, _ in reader.iter_decoded_messages(log_time_order=False):
+                by_mcap[channel.topic] = by_mcap.get(channel.topic, 0) + 1
+    except Exception as exc:  # a truncated or foreign file: the reader's own error, in one line
+        raise CliError(f"bag {files[0]}: not a readable MCAP file ({type(exc).__name__}: {exc})"[:300]) from None
     mcap_cpu = time.process_time() - t0
     by_rosbags: dict[str, int] = {}
-    with Reader(args.bag) as reader:
-        for connection, _, _ in reader.messages():
-            by_rosbags[connection.topic] = by_rosbags.get(connection.topic, 0) + 1
+    try:
+        with Reader(bag) as reader:
+            for connection, _, _ in reader.messages():
+                by_rosbags[connection.topic] = by_rosbags.get(connection.topic, 0) + 1
+    except Exception as exc:
+        raise CliError(f"bag {bag}: rosbags cannot read it ({type(exc).__name__}: {exc})"[:300]) from None
     topics = sorted(set(by_mcap) | set(by_rosbags))
     print(f"{'topic':40s} {'mcap (decoded)':>15s} {'rosbags':>10s}")
     for t in topics:

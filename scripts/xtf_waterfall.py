@@ -66,14 +66,16 @@ def waterfall(port: np.ndarray, starboard: np.ndarray) -> np.ndarray:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = script_parser("xtf_waterfall.py", __doc__.splitlines()[0])
+    p = script_parser("xtf_waterfall.py", " ".join(__doc__.split("\n\n")[0].split()))
     p.add_argument("--scenario", default="mcm_survey_full", help="a scenario with a side-scan sonar")
     p.add_argument("--duration-s", type=positive_float, default=120.0, help="simulated seconds (default 120)")
-    p.add_argument("--out", type=Path, default=Path("docs/xtf_waterfall.png"), help="the PNG to write")
+    p.add_argument("--out", type=Path, required=True, help="the PNG to write (the docs' figure: docs/xtf_waterfall.png)")
     return run_script(p, figure, argv)
 
 
 def figure(args) -> int:
+    if args.out.suffix.lower() != ".png":
+        raise CliError(f"--out {args.out}: give a .png file name")
     if args.out.is_dir():
         raise CliError(f"--out {args.out}: is a folder (give the PNG's file name)")
     if not args.out.parent.is_dir():

@@ -25,6 +25,10 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     scenario = load_scenario_noting(args.scenario, overrides, "bench")
     bench = getattr(importlib.import_module(module_name), func_name)
     params = inspect.signature(bench).parameters
+    if "scenario" not in params and (args.scenario != DEFAULT_SCENARIO or args.overrides):
+        what = "--scenario" if args.scenario != DEFAULT_SCENARIO else "--set"
+        raise CliError(f"{what}: bench {args.name} does not fly a scenario of yours ({BENCHES[args.name][2]}); "
+                       "leave it out (--seed is taken)")
     options = {}
     for flag, key, value, default in (("--workers", "workers", args.workers, None),
                                       ("--no-sonar", "sonar", not args.no_sonar, True),
@@ -43,8 +47,8 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         raise CliError("--workers: times the pipelined sonar against the serial loop; not with --no-sonar "
                        "(drop one of them)")
     what = f" on {scenario.name}" if "scenario" in params else ""
-    print(f"bench {args.name}{what}: running; its figures come at the end (minutes for mission and gym on a "
-          "loaded machine)", file=sys.stderr, flush=True)
+    print(f"bench {args.name}{what}: running; its figures come at the end (minutes for mission, gym and export "
+          "on a loaded machine)", file=sys.stderr, flush=True)
     if "scenario" in params:
         result = bench(scenario, **options)
     else:

@@ -121,7 +121,7 @@ class AuvTask(control.Task):
         """The shared task's ``begin_step(action)``.
 
         Raises:
-            ValueError: a non-finite action.
+            ValueError: an action of another shape, or with NaN or an infinity.
         """
         self.shared.begin_step(action)
 
@@ -232,7 +232,7 @@ class AuvEnvironment(control.Environment):
         discount 0 (the task's termination wins, as gymnasium's ``terminated``).
 
         Raises:
-            ValueError: a non-finite action.
+            ValueError: an action of another shape, or with NaN or an infinity.
             dm_control.rl.control.PhysicsError: MuJoCo raised a warning during the step.
         """
         ts = super().step(action)

@@ -45,6 +45,7 @@ from autonomy.messages import NavEstimate
 from scenarios.schema import Scenario
 from sim.envs.area import OperatingArea
 from sim.envs.coverage import CoverageGrid
+from sim.envs.action_check import checked_action
 from sim.envs.scenario_arg import resolve_scenario
 from sim.envs.time_limit import reached_time_limit, time_limit_steps
 from sim.envs.survey_layout import SurveyLayout, episode_scenario, episode_seabed, make_layout
@@ -404,7 +405,7 @@ class SurveyTask:
             thruster command, s), ``complete``.
 
         Raises:
-            ValueError: a non-finite action.
+            ValueError: an action of another shape, or with NaN or an infinity.
         """
         self.begin_step(action)
         self.advance()
@@ -416,11 +417,9 @@ class SurveyTask:
         collision flag, energy and newly covered cells.
 
         Raises:
-            ValueError: a non-finite action (nothing is changed then).
+            ValueError: an action of another shape, or with NaN or an infinity (nothing is changed then).
         """
-        a = np.clip(np.asarray(action, dtype=float).reshape(3), -1.0, 1.0)
-        if not np.all(np.isfinite(a)):
-            raise ValueError(f"SurveyTask.step: action must be finite, got {action!r}")
+        a = checked_action(action, 3, "SurveyTask.step")
         self._hold(a)
         self._collided = False
         self._effort = 0.0

@@ -36,6 +36,7 @@ from autonomy.messages import NavEstimate
 from scenarios.config.world import CurrentConfig
 from scenarios.schema import Scenario
 from sim.envs.area import OperatingArea, survey_area
+from sim.envs.action_check import checked_action
 from sim.envs.scenario_arg import resolve_scenario
 from sim.envs.time_limit import reached_time_limit, time_limit_steps
 from sim.scene.physics import Physics
@@ -311,7 +312,7 @@ class WaypointTask:
             (3,) m, ``energy`` (integral of the mean squared normalised thruster command, s).
 
         Raises:
-            ValueError: a non-finite action.
+            ValueError: an action of another shape, or with NaN or an infinity.
         """
         self.begin_step(action)
         self.advance()
@@ -323,11 +324,9 @@ class WaypointTask:
         collision flag and energy.
 
         Raises:
-            ValueError: a non-finite action (nothing is changed then).
+            ValueError: an action of another shape, or with NaN or an infinity (nothing is changed then).
         """
-        a = np.clip(np.asarray(action, dtype=float).reshape(self.n_act), -1.0, 1.0)
-        if not np.all(np.isfinite(a)):
-            raise ValueError(f"WaypointEnv.step: action must be finite, got {action!r}")
+        a = checked_action(action, self.n_act, "WaypointTask.step")
         if self.options.action_mode == "wrench":
             wrench = np.zeros(6)
             wrench[[0, 1, 2, 5]] = a * self.wrench_scale

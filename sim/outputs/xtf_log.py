@@ -31,6 +31,13 @@ What the fields hold, and their quantisation:
 | ``SlantRange`` / ``GroundRange`` | ``range_max_m`` / its ground range at the ping's altitude | float32 |
 | ``TimeDuration`` / ``SecondsPerPing`` | ``2 range_max_m / sound_speed_mps`` / ``1 / rate_hz`` | float32 |
 
+The raw navigation packets hold the vehicle's reference point: ``RawYcoordinate`` /
+``RawXcoordinate`` latitude / longitude, ``RawAltitude`` its WGS-84 ellipsoidal height (minus
+the depth below the origin's height, not the altitude above the seabed), roll, pitch,
+heading; their ``Microsecond`` field counts 0.1 ms (0-9999, a 16-bit field cannot count a
+second in microseconds; ``pyxtf``'s ``get_time`` reads it as microseconds, so its times of
+these packets are 100 times too fine below the second).
+
 Not simulated, written as 0: transmit frequency, gain codes, the channel offsets (the
 transducer position is written directly: the navigation position plus the mount offset
 rotated by the navigation attitude).

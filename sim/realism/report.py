@@ -81,6 +81,7 @@ class RealismReport:
     real: SetResult
     formations: list[FormationResult]
     notes: list[str] = field(default_factory=list)
+    options: dict = field(default_factory=dict)
 
     def to_json(self) -> dict:
         """The report as JSON-ready data (NaN, where nothing was measured, as None)."""
@@ -103,6 +104,7 @@ class RealismReport:
                       "profile_corr_at_least": GOAL_PROFILE_CORR, "min_judged_patches": MIN_JUDGED_PATCHES},
             "measure_labels": {m.key: {"label": m.label, "unit": m.unit} for m in MEASURES},
             "notes": list(self.notes),
+            "options": dict(self.options),
         }
 
 
@@ -273,7 +275,10 @@ def realism_report(real_dir: str, *, n_sim: int = 200, seed: int = 0, near_m: fl
     if small:
         notes.append(f"fewer than {MIN_JUDGED_PATCHES} patches ({', '.join(small)}): those accuracies are "
                      "not judged against the goal (more frames: --frames, and more real frames)")
-    return RealismReport(str(real_dir), int(seed), od, real_set, results, notes)
+    options = {"n_sim": int(n_sim), "seed": int(seed), "near_m": float(near_m), "formations": list(formations),
+               "cnn": bool(cnn), "limit_real": limit_real, "formation_settings": {f: FORMATIONS[f] for f in formations},
+               "tank": {k: getattr(tank, k) for k in tank.__dataclass_fields__}}
+    return RealismReport(str(real_dir), int(seed), od, real_set, results, notes, options)
 
 
 def report_lines(rep: RealismReport) -> list[str]:

@@ -84,12 +84,30 @@ def test_fls_frame_digest_refuses(argv, culprits, capsys):
 
 
 @pytest.mark.parametrize("argv,culprits", [
-    (["--duration-s", "0"], ("xtf_waterfall.py: error:", "--duration-s")),
-    (["--scenario", "mcm_survey_ful"], ("mcm_survey_ful", "did you mean mcm_survey_full?")),
-    (["--scenario", "cssn_lawnmower"], ("--scenario cssn_lawnmower", "sss")),
-    (["--out", "{dir}"], ("--out", "is a folder")),
+    (["--duration-s", "0", "--out", "{png}"], ("xtf_waterfall.py: error:", "--duration-s")),
+    (["--scenario", "mcm_survey_ful", "--out", "{png}"], ("mcm_survey_ful", "did you mean mcm_survey_full?")),
+    (["--scenario", "cssn_lawnmower", "--out", "{png}"], ("--scenario cssn_lawnmower", "sss")),
+    (["--out", "{dir}"], ("--out", "png")),
+    (["--out", "{dir}/sub.png/"], ("--out",)),
     (["--out", "{missing}/x.png"], ("--out", "does not exist")),
+    (["--out", "{dir}/x.txt"], ("--out", ".png")),
+    ([], ("--out",)),
 ])
 def test_xtf_waterfall_refuses(argv, culprits, capsys, tmp_path):
-    argv = [a.format(missing=tmp_path / "nope", dir=tmp_path) for a in argv]
+    (tmp_path / "sub.png").mkdir()
+    argv = [a.format(missing=tmp_path / "nope", dir=tmp_path, png=tmp_path / "f.png") for a in argv]
     script_refusal(load_script("xtf_waterfall"), argv, capsys, *culprits)
+
+
+@pytest.mark.parametrize("make,culprits", [
+    (lambda d: d / "nope", ("no such file or folder",)),
+    (lambda d: (d / "run" / "rosbag").mkdir(parents=True) or d / "run", ("a run folder", "rosbag")),
+    (lambda d: (d / "b").mkdir() or d / "b", ("one .mcap file, found 0",)),
+    (lambda d: [(d / "c").mkdir(), (d / "c" / "x.mcap").write_bytes(b"not an mcap file")] and d / "c",
+     ("not a readable MCAP file",)),
+])
+def test_check_bag_readers_refuses(make, culprits, capsys, tmp_path):
+    pytest.importorskip("mcap")
+    pytest.importorskip("rosbags")
+    script_refusal(load_script("check_bag_readers"), [str(make(tmp_path))], capsys, "check_bag_readers.py: error:",
+                   *culprits)

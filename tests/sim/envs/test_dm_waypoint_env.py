@@ -112,3 +112,8 @@ def test_bad_arguments_are_refused():
     env.reset()
     with pytest.raises(ValueError, match="finite"):
         env.step(np.array([np.nan, 0, 0, 0], np.float32))
+    with pytest.raises(ValueError, match="finite"):
+        env.step(np.array([np.inf, 0, 0, 0], np.float32))  # refused, not clipped to 1
+    for bad in (np.zeros(3), np.zeros((1, 4)), np.zeros((2, 2)), 0.5, None, "abcd"):
+        with pytest.raises(ValueError, match="action must"):
+            env.step(bad)
