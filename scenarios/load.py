@@ -70,6 +70,21 @@ def _validate(data: dict[str, Any], source: str, overrides: list[str] | tuple[st
         raise ScenarioError(_format_validation_error(exc, source, overrides, data)) from None
 
 
+def scenario_yaml(scenario: Scenario) -> str:
+    """``scenario`` fully resolved as YAML that :func:`load_scenario` reads back to an equal
+    scenario: every field, and ``null`` for each default sensor entry the scenario removed
+    (left out, the default suite would add it again)."""
+    from scenarios.config.sensor import DEFAULT_ENTRIES
+
+    data = scenario.model_dump(mode="json")
+    sensors = data.get("sensors") or {}
+    for name in DEFAULT_ENTRIES:
+        if name not in sensors and not (name == "gps" and scenario.world.indoor):
+            sensors[name] = None
+    data["sensors"] = sensors
+    return yaml.safe_dump(data, sort_keys=False)
+
+
 def scenarios_dir() -> Path:
     """Folder of the shipped scenario files."""
     return Path(str(resources.files("scenarios")))

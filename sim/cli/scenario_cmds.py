@@ -53,11 +53,11 @@ def _cmd_scenarios(args: argparse.Namespace) -> int:
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:
-    import yaml
+    from scenarios.load import scenario_yaml
 
     refuse_sweep_only(args.scenario, "validate")
     scenario = load_scenario_noting(args.scenario, args.overrides, "validate")
-    print(yaml.safe_dump(scenario.model_dump(mode="json"), sort_keys=False), end="")
+    print(scenario_yaml(scenario), end="")
     return 0
 
 

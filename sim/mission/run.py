@@ -168,7 +168,8 @@ def run_mission(
     score_detections: bool = True, workers: int = 1, features: Sequence[type[MissionFeature]] = (),
     ping360_log: bool | None = None, xtf: bool | None = None,
 ) -> dict[str, Any]:
-    """Run ``scenario`` and write metrics.json, trajectory.csv, world_model.json (objects in NED
+    """Run ``scenario`` and write metrics.json, scenario.yaml (the scenario as flown, fully
+    resolved: ``auvsim run OUT/scenario.yaml`` flies it again), trajectory.csv, world_model.json (objects in NED
     and latitude / longitude / depth), map.png (with an acoustic link, also
     surface_world_model.json and the link statistics under ``link`` in metrics.json)
     (with target tracking also tracking_error.png and tracking_boxplot.png, and the
@@ -252,5 +253,8 @@ def run_mission(
             **layers,
         )
         write_json(partial / "metrics.json", metrics, decimals=METRICS_DECIMALS)
+        from scenarios.load import scenario_yaml
+
+        (partial / "scenario.yaml").write_text(scenario_yaml(scenario))  # `auvsim run OUT/scenario.yaml` reruns it
         staged.commit()
     return metrics

@@ -46,8 +46,8 @@ def read_marker(folder: Path) -> dict | None:
     return data if isinstance(data, dict) else None
 
 
-RUN_FILES = frozenset({"metrics.json", "trajectory.csv", "world_model.json", "surface_world_model.json", "map.png",
-                       "recording.rrd", "rosbag",
+RUN_FILES = frozenset({"metrics.json", "scenario.yaml", "trajectory.csv", "world_model.json",
+                       "surface_world_model.json", "map.png", "recording.rrd", "rosbag", "xtf", "ping360",
                        "tracking_error.png", "tracking_boxplot.png"})
 
 
@@ -74,8 +74,10 @@ def is_output_of(folder: Path, kind: str) -> bool:
 
 
 def write_marker(folder: Path, kind: str) -> None:
-    """Mark ``folder`` as an auvsim output of ``kind`` (``run``, ``dataset``)."""
-    (folder / MARKER_FILE).write_text(json.dumps({"kind": kind, "tool": "auvsim"}) + "\n")
+    """Mark ``folder`` as an auvsim output of ``kind`` (``run``, ``dataset``), listing the
+    entries it holds (an ``--overwrite`` may delete those and no others)."""
+    files = sorted(p.name for p in folder.iterdir() if p.name not in (MARKER_FILE, INCOMPLETE_FILE))
+    (folder / MARKER_FILE).write_text(json.dumps({"kind": kind, "tool": "auvsim", "files": files}) + "\n")
 
 
 def _protected(out: Path) -> str | None:
@@ -151,7 +153,9 @@ def check_output_dir(path: str | os.PathLike[str], *, kind: str, overwrite: bool
                 raise OutputDirError(f"{arg} {out}: holds an earlier {kind}; pass --overwrite to replace it, "
                                      "or name a new folder")
             if overwrite and kind == "run":
-                extra = sorted(set(entries) - RUN_FILES - {MARKER_FILE})
+                written = (read_marker(out) or {}).get("files", [])
+                extra = sorted(set(entries) - RUN_FILES - set(written if isinstance(written, list) else [])
+                               - {MARKER_FILE})
                 if extra:
                     shown = ", ".join(extra[:5]) + (f" and {len(extra) - 5} more" if len(extra) > 5 else "")
                     raise OutputDirError(f"{arg} {out}: holds files an auvsim run did not write ({shown}); "
