@@ -360,12 +360,43 @@ def load_scenario(name_or_path: str | Path, overrides: list[str] | tuple[str, ..
     file_data = copy.deepcopy(data)
     data = apply_overrides(data, list(overrides))
     preset_notes = reset_preset_keys(file_data, data, overrides)
+    entry_notes = _new_sensor_entries(file_data, data, overrides, source)
     if notes is not None:
-        notes.extend(preset_notes)
+        notes.extend(preset_notes + entry_notes)
     data.setdefault("name", path.stem)
     scenario = _validate(data, source, overrides)
     check_scenario(scenario, source, overrides)
     return scenario
+
+
+def _new_sensor_entries(file_data: dict[str, Any], data: dict[str, Any], overrides: list[str] | tuple[str, ...],
+                        source: str) -> list[str]:
+    """Notes for sensor entries an override created, and a :class:`ScenarioError` for one that
+    names no sensor kind (a misspelt entry name, say ``fsl``), with the closest name."""
+    from scenarios.config.sensor import DEFAULT_ENTRIES, sensor_config_kinds
+
+    before = file_data.get("sensors") or {}
+    after = data.get("sensors") or {}
+    if not isinstance(before, dict) or not isinstance(after, dict):
+        return []
+    kinds = sensor_config_kinds()
+    out = []
+    for name in after:
+        if name in before or name in DEFAULT_ENTRIES:
+            continue
+        entry = after[name]
+        item = _override_for(f"sensors.{name}", overrides) or f"sensors.{name}..."
+        if isinstance(entry, dict) and "kind" not in entry and name not in kinds:
+            known = list(dict.fromkeys([*before, *DEFAULT_ENTRIES, *kinds]))
+            close = difflib.get_close_matches(name, known, n=1)
+            hint = f"did you mean {close[0]}? " if close else ""
+            raise ScenarioError(f"{source}: --set {item}: sensors.{name} is no entry of the scenario and no sensor "
+                                f"kind ({hint}entries: {', '.join(k for k in known if k in before or k in DEFAULT_ENTRIES)}; "
+                                f"a new entry of another name needs kind: one of {', '.join(sorted(kinds))})")
+        if entry is not None:
+            kind = entry.get("kind", name) if isinstance(entry, dict) else name
+            out.append(f"--set {item}: adds a sensor entry {name} (kind {kind}) the scenario did not have")
+    return out
 
 
 def _resolve_seabed_file(data: dict[str, Any], folder: Path) -> None:

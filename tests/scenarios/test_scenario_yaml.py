@@ -28,3 +28,20 @@ def test_a_run_folder_holds_the_scenario_it_flew_and_it_flies_again(tmp_path):
     assert written.seed == 5 and written.sensors.fls.formation.pulse_length_m == 0.02
     run_mission(written, tmp_path / "b", rerun=False, progress=False)
     assert (tmp_path / "a" / "trajectory.csv").read_bytes() == (tmp_path / "b" / "trajectory.csv").read_bytes()
+
+
+def test_a_misspelt_sensor_entry_in_an_override_is_named_with_the_closest():
+    from scenarios.load import ScenarioError
+
+    with pytest.raises(ScenarioError, match="did you mean fls"):
+        load_scenario("cssn_lawnmower", ["sensors.fsl.formation.pulse_length_m=0.012"])
+
+
+def test_an_override_that_adds_a_sensor_entry_says_so():
+    notes: list[str] = []
+    scn = load_scenario("cssn_lawnmower", ["sensors.sss.range_max_m=30"], notes=notes)
+    assert "sss" in scn.sensors
+    assert any("adds a sensor entry sss" in n for n in notes)
+    notes.clear()
+    load_scenario("cssn_lawnmower", ["sensors.fls.tilt_deg=20"], notes=notes)
+    assert not notes
