@@ -26,6 +26,33 @@ def print_summary(metrics: dict, out: str) -> None:
     print(f"results in {out}")
 
 
+#: The optional field-format outputs: (flag, outputs key, sensor kind it needs (None: any
+#: run), what that sensor is, shipped scenarios with one, module, extra).
+OPTIONAL_OUTPUTS = (
+    ("rosbag", "rosbag", None, "", "", "rosbags", "rosbag"),
+    ("ping360_log", "ping360_log", "msis", "a scanning sonar", "pool_circular, tank_rectangular", "brping", "ping"),
+    ("xtf", "xtf", "sss", "a side-scan sonar", "mcm_survey_full", "pyxtf", "xtf"),
+)
+
+
+def _optional_output(args: argparse.Namespace, scenario, flag: str, key: str, kind: str | None, what: str,
+                     shipped: str, module: str, extra: str) -> bool:
+    """Whether the run writes this output (its flag or its ``outputs`` key); CliError when it
+    cannot: no sensor of its kind, or its package missing (with the extra to install)."""
+    wanted = bool(getattr(args, flag)) or bool(getattr(scenario.outputs, key))
+    if not wanted:
+        return False
+    name = f"--{flag.replace('_', '-')}" if getattr(args, flag) else f"outputs.{key}"
+    if kind is not None and scenario.sensors.first_of_kind(kind) is None:
+        raise CliError(f"{name}: the scenario has no sensor of kind {kind} ({what}) to write; shipped ones "
+                       f"with one: {shipped}")
+    import importlib.util
+
+    if importlib.util.find_spec(module) is None:
+        raise CliError(f"{name}: needs the {module} package (pip install 'auvsim[{extra}]')")
+    return True
+
+
 def _cmd_run(args: argparse.Namespace) -> int:
     from sim.mission.run import run_mission
 
@@ -36,33 +63,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         overrides.append(f"autonomy.atr.detector={args.detector}")
     refuse_sweep_only(args.scenario, "run")
     scenario = load_scenario_noting(args.scenario, overrides, "run")
-    rosbag = args.rosbag or scenario.outputs.rosbag
-    if rosbag:
-        try:
-            import rosbags  # noqa: F401
-        except ImportError:
-            what = "--rosbag" if args.rosbag else "outputs.rosbag"
-            raise CliError(f"{what}: needs the rosbags package (pip install 'auvsim[rosbag]')") from None
-    ping360_log = args.ping360_log or scenario.outputs.ping360_log
-    if ping360_log:
-        what = "--ping360-log" if args.ping360_log else "outputs.ping360_log"
-        if scenario.sensors.first_of_kind("msis") is None:
-            raise CliError(f"{what}: the scenario has no sensor of kind msis (a scanning sonar) to log; "
-                           "shipped ones with one: pool_circular, tank_rectangular")
-        try:
-            import brping  # noqa: F401
-        except ImportError:
-            raise CliError(f"{what}: needs the bluerobotics-ping package (pip install 'auvsim[ping]')") from None
-    xtf = args.xtf or scenario.outputs.xtf
-    if xtf:
-        what = "--xtf" if args.xtf else "outputs.xtf"
-        if scenario.sensors.first_of_kind("sss") is None:
-            raise CliError(f"{what}: the scenario has no sensor of kind sss (a side-scan sonar) to export; "
-                           "shipped one with one: mcm_survey_full")
-        try:
-            import pyxtf  # noqa: F401
-        except ImportError:
-            raise CliError(f"{what}: needs the pyxtf package (pip install 'auvsim[xtf]')") from None
+    rosbag, ping360_log, xtf = (_optional_output(args, scenario, *spec) for spec in OPTIONAL_OUTPUTS)
     fls_every = args.rosbag_fls_every if args.rosbag_fls_every is not None else scenario.outputs.rosbag_fls_every
     metrics = run_mission(scenario, args.out, nav_source=args.nav, rerun=not args.no_rerun,
                           overwrite=args.overwrite, progress=not args.quiet, rosbag=rosbag,
