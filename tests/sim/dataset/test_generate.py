@@ -142,9 +142,28 @@ def test_ray_missing_gives_install_hint(tmp_path, monkeypatch):
         _make(tmp_path / "ray", n=2, use_ray=True)
 
 
+RAY_CHILD = """
+import sys
+from pathlib import Path
+from sim.dataset.generate import RenderSettings, generate_dataset
+from sim.dataset.randomization import Randomization
+fast = Randomization(range_max_m=(12.0, 16.0), n_targets=(1, 2), n_distractors=(0, 1), frames_per_scene=2,
+                     seabed_kinds=("plane", "ripple"))
+generate_dataset(Path(sys.argv[1]), 4, seed=3, workers=1, randomization=fast,
+                 settings=RenderSettings(azimuth_columns=181, elevation_rays=12), progress=False, use_ray=True)
+"""
+
+
 def test_ray_local_instance(tmp_path, dataset):
+    """Ray in a child process: its threads outlive ray.shutdown(), and a later test that forks
+    this process (the dataset and sweep workers) could inherit a lock one of them held."""
+    import subprocess
+    import sys
+
     pytest.importorskip("ray", reason="ray not installed (the `scale` extra)")
-    d = _make(tmp_path / "rayds", use_ray=True)
+    d = tmp_path / "rayds"
+    r = subprocess.run([sys.executable, "-c", RAY_CHILD, str(d)], capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr[-2000:]
     assert _files(d) == _files(dataset)
 
 
