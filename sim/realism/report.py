@@ -345,19 +345,30 @@ def side_by_side_png(rep: RealismReport, path, *, include_real: bool = True) -> 
         cv2.putText(canvas, label, (6, y0 + 17), cv2.FONT_HERSHEY_SIMPLEX, 0.55, 255, 1, cv2.LINE_AA)
         for j, img in enumerate(ex):
             canvas[y0 + pad:y0 + pad + h, j * w:(j + 1) * w] = img
-    # range profiles: near (left) to far (right)
+    # range profiles: near (left) to far (right), grey over its mean (1.0 marked), 0 to 2
     y0 = len(rows) * (h + pad)
-    pw = canvas.shape[1] - 40
-    cv2.putText(canvas, "mean grey against range (near -> far), over its mean: real thick, simulated thin",
-                (6, y0 + 18), cv2.FONT_HERSHEY_SIMPLEX, 0.45, 255, 1, cv2.LINE_AA)
-    profiles = [(rep.real.profile, 3)] + [(f.sim.profile, 1) for f in rep.formations]
-    for prof, thick in profiles:
-        xs = 20 + np.linspace(0, pw, len(prof))
-        ys = y0 + 190 - np.clip(prof, 0, 2) * 80
-        pts = np.stack([xs, ys], axis=1).astype(np.int32)
-        cv2.polylines(canvas, [pts], False, 255, thick, cv2.LINE_AA)
-    for k, (f) in enumerate(rep.formations):
-        prof = f.sim.profile
-        cv2.putText(canvas, f.name, (int(20 + pw) - 60, int(y0 + 190 - np.clip(prof[-1], 0, 2) * 80) - 4),
-                    cv2.FONT_HERSHEY_SIMPLEX, 0.4, 200, 1, cv2.LINE_AA)
+    x0, pw = 40, canvas.shape[1] - 240
+    font = cv2.FONT_HERSHEY_SIMPLEX
+    cv2.putText(canvas, "mean grey against range, over its mean", (6, y0 + 18), font, 0.45, 255, 1, cv2.LINE_AA)
+
+    def y_of(v):
+        return int(y0 + 190 - np.clip(v, 0, 2) * 80)
+
+    cv2.line(canvas, (x0, y_of(0)), (x0, y_of(2)), 128, 1)  # the axes
+    cv2.line(canvas, (x0, y_of(0)), (x0 + pw, y_of(0)), 128, 1)
+    for v in (0.0, 1.0, 2.0):
+        cv2.putText(canvas, f"{v:.0f}", (x0 - 18, y_of(v) + 4), font, 0.35, 200, 1, cv2.LINE_AA)
+        cv2.line(canvas, (x0 - 3, y_of(v)), (x0 + (pw if v == 1.0 else 3), y_of(v)), 90 if v == 1.0 else 128, 1)
+    cv2.putText(canvas, "near", (x0, y_of(0) + 0), font, 0.35, 200, 1, cv2.LINE_AA)
+    cv2.putText(canvas, "far", (x0 + pw - 20, y_of(0)), font, 0.35, 200, 1, cv2.LINE_AA)
+    profiles = [("real", rep.real.profile, 3, 255)] + [(f.name, f.sim.profile, 1, 170 + 40 * (k % 2))
+                                                       for k, f in enumerate(rep.formations)]
+    for k, (name, prof, thick, shade) in enumerate(profiles):
+        xs = x0 + np.linspace(0, pw, len(prof))
+        pts = np.stack([xs, [y_of(v) for v in prof]], axis=1).astype(np.int32)
+        cv2.polylines(canvas, [pts], False, shade, thick, cv2.LINE_AA)
+        ly = y0 + 50 + 22 * k  # legend
+        cv2.line(canvas, (x0 + pw + 20, ly), (x0 + pw + 60, ly), shade, thick, cv2.LINE_AA)
+        cv2.putText(canvas, name if name == "real" else f"simulated: {name}", (x0 + pw + 66, ly + 4), font, 0.4,
+                    255, 1, cv2.LINE_AA)
     cv2.imwrite(str(path), canvas)
