@@ -41,6 +41,8 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     if args.model is not None:
         from pathlib import Path
 
+        if Path(args.model).is_dir():
+            raise CliError(f"--model {args.model}: is a folder (give the .onnx file)")
         if not Path(args.model).is_file():
             raise CliError(f"--model {args.model}: no such ONNX file")
     if args.no_sonar and args.workers is not None and args.workers > 1:

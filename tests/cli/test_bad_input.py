@@ -334,6 +334,8 @@ def test_damaged_manifest_on_resume_is_named(sandbox, capsys):
     (["dataset", "--n", "2", "--out", "ds", "--heldout", "--randomization", "wide"], "contradict"),
     (["eval-atr", "--detector", "classical", "--model", "m.onnx"], "--model applies to the cnn detector"),
     (["eval-atr", "--model", "src"], "is a folder"),
+    (["bench", "atr", "--model", "src"], "is a folder"),
+    (["bench", "export", "--scenario", "pool_circular"], "does not fly a scenario of yours"),
     (["run", "--out", "x", "--bogus"], "auvsim run: error: unrecognized arguments"),
 ])
 def test_contradictions_and_limits(sandbox, capsys, argv, named):
