@@ -79,8 +79,7 @@ def scenario_yaml(scenario: Scenario) -> str:
     data = scenario.model_dump(mode="json")
     sensors = data.get("sensors") or {}
     for name in DEFAULT_ENTRIES:
-        if name not in sensors and not (name == "gps" and scenario.world.indoor):
-            sensors[name] = None
+        sensors.setdefault(name, None)
     data["sensors"] = sensors
     return yaml.safe_dump(data, sort_keys=False)
 

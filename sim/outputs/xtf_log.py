@@ -53,7 +53,7 @@ from typing import Any, BinaryIO
 
 import numpy as np
 
-from autonomy.frames import rot_from_euler
+from autonomy.frames import rot_from_euler, wrap_angle
 from autonomy.geodesy import GeodeticOrigin, ned_to_geodetic
 from autonomy.messages import NavEstimate
 from sim.events.records import MissionInfo, MissionSummary, ObserverBase, StepRecord
@@ -82,7 +82,7 @@ class NavSample:
         """Linear interpolation from ``self`` to ``other`` at ``t_s`` (angles on the short way round)."""
         span = other.t_s - self.t_s
         w = 0.0 if span <= 0.0 else min(max((t_s - self.t_s) / span, 0.0), 1.0)
-        d_rpy = np.angle(np.exp(1j * (other.rpy_rad - self.rpy_rad)))
+        d_rpy = wrap_angle(other.rpy_rad - self.rpy_rad)
         return NavSample(float(t_s), self.pos_ned + w * (other.pos_ned - self.pos_ned), self.rpy_rad + w * d_rpy,
                          self.speed_mps + w * (other.speed_mps - self.speed_mps))
 
