@@ -1,9 +1,14 @@
-"""Baseline returns on the auvsim gym environments: a scripted lawnmower and a random policy.
+"""Baseline returns on the auvsim gym environments: a scripted lawnmower, the inspection
+planner and a random policy.
 
 The lawnmower policy flies the scenario's own lawnmower plan through the env's action
 interface: the onboard LOS guidance (``autonomy.guidance.survey``) turns the navigation
 estimate into a speed/heading/altitude setpoint, which is mapped back to the normalised
-action (yaw rate towards the LOS heading). On ``Waypoint-v1`` the scripted policy steers
+action (yaw rate towards the LOS heading). The inspection policy (with ``--sonar``) is the
+onboard active-inspection guidance (``autonomy.guidance.inspection``, the shipped defaults):
+a coarse coverage pass, then legs towards the world model's confirmed, uncertain objects; it
+reads the episode's onboard world model (what the observation's ``anchors`` table summarises)
+and flies through the same action mapping. On ``Waypoint-v1`` the scripted policy steers
 straight at the current waypoint (setpoint action mode).
 
     python scripts/gym_baselines.py [--scenario cssn_lawnmower] [--episodes 2] [--sonar]
@@ -17,6 +22,8 @@ import math
 import numpy as np
 
 from autonomy.frames import wrap_angle
+from autonomy.guidance.config import InspectionConfig
+from autonomy.guidance.inspection import InspectionGuidance
 from autonomy.guidance.survey import SurveyGuidance
 from sim.envs.survey_env import SurveyEnv, SurveyEnvOptions
 from sim.envs.waypoint_env import WaypointEnv, WaypointEnvOptions
@@ -49,6 +56,35 @@ class LawnmowerPolicy:
         alt = sp.altitude_m if sp.altitude_m is not None else float(np.mean(opts.altitude_range_m))
         return np.array([_to_unit(sp.speed_mps, *opts.speed_range_mps), rate,
                          _to_unit(alt, *opts.altitude_range_m)], dtype=np.float32)
+
+
+class InspectionPolicy(LawnmowerPolicy):
+    """The onboard inspection guidance through SurveyEnv actions (needs the env's sonar and
+    perception: ``SurveyEnvOptions(sonar=True)``)."""
+
+    def __init__(self, env: SurveyEnv, cfg: InspectionConfig = InspectionConfig(enabled=True)) -> None:
+        scn = env.scenario
+        self.env = env
+        fls = env.mission.fls
+        if fls is None or not env.options.sonar:
+            raise ValueError("InspectionPolicy needs the Survey env's sonar and world model (--sonar)")
+        survey, loc = scn.autonomy.guidance.survey, scn.autonomy.localization
+        self.guidance = InspectionGuidance.from_config(
+            survey, cfg, scn.autonomy.guidance.los, swath_width_m=fls.swath_width_m(survey.altitude_m),
+            fov_rad=fls.geometry.fov_rad, range_sigma_m=loc.range_sigma_m,
+            azimuth_sigma_rad=loc.azimuth_sigma_rad + loc.attitude_sigma_rad, altitude_sigma_m=loc.altitude_sigma_m)
+        self._scans = -1
+
+    def reset(self) -> None:
+        super().reset()
+        self._scans = -1
+
+    def __call__(self) -> np.ndarray:
+        perception = self.env.mission.perception
+        if perception.pmha.n_scans != self._scans:  # a world-model update since the last decision
+            self._scans = perception.pmha.n_scans
+            self.guidance.on_world_model(self.env.mission.t_s, perception.world_objects())
+        return super().__call__()
 
 
 def waypoint_pursuit(env: WaypointEnv) -> np.ndarray:
@@ -89,13 +125,24 @@ def main() -> None:
     lawnmower = LawnmowerPolicy(survey)
     rng = np.random.default_rng(0)
     print(f"Survey-v1 ({args.scenario}, sonar={'on' if args.sonar else 'off'})")
-    for name, policy, hook in (("lawnmower", lawnmower, lawnmower.reset),
-                               ("random", lambda: rng.uniform(-1, 1, 3).astype(np.float32), None)):
+    policies = [("lawnmower", lawnmower, lawnmower.reset)]
+    if args.sonar:
+        survey.reset(seed=0)
+        inspection = InspectionPolicy(survey)
+        policies.append(("inspection", inspection, inspection.reset))
+    policies.append(("random", lambda: rng.uniform(-1, 1, 3).astype(np.float32), None))
+    for name, policy, hook in policies:
         for ep in range(args.episodes):
             ret, n, info = _episode(survey, policy, ep, hook)
-            print(f"  {name:9s} episode {ep}: return {ret:8.2f}  steps {n:4d}  coverage "
-                  f"{info['coverage_fraction']:.2f}  targets {info['targets_found']}/{len(survey.targets_ned)}  "
-                  f"collision {info['collision']}  left area {info['left_area']}")
+            line = (f"  {name:10s} episode {ep}: return {ret:8.2f}  steps {n:4d}  coverage "
+                    f"{info['coverage_fraction']:.2f}  targets {info['targets_found']}/{len(survey.targets_ned)}  "
+                    f"collision {info['collision']}  left area {info['left_area']}")
+            if args.sonar:
+                wm = survey.mission.perception.world_model_metrics()
+                err = wm["mean_position_error_m"]
+                line += (f"  map {wm['matched']} matched {wm['false']} false, mean error "
+                         f"{'n/a' if err is None else f'{err:.2f} m'}")
+            print(line, flush=True)
 
     wp = WaypointEnv(args.scenario, WaypointEnvOptions(action_mode="setpoint"), overrides=over)
     print(f"Waypoint-v1 ({args.scenario}, setpoint actions)")

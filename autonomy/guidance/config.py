@@ -103,8 +103,58 @@ class BuddyConfig(StrictModel):
     depth_offset_m: float = Field(0.5, ge=-20.0, le=20.0)
 
 
+class InspectionConfig(StrictModel):
+    """Active inspection: the world model drives the vehicle (:mod:`autonomy.guidance.inspection`).
+
+    When enabled, the survey rectangle of ``survey`` is covered by a coarse pass (legs
+    ``coverage_spacing_m`` apart, centred across the area; ``from_swath``: the sonar's seabed
+    swath times ``1 - swath_overlap``) and the world model's confirmed, not yet confident
+    objects are then inspected by legs flown towards them (:mod:`autonomy.guidance.inspection_planner`
+    for the tests). ``mode``: ``coverage_then_inspect`` (the pass, then the legs) or
+    ``interleaved`` (a coverage leg is broken off to inspect objects it has passed, then
+    resumed where it was left). The mission ends when every confirmed object is confident
+    (``finish_when_confident``) or at mission time ``time_budget_s``. Speed and altitude (or
+    depth) are the survey's. Disabled: the lawnmower of ``survey``, unchanged.
+    """
+
+    enabled: bool = False
+    mode: Literal["coverage_then_inspect", "interleaved"] = "coverage_then_inspect"
+    coverage_spacing_m: PositiveFloat | Literal["from_swath"] = Field(
+        "from_swath", description="m between coverage legs, or from_swath")
+    swath_overlap: float = Field(0.3, ge=0.0, lt=1.0, description="fraction of the swath coverage legs overlap")
+    time_budget_s: PositiveFloat = Field(600.0, le=86400.0, description="mission time (s from start) to stop inspecting")
+    finish_when_confident: bool = Field(
+        True, description="end when every confirmed object is confident; false: keep inspecting "
+        "(up to max_legs_per_object each) until the time budget")
+    confirm_existence: float = Field(0.9, ge=0.0, le=1.0, description="existence to count an object confirmed")
+    confirm_detections: int = Field(5, ge=1, le=100000, description="detections to count an object confirmed")
+    position_2sigma_m: PositiveFloat = Field(1.0, le=100.0, description="confident: world-model 2-sigma semi-major below")
+    look_2sigma_m: PositiveFloat = Field(0.45, le=100.0, description="confident: looks' predicted 2-sigma semi-major below")
+    class_entropy_bits: float = Field(0.5, ge=0.0, le=1.0, description="confident: class entropy below (bits)")
+    confident_existence: float = Field(0.99, ge=0.0, le=1.0, description="confident: existence above")
+    leg_start_range_m: PositiveFloat = Field(12.0, le=100.0, description="an inspection leg starts this far from its object")
+    leg_end_range_m: PositiveFloat = Field(5.0, le=100.0, description="and ends this far from it")
+    aspect_sigma_m: PositiveFloat = Field(
+        0.3, le=10.0, description="where-on-the-object error of one aspect (look model): cssn_lawnmower's world "
+        "after one coverage pass is off by 0.24-0.36 m")
+    aspect_bin_deg: float = Field(30.0, ge=5.0, le=180.0, description="looks closer in bearing count as one aspect")
+    max_legs_per_object: int = Field(2, ge=1, le=100, description="inspection legs per object at most")
+    area_margin_m: NonNegFloat = Field(2.0, le=100.0, description="legs stay inside the survey area grown by this")
+    interleave_radius_m: PositiveFloat = Field(15.0, le=1000.0, description="interleaved: break off for objects within this")
+
+    @model_validator(mode="after")
+    def _legs(self) -> "InspectionConfig":
+        if not self.leg_start_range_m > self.leg_end_range_m:
+            raise ValueError(f"leg_start_range_m ({self.leg_start_range_m}) must be greater than leg_end_range_m "
+                             f"({self.leg_end_range_m})")
+        if self.confident_existence < self.confirm_existence:
+            raise ValueError("confident_existence must be >= confirm_existence")
+        return self
+
+
 class GuidanceConfig(StrictModel):
     survey: SurveyConfig = SurveyConfig()
+    inspection: InspectionConfig = InspectionConfig()
     buddy: BuddyConfig = BuddyConfig()
     los: LosConfig = LosConfig()
     mission: MissionConfig = MissionConfig()

@@ -19,5 +19,6 @@ BENCHES: dict[str, tuple[str, str, str]] = {
     "link": ("sim.bench.link", "run", "acoustic modem link and message codec: cost per message and per tick"),
     "dataset": ("sim.bench.dataset", "run", "labelled FLS dataset frames per second, one worker process against N"),
     "atr": ("sim.evaluation.atr_metrics", "bench_atr", "ATR inference frame rate (CNN and classical)"),
+    "inspection": ("sim.bench.inspection", "run", "inspection planner: CPU per re-plan against the number of objects"),
     "export": ("sim.bench.export", "run", "CPU per simulated minute of the ROS 2 bag, XTF and ping-protocol writers"),
 }

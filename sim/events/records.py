@@ -63,6 +63,26 @@ class PerceptionResult:
     world_objects: tuple[Any, ...] = ()
 
 
+@dataclass(frozen=True, slots=True)
+class InspectionGoal:
+    """What the inspection planner aims at, emitted when it changes.
+
+    Attributes:
+        t_s: mission time, s.
+        phase: ``coverage``, ``inspect`` or ``done``.
+        object_id: the world-model object of the leg being flown (None outside a leg).
+        start_ne_m, end_ne_m: (2,) the leg, m NED (None outside a leg).
+        tour: the objects of the legs planned after it, in order.
+    """
+
+    t_s: float
+    phase: str
+    object_id: int | None
+    start_ne_m: tuple[float, float] | None
+    end_ne_m: tuple[float, float] | None
+    tour: tuple[int, ...]
+
+
 @dataclass(frozen=True)
 class MissionInfo:
     """The built mission as observers may see it (read-only).

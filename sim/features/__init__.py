@@ -8,6 +8,7 @@ in the loop, the outputs or the CLI changes.
 feature                                what it adds
 =====================================  ==========================================================
 :class:`SurveyPerceptionFeature`       ATR -> geolocalisation -> world model on the sonar's frames
+:class:`InspectionFeature`             the world model's updates to the inspection guidance; its legs
 :class:`SeaTrialFeature`               extra vehicles (the buoy), the acoustic link, the surface
                                        world model, late USBL fixes in the AUV's filter
 :class:`MsisLocalizationFeature`       Ping360 pool / tank localisation fixes
@@ -18,6 +19,7 @@ feature                                what it adds
 
 from __future__ import annotations
 
+from sim.features.inspection import InspectionFeature
 from sim.features.mcm_full import McmFullFeature
 from sim.features.msis_localization import MsisLocalizationFeature
 from sim.features.sea_trial import SeaTrialFeature
@@ -27,7 +29,7 @@ from sim.features.base import FeatureContext, MissionFeature
 
 #: Every feature, in the order the loop calls them.
 FEATURES: tuple[type[MissionFeature], ...] = (
-    SurveyPerceptionFeature, SeaTrialFeature, MsisLocalizationFeature, TrackingFeature, McmFullFeature)
+    SurveyPerceptionFeature, InspectionFeature, SeaTrialFeature, MsisLocalizationFeature, TrackingFeature, McmFullFeature)
 
 
 def build_features(ctx_args: dict, extra: tuple[type[MissionFeature], ...] = ()) -> tuple[MissionFeature, ...]:
@@ -68,5 +70,5 @@ def runs_to_duration(scenario, extra: tuple[type[MissionFeature], ...] = ()) -> 
     return any(cls.runs_to_duration(scenario) for cls in (*FEATURES, *extra))
 
 
-__all__ = ["FEATURES", "FeatureContext", "McmFullFeature", "MissionFeature", "MsisLocalizationFeature", "SeaTrialFeature", "SurveyPerceptionFeature",
+__all__ = ["FEATURES", "FeatureContext", "InspectionFeature", "McmFullFeature", "MissionFeature", "MsisLocalizationFeature", "SeaTrialFeature", "SurveyPerceptionFeature",
            "TrackingFeature", "build_features", "runs_to_duration", "summary_lines"]

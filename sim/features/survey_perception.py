@@ -41,7 +41,7 @@ class SurveyPerceptionFeature(MissionFeature):
     def __init__(self, ctx: FeatureContext) -> None:
         self.ctx = ctx
         self.sonar = ctx.parts.sonar
-        self.perception = Perception(ctx.scenario, self.sonar, ctx.physics.world.seabed, ctx.parts.waypoints_ne,
+        self.perception = Perception(ctx.scenario, self.sonar, ctx.physics.world.seabed, ctx.parts.region_waypoints_ne,
                                      nav_source=ctx.nav_source)
         self.pipeline: SonarPipeline | None = None
         self.scorer: Any = None

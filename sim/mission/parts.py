@@ -19,8 +19,9 @@ from numpy.typing import NDArray
 
 from autonomy.control.allocation import ThrustAllocator
 from autonomy.control.autopilot import Autopilot
+from autonomy.guidance.inspection import InspectionGuidance
 from autonomy.guidance.mission import MissionFsm
-from autonomy.guidance.survey import SurveyGuidance
+from autonomy.guidance.survey import SurveyGuidance, plan_from_config
 from autonomy.navigation import NavigationFilter, NavNoiseModel
 from scenarios.schema import Scenario
 from scenarios.sensor_links import atr_sonar_name
@@ -46,8 +47,12 @@ class MissionParts:
         scheduler: fires the sensors at their rates and delivers after their latencies.
         nav_noise: the navigation filter's sensor noise model.
         nav_mounts: sensor kind -> (3,) FRD mount of the first sensor of that kind, m.
-        guidance, fsm, autopilot, allocator: the onboard guidance and control.
-        waypoints_ne: (k, 2) survey plan, m.
+        guidance, fsm, autopilot, allocator: the onboard guidance and control (the guidance is
+            an :class:`autonomy.guidance.inspection.InspectionGuidance` when
+            ``autonomy.guidance.inspection.enabled``).
+        waypoints_ne: (k, 2) survey plan, m (the coverage pass when inspecting).
+        region_waypoints_ne: (k, 2) the lawnmower of the survey config, m: the world model's
+            surveyed region is its bounding box (the same with or without inspection).
         sonar: the sonar whose frames are processed (``autonomy.atr.sonar_sensor``, default the
             first enabled fls entry; the tracker's ``autonomy.tracking.sonar_sensor`` when
             tracking; None: no forward-looking sonar). Other fls entries are rendered, not processed.
@@ -59,13 +64,14 @@ class MissionParts:
     scheduler: SensorScheduler
     nav_noise: NavNoiseModel
     nav_mounts: dict[str, NDArray[np.float64]]
-    guidance: SurveyGuidance
+    guidance: SurveyGuidance | InspectionGuidance
     fsm: MissionFsm
     autopilot: Autopilot
     allocator: ThrustAllocator
     waypoints_ne: NDArray[np.float64]
     sonar: Sensor | None
     usbl_beacon_pos_ned: NDArray[np.float64] | None = None
+    region_waypoints_ne: NDArray[np.float64] | None = None
 
     def make_nav_filter(self, scenario: Scenario) -> NavigationFilter:
         """A fresh navigation filter at the scenario's start pose."""
@@ -104,7 +110,22 @@ def build_mission_parts(scenario: Scenario, physics: Physics, seed: int) -> Miss
     atr_sonar = atr_sonar_name(scenario)
     sonar = sensors.get(atr_sonar) if atr_sonar is not None else None
     swath = sonar.swath_width_m(survey.altitude_m) if sonar is not None else None
-    guidance = SurveyGuidance.from_config(survey, auto.guidance.los, swath_width_m=swath)
+    inspection = auto.guidance.inspection
+    if inspection.enabled:
+        if sonar is None or auto.atr.detector == "none":
+            raise ValueError("autonomy.guidance.inspection needs a forward-looking sonar whose frames are processed "
+                             "(autonomy.atr.sonar_sensor) and a detector (autonomy.atr.detector not none)")
+        if auto.tracking.enabled or auto.guidance.buddy.enabled:
+            raise ValueError("autonomy.guidance.inspection cannot be combined with autonomy.tracking / buddy guidance")
+        loc = auto.localization
+        guidance = InspectionGuidance.from_config(
+            survey, inspection, auto.guidance.los, swath_width_m=swath, fov_rad=sonar.geometry.fov_rad,
+            range_sigma_m=loc.range_sigma_m, azimuth_sigma_rad=loc.azimuth_sigma_rad + loc.attitude_sigma_rad,
+            altitude_sigma_m=loc.altitude_sigma_m)
+        region = np.asarray(plan_from_config(survey, swath).waypoints_ne_m)
+    else:
+        guidance = SurveyGuidance.from_config(survey, auto.guidance.los, swath_width_m=swath)
+        region = None
     waypoints_ne = np.asarray(guidance.plan.waypoints_ne_m)
     fsm = MissionFsm(auto.guidance.mission, guidance)
     if auto.tracking.enabled:  # the tracker reads its own sonar (checked here: the core picks the sonar)
@@ -122,5 +143,5 @@ def build_mission_parts(scenario: Scenario, physics: Physics, seed: int) -> Miss
         seed=int(seed), sensors=sensors, scheduler=scheduler, nav_noise=nav_noise, nav_mounts=nav_mounts,
         guidance=guidance, fsm=fsm, autopilot=Autopilot(auto.control),
         allocator=ThrustAllocator.from_layout(physics.params.layout), waypoints_ne=waypoints_ne, sonar=sonar,
-        usbl_beacon_pos_ned=beacon,
+        usbl_beacon_pos_ned=beacon, region_waypoints_ne=waypoints_ne if region is None else region,
     )

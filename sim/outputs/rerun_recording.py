@@ -50,7 +50,7 @@ from autonomy.sonar_geometry import FanGeometry
 from autonomy.tracking.onboard import TrackingFrameResult
 from autonomy.tracking.roi import PolarRoi
 from sim.outputs.rerun_columns import PoseColumn, ScalarColumn
-from sim.events.records import MissionInfo, MissionSummary, ObserverBase, PerceptionResult, StepRecord
+from sim.events.records import InspectionGoal, MissionInfo, MissionSummary, ObserverBase, PerceptionResult, StepRecord
 from sim.sensors.fls import FlsRender
 from sim.sensors.msis import MsisRender
 from sim.sensors.msis_scan import ScanImage
@@ -255,6 +255,24 @@ class RerunRecorder(ObserverBase):
             self._on_msis_ping(name, msg)
         elif isinstance(msg, PositionFixMsg):
             self._on_position_fix(name, msg)
+        elif isinstance(msg, InspectionGoal):
+            self._on_inspection_goal(msg)
+
+    def _on_inspection_goal(self, goal: InspectionGoal) -> None:
+        """The inspection planner's goal: the leg being flown (a red arrow at the survey depth of
+        the vehicle's estimate) and a text line naming the phase, the object and the tour."""
+        rr, rec = self._rr, self._rec
+        rec.set_time("sim_time", duration=goal.t_s)
+        if goal.start_ne_m is not None and goal.end_ne_m is not None:
+            z = float(self._est._points[-1][2]) if self._est._points else 0.0
+            s = np.array([*goal.start_ne_m, z])
+            rec.log("world/inspection/goal", rr.Arrows3D(origins=[s], vectors=[np.array([*goal.end_ne_m, z]) - s],
+                                                         colors=[[230, 40, 40]], labels=[f"inspect {goal.object_id}"]))
+        else:
+            rec.log("world/inspection/goal", rr.Clear(recursive=False))
+        tour = " -> ".join(str(i) for i in goal.tour) or "none"
+        leg = f", leg to object {goal.object_id}" if goal.object_id is not None else ""
+        rec.log("inspection/goal", rr.TextLog(f"{goal.phase}{leg}; tour after it: {tour}"))
 
     def _on_msis_ping(self, name: str, render: MsisRender) -> None:
         rr, rec = self._rr, self._rec

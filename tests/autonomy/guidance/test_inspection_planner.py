@@ -1,0 +1,198 @@
+"""The inspection planner on hand-made world models, its look model against the flat-seabed
+geometry, and its tour against brute force."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import pytest
+
+from autonomy.guidance.config import InspectionConfig, SurveyConfig
+from autonomy.guidance.inspection import coverage_spacing_m, plan_coverage
+from autonomy.guidance.inspection_planner import (
+    InspectionPlanner, LookRecord, PlannerParams, SurveyArea, brute_force_order, look_covariance,
+    look_information, semi_major_2sigma_m, tour_length_m, tour_order)
+
+
+@dataclass(frozen=True)
+class Obj:
+    id: int
+    pos_ned: np.ndarray
+    cov_ned: np.ndarray = field(default_factory=lambda: np.diag([0.04, 0.04, 0.01]))
+    class_pmf: np.ndarray = field(default_factory=lambda: np.array([0.999, 0.001]))
+    n_detections: int = 50
+    existence_probability: float = 0.999
+
+    @property
+    def class_name(self) -> str:
+        return "target" if self.class_pmf[0] >= 0.5 else "not_target"
+
+
+AREA = SurveyArea((20.0, -20.0), math.radians(90.0), 40.0, 40.0)  # N 20 .. -20, E -20 .. 20
+
+
+def planner(**kw) -> InspectionPlanner:
+    return InspectionPlanner(PlannerParams(**kw), AREA)
+
+
+def look_from(p: InspectionPlanner, obj: Obj, bearing_deg: float, ground_range_m: float, frames: int = 30) -> None:
+    """Record a look at ``obj`` from ``bearing_deg`` (the line of sight, vehicle -> object)."""
+    p.looks.setdefault(obj.id, LookRecord()).add(math.radians(bearing_deg), ground_range_m,
+                                                 math.radians(p.params.aspect_bin_deg), frames)
+
+
+def axis_deg(heading_rad: float) -> float:
+    """A heading's axis, 0 .. 180 deg (a look and its opposite carry the same information)."""
+    return math.degrees(heading_rad) % 180.0
+
+
+def test_look_information_matches_the_flat_seabed_geometry():
+    """Along the line of sight the ground range g = sqrt(r^2 - h^2) moves by dg/dr = r/g per
+    metre of slant range and dg/dh = -h/g per metre of altitude (finite differences here);
+    across it the azimuth error moves the point by g per radian."""
+    p = PlannerParams(altitude_m=2.0, range_sigma_m=0.05, altitude_sigma_m=0.1, azimuth_sigma_rad=0.01,
+                      aspect_sigma_m=0.3)
+    g, h = 6.0, 2.0
+    r = math.hypot(g, h)
+    eps = 1e-6
+    dg_dr = (math.sqrt((r + eps) ** 2 - h ** 2) - math.sqrt((r - eps) ** 2 - h ** 2)) / (2 * eps)
+    dg_dh = (math.sqrt(r ** 2 - (h + eps) ** 2) - math.sqrt(r ** 2 - (h - eps) ** 2)) / (2 * eps)
+    var_along = (dg_dr * 0.05) ** 2 + (dg_dh * 0.1) ** 2 + 0.3 ** 2
+    var_across = (g * 0.01) ** 2 + 0.15 ** 2
+    cov = np.linalg.inv(look_information(p, 0.0, g))  # bearing north: along = N, across = E
+    np.testing.assert_allclose(cov, np.diag([var_along, var_across]), rtol=1e-6, atol=1e-12)
+    rot = np.linalg.inv(look_information(p, math.radians(90.0), g))  # bearing east: the axes swap
+    np.testing.assert_allclose(rot, np.diag([var_across, var_along]), rtol=1e-6, atol=1e-12)
+
+
+def test_two_perpendicular_aspects_shrink_the_ellipse_and_repeated_frames_do_not():
+    p = PlannerParams()
+    one = LookRecord()
+    one.add(0.0, 6.0, math.radians(30.0), frames=1)
+    many = LookRecord()
+    many.add(0.0, 6.0, math.radians(30.0), frames=1)
+    many.add(math.radians(10.0), 6.0, math.radians(30.0), frames=500)  # the same aspect, more frames
+    two = LookRecord()
+    two.add(0.0, 6.0, math.radians(30.0))
+    two.add(math.radians(90.0), 6.0, math.radians(30.0))
+    s_one, s_many, s_two = (semi_major_2sigma_m(look_covariance(p, r)) for r in (one, many, two))
+    assert s_many == pytest.approx(s_one, rel=1e-9)
+    assert s_two < 0.6 * s_one
+
+
+def test_one_uncertain_object_gets_one_leg_across_its_previous_look():
+    p = planner()
+    seen = Obj(0, np.array([0.0, 0.0, 10.0]))
+    done = Obj(1, np.array([10.0, 10.0, 10.0]))
+    look_from(p, seen, 90.0, 15.0)  # seen once, looking east from 15 m
+    look_from(p, done, 0.0, 6.0)
+    look_from(p, done, 90.0, 6.0)
+    look_from(p, done, 180.0, 6.0)
+    assert p.confident(done) and not p.confident(seen)
+    legs = p.plan([seen, done], (-15.0, -15.0))
+    assert [leg.object_id for leg in legs] == [0]
+    leg = legs[0]
+    assert abs(axis_deg(leg.heading_rad) - 0.0) <= 15.0 or abs(axis_deg(leg.heading_rad) - 180.0) <= 15.0
+    assert leg.predicted_2sigma_m < leg.now_2sigma_m
+    # the leg runs towards the object, from leg_start_range_m to leg_end_range_m of it
+    assert math.dist(leg.start_ne_m, leg.object_ne_m) == pytest.approx(p.params.leg_start_range_m)
+    assert math.dist(leg.end_ne_m, leg.object_ne_m) == pytest.approx(p.params.leg_end_range_m)
+
+
+def test_two_objects_needing_opposite_aspects_get_crossing_headings():
+    p = planner()
+    a = Obj(0, np.array([-5.0, -5.0, 10.0]))
+    b = Obj(1, np.array([5.0, 5.0, 10.0]))
+    look_from(p, a, 0.0, 10.0)  # a seen looking north
+    look_from(p, b, 90.0, 10.0)  # b seen looking east
+    legs = {leg.object_id: leg for leg in p.plan([a, b], (0.0, -18.0))}
+    assert set(legs) == {0, 1}
+    assert abs(axis_deg(legs[0].heading_rad) - 90.0) <= 15.0  # a: look east-west
+    ax_b = axis_deg(legs[1].heading_rad)
+    assert min(ax_b, 180.0 - ax_b) <= 15.0  # b: look north-south
+
+
+def test_a_false_alarm_is_never_visited():
+    p = planner()
+    weak = Obj(0, np.array([0.0, 0.0, 10.0]), n_detections=2, existence_probability=0.99)
+    doubtful = Obj(1, np.array([5.0, 0.0, 10.0]), n_detections=40, existence_probability=0.6)
+    real = Obj(2, np.array([-5.0, 0.0, 10.0]))
+    for o in (weak, doubtful, real):
+        look_from(p, o, 90.0, 20.0)
+    assert not p.confirmed(weak) and not p.confirmed(doubtful)
+    assert [leg.object_id for leg in p.plan([weak, doubtful, real], (0.0, -18.0))] == [2]
+    assert p.map_confident([weak, doubtful])  # nothing confirmed, nothing to inspect
+
+
+@pytest.mark.parametrize("pos_ne", [(19.0, 0.0), (0.0, 19.5), (-19.0, -19.0), (19.5, 19.5)])
+def test_legs_stay_inside_the_area(pos_ne):
+    p = planner(area_margin_m=1.0)
+    obj = Obj(0, np.array([*pos_ne, 10.0]))
+    look_from(p, obj, 45.0, 15.0)
+    legs = p.plan([obj], (0.0, 0.0))
+    assert len(legs) == 1
+    for point in (legs[0].start_ne_m, legs[0].end_ne_m):
+        assert AREA.contains(np.asarray(point), 1.0 + 1e-9)
+
+
+def test_an_object_with_no_heading_inside_the_area_gets_no_leg():
+    small = SurveyArea((0.0, 0.0), 0.0, 6.0, 6.0)  # too small for a 12 m leg in any direction
+    p = InspectionPlanner(PlannerParams(area_margin_m=0.0), small)
+    obj = Obj(0, np.array([3.0, 3.0, 5.0]))
+    assert p.plan([obj], (0.0, 0.0)) == []
+
+
+def test_legs_per_object_are_capped():
+    p = planner(max_legs_per_object=2)
+    obj = Obj(0, np.array([0.0, 0.0, 10.0]))
+    look_from(p, obj, 90.0, 20.0)
+    p.leg_flown(0)
+    assert len(p.plan([obj], (0.0, -18.0))) == 1
+    p.leg_flown(0)
+    assert p.plan([obj], (0.0, -18.0)) == []
+
+
+def test_class_and_existence_uncertainty_count():
+    p = planner()
+    obj = Obj(0, np.array([0.0, 0.0, 10.0]), class_pmf=np.array([0.6, 0.4]), existence_probability=0.95)
+    for b in (0.0, 90.0, 180.0):
+        look_from(p, obj, b, 6.0)
+    assert p.reasons(obj) == ["class", "existence"]
+
+
+def test_exact_tour_equals_brute_force_and_two_opt_is_no_worse_than_nearest_neighbour():
+    rng = np.random.default_rng(7)
+    for _ in range(25):
+        n = int(rng.integers(2, 8))
+        s = rng.uniform(-20, 20, (n, 2))
+        e = s + rng.uniform(-8, 8, (n, 2))
+        p0 = rng.uniform(-20, 20, 2)
+        first = np.linalg.norm(s - p0, axis=1)
+        between = np.linalg.norm(e[:, None] - s[None], axis=2)
+        exact = tour_length_m(tour_order(p0, s, e, exact_max=8), first, between)
+        assert exact == pytest.approx(tour_length_m(brute_force_order(p0, s, e), first, between), abs=1e-9)
+        # nearest neighbour, then 2-opt: never worse than nearest neighbour alone
+        nn = [int(np.argmin(first))]
+        while len(nn) < n:
+            nn.append(min(set(range(n)) - set(nn), key=lambda j: between[nn[-1], j]))
+        two_opt = tour_length_m(tour_order(p0, s, e, exact_max=0), first, between)
+        assert exact - 1e-9 <= two_opt <= tour_length_m(nn, first, between) + 1e-9
+
+
+def test_coverage_pass_is_centred_and_spaced_from_the_swath():
+    survey = SurveyConfig(origin_ne_m=(8.0, 0.0), leg_heading_deg=90.0, length_m=32.0, width_m=16.0)
+    one = plan_coverage(survey, coverage_spacing_m(InspectionConfig(), 53.7))
+    assert one.n_legs == 1
+    np.testing.assert_allclose(one.leg_starts_ne_m[0], (0.0, 0.0), atol=1e-9)  # the centre line, N = 0
+    two = plan_coverage(survey, 8.0)
+    assert two.n_legs == 2
+    np.testing.assert_allclose(sorted(two.leg_starts_ne_m[:, 0]), (-4.0, 4.0), atol=1e-9)  # bands' middles
+    with pytest.raises(ValueError, match="coverage_spacing_m"):
+        coverage_spacing_m(InspectionConfig(), None)
+
+
+def test_config_refuses_legs_that_end_before_they_start():
+    with pytest.raises(ValueError, match="leg_start_range_m"):
+        InspectionConfig(leg_start_range_m=4.0, leg_end_range_m=5.0)
