@@ -199,6 +199,37 @@ class Scenario(StrictModel):
         return self
 
     @model_validator(mode="after")
+    def _inspection_has_its_world_model(self) -> "Scenario":
+        auto = self.autonomy
+        if not auto.guidance.inspection.enabled:
+            return self
+        enabled = self.sensors.enabled()
+        name = auto.atr.sonar_sensor
+        has_fls = (enabled.get(name) is not None and enabled[name].kind == "fls") if name is not None else any(
+            c.kind == "fls" for c in enabled.values())
+        if not has_fls or auto.atr.detector == "none":
+            raise ValueError("autonomy.guidance.inspection.enabled: inspection reads the world model, which needs an "
+                             "enabled forward-looking sonar (kind fls) and a detector (autonomy.atr.detector cnn or "
+                             "classical); set enabled false or add them")
+        ins = auto.guidance.inspection
+        if ins.leg_start_range_m == "from_beam":
+            import math
+
+            from scenarios.fls_presets import resolve_geometry
+
+            fls = enabled[name] if name is not None else next(c for c in enabled.values() if c.kind == "fls")
+            vbw = resolve_geometry(fls).vertical_beamwidth_rad
+            tilt = math.radians(fls.tilt_deg)
+            if not (0.0 < tilt - 0.25 * vbw and tilt + 0.25 * vbw < 0.5 * math.pi):
+                raise ValueError(f"autonomy.guidance.inspection.leg_start_range_m: from_beam needs a sonar looking down "
+                                 f"at the seabed a quarter beam either side of its boresight (tilt {fls.tilt_deg} deg, "
+                                 f"vertical beam {math.degrees(vbw):.1f} deg); give the leg ranges in m")
+        if auto.tracking.enabled or auto.guidance.buddy.enabled:
+            raise ValueError("autonomy.guidance.inspection.enabled: inspection cannot fly with autonomy.tracking or "
+                             "buddy guidance (one guidance at a time); set one of them false")
+        return self
+
+    @model_validator(mode="after")
     def _mcm_needs_its_sonar(self) -> "Scenario":
         if self.mcm.mode == "full":
             cfg = self.sensors.enabled().get(self.mcm.sensor)

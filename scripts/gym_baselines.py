@@ -72,7 +72,8 @@ class InspectionPolicy(LawnmowerPolicy):
         self.guidance = InspectionGuidance.from_config(
             survey, cfg, scn.autonomy.guidance.los, swath_width_m=fls.swath_width_m(survey.altitude_m),
             fov_rad=fls.geometry.fov_rad, range_sigma_m=loc.range_sigma_m,
-            azimuth_sigma_rad=loc.azimuth_sigma_rad + loc.attitude_sigma_rad, altitude_sigma_m=loc.altitude_sigma_m)
+            azimuth_sigma_rad=loc.azimuth_sigma_rad + loc.attitude_sigma_rad, altitude_sigma_m=loc.altitude_sigma_m,
+            tilt_rad=fls.tilt_down_rad, vertical_beam_rad=fls.geometry.vertical_beamwidth_rad)
         self._scans = -1
 
     def reset(self) -> None:
@@ -141,7 +142,7 @@ def main() -> None:
                 wm = survey.mission.perception.world_model_metrics()
                 err = wm["mean_position_error_m"]
                 line += (f"  map {wm['matched']} matched {wm['false']} false, mean error "
-                         f"{'n/a' if err is None else f'{err:.2f} m'}")
+                         f"{'n/a' if err is None or err != err else f'{err:.2f} m'}")
             print(line, flush=True)
 
     wp = WaypointEnv(args.scenario, WaypointEnvOptions(action_mode="setpoint"), overrides=over)

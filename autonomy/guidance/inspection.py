@@ -76,15 +76,37 @@ def plan_coverage(survey: SurveyConfig, spacing_m: float) -> LawnmowerPlan:
                           min_turn_radius_m=survey.min_turn_radius_m, arc_points=survey.arc_points)
 
 
+def leg_ranges_m(cfg: InspectionConfig, altitude_m: float, tilt_rad: float,
+                 vertical_beam_rad: float) -> tuple[float, float]:
+    """(start, end) ground ranges of an inspection leg, m: the configured ones, or ``from_beam``:
+    where a seabed object at ``altitude_m`` below the sonar lies a quarter of the vertical beam
+    above and below the boresight (depressions ``tilt -/+ beam / 4``), ``g = h / tan(depression)``.
+
+    Raises:
+        ValueError: ``from_beam`` with a beam that does not reach the seabed at both ends.
+    """
+    if cfg.leg_start_range_m != "from_beam":
+        return float(cfg.leg_start_range_m), float(cfg.leg_end_range_m)
+    near_dep, far_dep = tilt_rad + 0.25 * vertical_beam_rad, tilt_rad - 0.25 * vertical_beam_rad
+    if not (0.0 < far_dep < near_dep < 0.5 * math.pi):
+        raise ValueError(f"autonomy.guidance.inspection leg ranges from_beam: the sonar's tilt {math.degrees(tilt_rad):.1f} "
+                         f"deg and vertical beam {math.degrees(vertical_beam_rad):.1f} deg do not look down at the "
+                         "seabed at both ends; give leg_start_range_m and leg_end_range_m in m")
+    return altitude_m / math.tan(far_dep), altitude_m / math.tan(near_dep)
+
+
 def planner_params(cfg: InspectionConfig, survey: SurveyConfig, *, range_sigma_m: float = 0.05,
-                   azimuth_sigma_rad: float = 0.015, altitude_sigma_m: float = 0.1) -> PlannerParams:
-    """The planner's parameters from the config (the look model's sigmas from the localisation)."""
+                   azimuth_sigma_rad: float = 0.015, altitude_sigma_m: float = 0.1,
+                   tilt_rad: float = math.radians(15.0), vertical_beam_rad: float = math.radians(20.0)) -> PlannerParams:
+    """The planner's parameters from the config (the look model's sigmas from the localisation,
+    the leg ranges from the sonar's tilt and vertical beam: :func:`leg_ranges_m`). In depth
+    mode the survey's nominal ``altitude_m`` stands for the altitude."""
+    start_m, end_m = leg_ranges_m(cfg, survey.altitude_m, tilt_rad, vertical_beam_rad)
     return PlannerParams(
         confirm_existence=cfg.confirm_existence, confirm_detections=cfg.confirm_detections,
         position_2sigma_m=cfg.position_2sigma_m, look_2sigma_m=cfg.look_2sigma_m,
         class_entropy_bits=cfg.class_entropy_bits, confident_existence=cfg.confident_existence,
-        leg_start_range_m=cfg.leg_start_range_m, leg_end_range_m=cfg.leg_end_range_m,
-        altitude_m=survey.altitude_m if survey.vertical_mode == "altitude" else 2.0,
+        leg_start_range_m=start_m, leg_end_range_m=end_m, altitude_m=survey.altitude_m,
         range_sigma_m=range_sigma_m, altitude_sigma_m=altitude_sigma_m, azimuth_sigma_rad=azimuth_sigma_rad,
         aspect_sigma_m=cfg.aspect_sigma_m, aspect_bin_deg=cfg.aspect_bin_deg,
         max_legs_per_object=cfg.max_legs_per_object, area_margin_m=cfg.area_margin_m)
@@ -143,8 +165,10 @@ class InspectionGuidance:
     def from_config(cls, survey: SurveyConfig, cfg: InspectionConfig, los: LosConfig, *,
                     swath_width_m: float | None = None, fov_rad: float = math.radians(130.0),
                     range_sigma_m: float = 0.05, azimuth_sigma_rad: float = 0.015,
-                    altitude_sigma_m: float = 0.1) -> "InspectionGuidance":
-        """Build from the survey and inspection configs (:func:`plan_coverage`, :func:`planner_params`).
+                    altitude_sigma_m: float = 0.1, tilt_rad: float = math.radians(15.0),
+                    vertical_beam_rad: float = math.radians(20.0)) -> "InspectionGuidance":
+        """Build from the survey and inspection configs (:func:`plan_coverage`, :func:`planner_params`;
+        ``tilt_rad`` / ``vertical_beam_rad``: the sonar's boresight depression and vertical beam).
 
         Raises:
             ValueError: see :func:`coverage_spacing_m`.
@@ -152,7 +176,8 @@ class InspectionGuidance:
         coverage = plan_coverage(survey, coverage_spacing_m(cfg, swath_width_m))
         planner = InspectionPlanner(planner_params(cfg, survey, range_sigma_m=range_sigma_m,
                                                    azimuth_sigma_rad=azimuth_sigma_rad,
-                                                   altitude_sigma_m=altitude_sigma_m), survey_area(survey))
+                                                   altitude_sigma_m=altitude_sigma_m, tilt_rad=tilt_rad,
+                                                   vertical_beam_rad=vertical_beam_rad), survey_area(survey))
         altitude_mode = survey.vertical_mode == "altitude"
         return cls(coverage, planner, cfg, survey.speed_mps, los, depth_m=None if altitude_mode else survey.depth_m,
                    altitude_m=survey.altitude_m if altitude_mode else None, fov_rad=fov_rad)
@@ -340,5 +365,5 @@ class InspectionGuidance:
         return out
 
 
-__all__ = ["InspectionEvent", "InspectionGuidance", "coverage_spacing_m", "plan_coverage", "planner_params",
+__all__ = ["InspectionEvent", "InspectionGuidance", "coverage_spacing_m", "leg_ranges_m", "plan_coverage", "planner_params",
            "survey_area"]

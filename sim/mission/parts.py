@@ -112,16 +112,14 @@ def build_mission_parts(scenario: Scenario, physics: Physics, seed: int) -> Miss
     swath = sonar.swath_width_m(survey.altitude_m) if sonar is not None else None
     inspection = auto.guidance.inspection
     if inspection.enabled:
-        if sonar is None or auto.atr.detector == "none":
-            raise ValueError("autonomy.guidance.inspection needs a forward-looking sonar whose frames are processed "
-                             "(autonomy.atr.sonar_sensor) and a detector (autonomy.atr.detector not none)")
-        if auto.tracking.enabled or auto.guidance.buddy.enabled:
-            raise ValueError("autonomy.guidance.inspection cannot be combined with autonomy.tracking / buddy guidance")
+        if sonar is None:  # the scenario's validation refuses this; a hand-built Scenario may not have been
+            raise ValueError("autonomy.guidance.inspection needs a forward-looking sonar whose frames are processed")
         loc = auto.localization
         guidance = InspectionGuidance.from_config(
             survey, inspection, auto.guidance.los, swath_width_m=swath, fov_rad=sonar.geometry.fov_rad,
             range_sigma_m=loc.range_sigma_m, azimuth_sigma_rad=loc.azimuth_sigma_rad + loc.attitude_sigma_rad,
-            altitude_sigma_m=loc.altitude_sigma_m)
+            altitude_sigma_m=loc.altitude_sigma_m, tilt_rad=sonar.tilt_down_rad,
+            vertical_beam_rad=sonar.geometry.vertical_beamwidth_rad)
         region = np.asarray(plan_from_config(survey, swath).waypoints_ne_m)
     else:
         guidance = SurveyGuidance.from_config(survey, auto.guidance.los, swath_width_m=swath)

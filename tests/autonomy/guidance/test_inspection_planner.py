@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from autonomy.guidance.config import InspectionConfig, SurveyConfig
-from autonomy.guidance.inspection import coverage_spacing_m, plan_coverage
+from autonomy.guidance.inspection import coverage_spacing_m, leg_ranges_m, plan_coverage
 from autonomy.guidance.inspection_planner import (
     InspectionPlanner, LookRecord, PlannerParams, SurveyArea, brute_force_order, look_covariance,
     look_information, semi_major_2sigma_m, tour_length_m, tour_order)
@@ -196,3 +196,15 @@ def test_coverage_pass_is_centred_and_spaced_from_the_swath():
 def test_config_refuses_legs_that_end_before_they_start():
     with pytest.raises(ValueError, match="leg_start_range_m"):
         InspectionConfig(leg_start_range_m=4.0, leg_end_range_m=5.0)
+    with pytest.raises(ValueError, match="give both in m"):
+        InspectionConfig(leg_start_range_m="from_beam", leg_end_range_m=5.0)
+
+
+def test_leg_ranges_from_the_beam_put_the_object_a_quarter_beam_either_side_of_the_boresight():
+    cfg = InspectionConfig(leg_start_range_m="from_beam", leg_end_range_m="from_beam")
+    start, end = leg_ranges_m(cfg, 2.0, math.radians(15.0), math.radians(20.0))
+    assert math.degrees(math.atan2(2.0, start)) == pytest.approx(10.0)  # depression at the leg's start
+    assert math.degrees(math.atan2(2.0, end)) == pytest.approx(20.0)
+    assert leg_ranges_m(InspectionConfig(), 2.0, 0.2, 0.3) == (12.0, 5.0)
+    with pytest.raises(ValueError, match="from_beam"):
+        leg_ranges_m(cfg, 2.0, math.radians(3.0), math.radians(20.0))  # the far edge looks above the horizon

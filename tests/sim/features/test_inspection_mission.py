@@ -6,6 +6,7 @@ from __future__ import annotations
 import pytest
 
 from scenarios import load_scenario
+from scenarios.load import ScenarioError
 from sim.events.records import ObserverBase
 from sim.features import InspectionFeature
 from sim.events.records import InspectionGoal
@@ -69,7 +70,11 @@ def test_the_lawnmower_stays_the_default():
     assert type(parts.guidance).__name__ == "SurveyGuidance"
 
 
-def test_inspection_without_a_detector_is_refused():
-    scenario = load_scenario("cssn_inspect", ["autonomy.atr.detector=none"])
-    with pytest.raises(ValueError, match="autonomy.guidance.inspection needs"):
-        build_mission_parts(scenario, Physics(scenario), 0)
+@pytest.mark.parametrize("override, says", [
+    ("autonomy.atr.detector=none", "needs an enabled forward-looking sonar"),
+    ("sensors.fls.enabled=false", "needs an enabled forward-looking sonar"),
+    ("autonomy.guidance.buddy.enabled=true", "cannot fly with autonomy.tracking or buddy"),
+])
+def test_inspection_without_its_world_model_is_refused_at_load(override, says):
+    with pytest.raises(ScenarioError, match=says):
+        load_scenario("cssn_inspect", [override])
