@@ -195,10 +195,40 @@ def _override_for(loc: str, overrides: list[str] | tuple[str, ...]) -> str | Non
     return None
 
 
+_UNION_TAG = re.compile(r"^(constrained-float|constrained-int|float|int|bool|str|literal\[.*\])$")
+
+
+def _merged_union_errors(errors: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """One error per key for a value that fails every member of a union field (``4.0`` or
+    ``'from_swath'``): pydantic reports each member under a tag appended to the key; they
+    become one ``value_error`` listing what is allowed."""
+    out: list[dict[str, Any]] = []
+    groups: dict[tuple, dict[str, Any]] = {}
+    for err in errors:
+        loc = tuple(err["loc"])
+        if len(loc) >= 2 and _UNION_TAG.match(str(loc[-1])):
+            base = loc[:-1]
+            tag = str(loc[-1])
+            allowed = (tag[len("literal["):-1].replace("|", " or ") if tag.startswith("literal[")
+                       else "a number" + ("" if "constrained" not in tag else f" ({err['msg'].split('should be ', 1)[-1]})"
+                                          if "greater" in err["msg"] or "less" in err["msg"] else ""))
+            group = groups.get(base)
+            if group is None:
+                group = groups[base] = {"loc": base, "type": "value_error", "input": err.get("input"), "allowed": []}
+                out.append(group)
+            group["allowed"].append(allowed)
+        else:
+            out.append(err)
+    for group in groups.values():
+        group["msg"] = "allowed: " + " or ".join(dict.fromkeys(group.pop("allowed")))
+    return out
+
+
 def _format_validation_error(exc: ValidationError, source: str, overrides: list[str] | tuple[str, ...] = (),
                              data: dict[str, Any] | None = None) -> str:
-    lines = [f"{source}: invalid scenario ({exc.error_count()} error{'s' if exc.error_count() != 1 else ''})"]
-    for err in exc.errors(include_url=False):
+    errors = _merged_union_errors(exc.errors(include_url=False))
+    lines = [f"{source}: invalid scenario ({len(errors)} error{'s' if len(errors) != 1 else ''})"]
+    for err in errors:
         loc = ".".join(str(p) for p in err["loc"])
         # a check across sections (empty loc) names its keys in its message: credit the --set behind one
         keys = [loc] if loc else re.findall(r"\b[a-z_]+(?:\.[a-z_0-9]+)+\b", err["msg"])

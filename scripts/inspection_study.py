@@ -8,8 +8,9 @@ error of the matched targets, class accuracy of the matched true objects (target
 distractors), inspection legs aimed at objects that end up false, and the planner's re-plan
 cost (p99 over every re-plan of the run).
 
-    python scripts/inspection_study.py --seeds 0-4 --jobs 2 --json docs/studies/inspection_study.json
-    python scripts/inspection_study.py --layout mixed_targets_rough --equal-time --seeds 0-4 --jobs 2
+    python scripts/inspection_study.py --nav truth --seeds 0-4 --jobs 2 --json runs/insp_truth.json
+    python scripts/inspection_study.py --nav truth --layout mixed_targets_rough --equal-time --seeds 0-4 --jobs 2
+    python scripts/inspection_study.py --tabulate docs/studies/inspection_study.json   # the shipped figures' runs
 
 Layouts: ``cssn`` (cssn_lawnmower's world), ``mixed3``, ``mixed8``, ``mixed12``
 (scripts/world_model_layouts/) and any shipped scenario name or YAML path.
@@ -34,6 +35,7 @@ MATCH_RADIUS_M = 2.0
 
 
 def _seeds(text: str) -> list[int]:
+    """``0-4`` or ``0,2,5`` -> the seeds; ValueError when malformed or empty."""
     out: list[int] = []
     for part in text.split(","):
         if "-" in part:
@@ -41,6 +43,8 @@ def _seeds(text: str) -> list[int]:
             out += list(range(int(a), int(b) + 1))
         else:
             out.append(int(part))
+    if not out:
+        raise ValueError(text)
     return out
 
 
@@ -97,7 +101,7 @@ def run_one(args: tuple[str, int, str, float | None, tuple[str, ...], str]) -> d
         metrics: dict = {}
         feature.add_metrics(metrics, None)
         ins = metrics["inspection"]
-        out.update(legs_sent=ins["legs_sent"], legs_flown=ins["legs_flown"],
+        out.update(legs_sent=ins["legs_sent"], legs_started=ins["legs_started"], legs_completed=ins["legs_completed"],
                    legs_at_false_objects=ins["legs_at_false_objects"],
                    time_to_confident_map_s=ins["time_to_confident_map_s"], end_reason=ins["end_reason"])
     mission.close()
@@ -105,31 +109,72 @@ def run_one(args: tuple[str, int, str, float | None, tuple[str, ...], str]) -> d
 
 
 def _table(rows: list[dict]) -> list[str]:
+    """Per layout and navigation source: one row per variant, summed or averaged over seeds."""
     lines = []
-    for layout in dict.fromkeys(r["layout"] for r in rows):
-        lines.append(f"\n{layout}")
-        lines.append("  variant      time s   found/targets  false  mean err m  class acc  false legs  legs")
-        base = {r["seed"]: r for r in rows if r["layout"] == layout and r["variant"] == "lawnmower"}
-        for variant in dict.fromkeys(r["variant"] for r in rows if r["layout"] == layout):
-            rs = [r for r in rows if r["layout"] == layout and r["variant"] == variant]
+    head = (f"  {'variant':<11} {'time s':>7} {'ratio':>6} {'found':>8} {'false':>6} {'mean err m':>11} "
+            f"{'class acc':>10} {'legs sent':>10} {'at false':>9}")
+    for layout, nav in dict.fromkeys((r["layout"], r.get("nav_source", "estimate")) for r in rows):
+        here = [r for r in rows if r["layout"] == layout and r.get("nav_source", "estimate") == nav]
+        lines += [f"\n{layout} (nav: {nav}, {len({r['seed'] for r in here})} seeds)", head]
+        base = {r["seed"]: r for r in here if r["variant"] == "lawnmower"}
+        for variant in dict.fromkeys(r["variant"] for r in here):
+            rs = [r for r in here if r["variant"] == variant]
             t = np.mean([r["mission_time_s"] for r in rs])
             errs = [r["mean_error_m"] for r in rs if r["mean_error_m"] is not None]
             acc = sum(r["class_right"] for r in rs) / max(sum(r["class_matched"] for r in rs), 1)
-            ratio = (f" ({t / np.mean([base[r['seed']]['mission_time_s'] for r in rs if r['seed'] in base]):.2f}x)"
-                     if base and variant != "lawnmower" else "")
-            lines.append(
-                f"  {variant:<12} {t:6.0f}{ratio:<8} {sum(r['matched'] for r in rs):3d}/"
-                f"{sum(r['matched'] + r['missed'] for r in rs):<3d}        {sum(r['false'] for r in rs):3d}"
-                f"    {np.mean(errs) if errs else float('nan'):.3f}      {acc:.3f}     "
-                f"{sum(r.get('legs_at_false_objects', 0) for r in rs):3d}        {sum(r.get('legs_flown', 0) for r in rs)}")
+            paired = [base[r["seed"]]["mission_time_s"] for r in rs if r["seed"] in base]
+            ratio = f"{t / np.mean(paired):.2f}x" if paired and variant != "lawnmower" else "-"
+            found = f"{sum(r['matched'] for r in rs)}/{sum(r['matched'] + r['missed'] for r in rs)}"
+            legs = "-" if variant == "lawnmower" else str(sum(r.get("legs_sent", 0) for r in rs))
+            at_false = "-" if variant == "lawnmower" else str(sum(r.get("legs_at_false_objects", 0) for r in rs))
+            err = f"{np.mean(errs):.3f}" if errs else "n/a"
+            lines.append(f"  {variant:<11} {t:7.0f} {ratio:>6} {found:>8} {sum(r['false'] for r in rs):6d} {err:>11} "
+                         f"{acc:10.3f} {legs:>10} {at_false:>9}")
     return lines
+
+
+def _progress(r: dict) -> str:
+    err = "n/a" if r["mean_error_m"] is None else f"{r['mean_error_m']:.3f} m"
+    return (f"{r['layout']} seed {r['seed']} {r['variant']}: {r['mission_time_s']:.0f} s, {r['matched']}/"
+            f"{r['matched'] + r['missed']} found, {r['false']} false, mean error {err}")
+
+
+def plot(rows: list[dict], path: Path) -> None:
+    """Mission time against mean position error, one point per run, one panel per layout and
+    navigation source (the lawnmower's runs and the inspection's of the same seeds)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    layouts = list(dict.fromkeys(r["layout"] for r in rows))
+    navs = list(dict.fromkeys(r.get("nav_source", "estimate") for r in rows))
+    fig = Figure(figsize=(3.0 * len(layouts), 2.8 * len(navs)), layout="constrained")
+    FigureCanvasAgg(fig)
+    grid = fig.subplots(len(navs), len(layouts), squeeze=False)
+    axes = [grid[i, j] for i in range(len(navs)) for j in range(len(layouts))]
+    panels = [(layout, nav) for nav in navs for layout in layouts]
+    style = {"lawnmower": ("tab:blue", "s"), "inspect": ("tab:red", "o"), "equal_time": ("tab:purple", "^")}
+    for ax, (layout, nav) in zip(axes, panels):
+        for variant, (color, marker) in style.items():
+            rs = [r for r in rows if r["layout"] == layout and r.get("nav_source", "estimate") == nav
+                  and r["variant"] == variant and r["mean_error_m"] is not None]
+            if rs:
+                ax.scatter([r["mission_time_s"] for r in rs], [r["mean_error_m"] for r in rs], c=color, marker=marker,
+                           s=22, label=variant.replace("_", " "))
+        ax.set_title(f"{layout} (nav: {nav})", fontsize=9)
+        ax.set_xlabel("mission time (s)")
+        ax.set_ylim(bottom=0.0)
+        ax.grid(alpha=0.3)
+    for i in range(len(navs)):
+        grid[i, 0].set_ylabel("mean target position error (m)", fontsize=8)
+    axes[0].legend(fontsize=7)
+    fig.savefig(path, dpi=110)
 
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--layout", action="append", help="cssn, mixed3, mixed8, mixed12 or a scenario (repeatable; "
                     "default: the four)")
-    ap.add_argument("--seeds", default="0-4", help="e.g. 0-4 or 0,2,5")
+    ap.add_argument("--seeds", default="0-4", help="e.g. 0-4 or 0,2,5 (default 0-4)")
     ap.add_argument("--equal-time", action="store_true", help="also inspect until the lawnmower's mission time")
     ap.add_argument("--no-inspect", action="store_true", help="with --equal-time: skip the finish-when-confident runs")
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
@@ -139,9 +184,22 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--nav", choices=("estimate", "truth"), default="estimate",
                     help="pose for geolocalisation: estimate (the navigation filter's; its error dominates the map's) "
                          "or truth (paper 000's simulated evaluation: the map's own error)")
-    ap.add_argument("--jobs", type=int, default=1, help="processes (at most the cores)")
+    ap.add_argument("--jobs", type=int, default=1, help="processes, at most the cores (default 1)")
     ap.add_argument("--json", type=Path, help="write every run's figures here")
+    ap.add_argument("--png", type=Path, help="plot mission time against mean error per run here")
+    ap.add_argument("--tabulate", type=Path, nargs="+", metavar="JSON",
+                    help="run nothing: print the tables (and --png) of earlier --json files")
     a = ap.parse_args(argv)
+    if a.tabulate:
+        try:
+            rows = [r for f in a.tabulate for r in json.loads(f.read_text())]
+        except (OSError, ValueError) as exc:
+            print(f"--tabulate: cannot read {exc}", file=sys.stderr)
+            return 2
+        print("\n".join(_table(rows)))
+        if a.png:
+            plot(rows, a.png)
+        return 0
     layouts = a.layout or list(LAYOUTS)
     try:
         seeds = _seeds(a.seeds)
@@ -151,15 +209,18 @@ def main(argv: list[str] | None = None) -> int:
     if a.jobs < 1:
         print(f"--jobs: must be >= 1, got {a.jobs}", file=sys.stderr)
         return 2
-    from scenarios.load import resolve_path
+    from scenarios import load_scenario
+    from scenarios.load import ScenarioError, resolve_path
 
     for layout in layouts:
-        if layout not in LAYOUTS:
-            try:
+        try:
+            if layout not in LAYOUTS:
                 resolve_path(layout)
-            except (FileNotFoundError, ValueError) as exc:
-                print(f"--layout: {exc}", file=sys.stderr)
-                return 2
+            # the inspection runs' overrides, checked before any mission flies
+            load_scenario(LAYOUTS.get(layout, layout), ["autonomy.guidance.inspection.enabled=true", *a.set])
+        except (FileNotFoundError, ScenarioError, ValueError) as exc:
+            print(f"--layout {layout} / --set: {exc}".splitlines()[0], file=sys.stderr)
+            return 2
     rows: list[dict] = []
     extra = tuple(a.set)
     if a.lawnmower_json:
@@ -171,16 +232,18 @@ def main(argv: list[str] | None = None) -> int:
         if not (a.equal_time and a.no_inspect):
             first += [(lay, s, "inspect", None, extra, a.nav) for lay in layouts for s in seeds]
         for r in pool.map(run_one, first):
-            print(json.dumps(r), flush=True)
+            print(_progress(r), flush=True)
             rows.append(r)
         if a.equal_time:
             base = {(r["layout"], r["seed"]): r["mission_time_s"] for r in rows if r["variant"] == "lawnmower"}
             for r in pool.map(run_one, [(lay, s, "equal_time", base[(lay, s)], extra, a.nav) for lay in layouts for s in seeds]):
-                print(json.dumps(r), flush=True)
+                print(_progress(r), flush=True)
                 rows.append(r)
     print("\n".join(_table(rows)))
     if a.json:
         a.json.write_text(json.dumps(rows, indent=1))
+    if a.png:
+        plot(rows, a.png)
     return 0
 
 

@@ -20,7 +20,7 @@ phase                       what the vehicle does
 Modes: ``coverage_then_inspect`` (the whole pass, then the tour of legs, re-planned after
 each leg) and ``interleaved`` (a coverage leg is broken off for the confirmed, uncertain
 objects it has passed, out of the sonar's view and within ``interleave_radius_m``; coverage
-resumes where it was left). A leg being flown is kept while its object stays confirmed and
+rejoins the coverage path at its point nearest the vehicle). A leg being flown is kept while its object stays confirmed and
 not confident (else it is dropped); the tour after it is re-planned at every world-model update.
 """
 
@@ -112,6 +112,22 @@ def planner_params(cfg: InspectionConfig, survey: SurveyConfig, *, range_sigma_m
         max_legs_per_object=cfg.max_legs_per_object, area_margin_m=cfg.area_margin_m)
 
 
+def rejoin_path(path_ne_m: np.ndarray, pos_ne_m: ArrayLike) -> np.ndarray:
+    """The rest of a polyline ((k, 2) m) from its point nearest ``pos_ne_m``: that point, then
+    the vertices after it (the part before it was in the sonar's view on the way back)."""
+    path = np.asarray(path_ne_m, dtype=float).reshape(-1, 2)
+    p = np.asarray(pos_ne_m, dtype=float)[:2]
+    if len(path) == 1:
+        return path.copy()
+    a, b = path[:-1], path[1:]
+    d = b - a
+    L2 = np.maximum(np.sum(d * d, axis=1), 1e-12)
+    u = np.clip(np.sum((p - a) * d, axis=1) / L2, 0.0, 1.0)
+    q = a + u[:, None] * d
+    k = int(np.argmin(np.linalg.norm(q - p, axis=1)))
+    return np.vstack([q[k][None], path[k + 1:]])
+
+
 @dataclass(frozen=True, slots=True)
 class InspectionEvent:
     """One entry of the guidance's log: ``event`` is ``leg_start`` (the leg's first waypoint
@@ -148,8 +164,10 @@ class InspectionGuidance:
 
     def __init__(self, coverage: LawnmowerPlan, planner: InspectionPlanner, cfg: InspectionConfig, speed_mps: float,
                  los: LosConfig = LosConfig(), *, depth_m: float | None = None, altitude_m: float | None = None,
-                 fov_rad: float = math.radians(130.0)) -> None:
+                 fov_rad: float = math.radians(130.0), coverage_spacing_m: float | None = None) -> None:
         self.plan = coverage
+        #: The spacing the coverage pass was planned with, m (from the swath or the config).
+        self.coverage_spacing_m = coverage_spacing_m
         self.planner = planner
         self.cfg = cfg
         self.fov_rad = float(fov_rad)
@@ -173,14 +191,16 @@ class InspectionGuidance:
         Raises:
             ValueError: see :func:`coverage_spacing_m`.
         """
-        coverage = plan_coverage(survey, coverage_spacing_m(cfg, swath_width_m))
+        spacing = coverage_spacing_m(cfg, swath_width_m)
+        coverage = plan_coverage(survey, spacing)
         planner = InspectionPlanner(planner_params(cfg, survey, range_sigma_m=range_sigma_m,
                                                    azimuth_sigma_rad=azimuth_sigma_rad,
                                                    altitude_sigma_m=altitude_sigma_m, tilt_rad=tilt_rad,
                                                    vertical_beam_rad=vertical_beam_rad), survey_area(survey))
         altitude_mode = survey.vertical_mode == "altitude"
         return cls(coverage, planner, cfg, survey.speed_mps, los, depth_m=None if altitude_mode else survey.depth_m,
-                   altitude_m=survey.altitude_m if altitude_mode else None, fov_rad=fov_rad)
+                   altitude_m=survey.altitude_m if altitude_mode else None, fov_rad=fov_rad,
+                   coverage_spacing_m=spacing)
 
     def _reset_state(self) -> None:
         self.phase = "coverage"
@@ -202,6 +222,11 @@ class InspectionGuidance:
     @property
     def finished(self) -> bool:
         return self.phase == "done"
+
+    @property
+    def mode_label(self) -> str:
+        """``inspect`` while a leg is flown, else ``survey`` (the coverage pass)."""
+        return "inspect" if self.phase == "inspect" else "survey"
 
     @property
     def errors(self):
@@ -304,14 +329,15 @@ class InspectionGuidance:
         if self.phase != "done" and t_s >= self.cfg.time_budget_s:
             self._finish(t_s, "budget")
         if self.phase == "coverage":
-            if self.cfg.mode == "interleaved" and self._dirty:
-                self._dirty = False
+            m = self.follower.manager
+            if self.cfg.mode == "interleaved" and self._dirty and m.index >= 1 and not m.finished:
+                self._dirty = False  # on the coverage path (its first waypoint reached)
                 passed = self._passed_candidates()
                 if passed:
-                    m = self.follower.manager
                     self._resume = np.vstack([self._pos[None], m.waypoints_ne_m[m.index:]])
                     self._break_off = passed
-                    self._log(t_s, "break_off", None, ",".join(str(leg.object_id) for leg in passed))
+                    self._log(t_s, "break_off", passed[0].object_id,
+                              "objects " + ",".join(str(leg.object_id) for leg in passed))
                     self._next_leg(t_s)
             if self.phase == "coverage" and self.follower.finished:
                 self._log(t_s, "coverage_done")
@@ -337,8 +363,8 @@ class InspectionGuidance:
         """After the coverage or a leg: the next leg, else resume coverage, else done."""
         if self._next_leg(t_s):
             return
-        if self._resume is not None:  # interleaved: back to where coverage was left
-            self._fly(self._resume)
+        if self._resume is not None:  # interleaved: rejoin the coverage path left, at its nearest point
+            self._fly(rejoin_path(self._resume, self._pos))
             self._resume = None
             self._break_off = []
             self.phase = "coverage"
@@ -365,5 +391,5 @@ class InspectionGuidance:
         return out
 
 
-__all__ = ["InspectionEvent", "InspectionGuidance", "coverage_spacing_m", "leg_ranges_m", "plan_coverage", "planner_params",
+__all__ = ["InspectionEvent", "InspectionGuidance", "coverage_spacing_m", "leg_ranges_m", "rejoin_path", "plan_coverage", "planner_params",
            "survey_area"]

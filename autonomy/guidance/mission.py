@@ -61,7 +61,10 @@ class MissionFsm:
 
     @property
     def mode(self) -> str:
-        """Current state name: idle, dive, survey, surface, abort or done."""
+        """Current state name: idle, dive, survey, surface, abort or done; while surveying, the
+        guidance's own ``mode_label`` (``inspect`` on an inspection leg)."""
+        if self.state is MissionState.SURVEY:
+            return self.guidance.mode_label
         return self.state.value
 
     @property

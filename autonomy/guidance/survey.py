@@ -107,6 +107,9 @@ class SurveyGuidance:
         guidance.plan = plan
         return guidance
 
+    #: The mission mode while this guidance flies (:attr:`autonomy.guidance.mission.MissionFsm.mode`).
+    mode_label = "survey"
+
     @property
     def finished(self) -> bool:
         return self.manager.finished

@@ -20,6 +20,7 @@ import numpy as np
 
 from autonomy.guidance.config import InspectionConfig, LosConfig, SurveyConfig
 from autonomy.guidance.inspection import InspectionGuidance
+from autonomy.guidance.inspection_planner import PlannerParams
 
 GOAL_REPLAN_MS_P99 = 10.0
 
@@ -78,15 +79,19 @@ def measure(n_objects: int, seed: int = 0, replans: int = 60, repeats: int = 3) 
             "exact_tour": n_objects <= guidance.planner.params.exact_tour_max}
 
 
-def run(table_objects: tuple[int, ...] = (3, 6, 8, 9, 12, 24, 48), seed: int = 0) -> dict:
-    """The re-plan cost table; the headline is the worst p99 over the table's sizes up to 24
-    objects (the shipped layouts hold 3-12)."""
+def run(table_objects: tuple[int, ...] = (3, 6, 7, 8, 12, 24, 48), seed: int = 0) -> dict:
+    """The re-plan cost table over 3 to 48 uncertain objects (the shipped layouts hold 3-12);
+    the headline is the worst p99 over the whole table."""
     table = [measure(n, seed) for n in table_objects]
-    worst = max(r["replan_ms_p99"] for r in table if r["n_objects"] <= 24)
-    return {"replan_ms_p99_worst_to_24": worst, "goal_replan_ms_p99": GOAL_REPLAN_MS_P99,
-            "meets_goal": worst <= GOAL_REPLAN_MS_P99, "table": table,
-            "note": "process CPU time per re-plan (look bookkeeping + a heading per object + the tour), fastest of "
-                    "3 repeats; exact Held-Karp tour up to exact_tour_max legs, nearest neighbour + 2-opt above"}
+    worst = max(r["replan_ms_p99"] for r in table)
+    worst_single = max(r["replan_ms_p99_single_shot"] for r in table)
+    return {"replan_ms_p99_worst": worst, "replan_ms_p99_single_shot_worst": worst_single,
+            "goal_replan_ms_p99": GOAL_REPLAN_MS_P99, "meets_goal": worst <= GOAL_REPLAN_MS_P99,
+            "objects_range": [min(table_objects), max(table_objects)], "table": table,
+            "note": "process CPU time per re-plan (look bookkeeping, a heading per object, the tour); replan_ms_*: "
+                    "the fastest of 3 repeats of each re-plan (what the code costs), *_single_shot: the first try "
+                    "(what a busy machine adds); exact Held-Karp tour up to "
+                    f"{PlannerParams().exact_tour_max} legs, nearest neighbour + 2-opt above"}
 
 
 if __name__ == "__main__":

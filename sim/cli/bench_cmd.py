@@ -13,6 +13,7 @@ from sim.cli.args import non_negative_int, positive_int
 from sim.cli.errors import CliError
 from sim.cli.scenario_cmds import DEFAULT_SCENARIO, add_scenario_args, load_scenario_noting, refuse_sweep_only
 
+SLOW_BENCHES = ("mission", "gym", "export", "dataset", "atr", "fls")  # a minute or more
 OPTION_BENCHES = {"workers": ("mission", "gym", "dataset"), "sonar": ("mission",), "model": ("atr",)}  # benches taking each option
 
 
@@ -49,8 +50,8 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         raise CliError("--workers: times the pipelined sonar against the serial loop; not with --no-sonar "
                        "(drop one of them)")
     what = f" on {scenario.name}" if "scenario" in params else ""
-    print(f"bench {args.name}{what}: running; its figures come at the end (minutes for mission, gym and export "
-          "on a loaded machine)", file=sys.stderr, flush=True)
+    slow = " (minutes on a loaded machine)" if args.name in SLOW_BENCHES else ""
+    print(f"bench {args.name}{what}: running; its figures come at the end{slow}", file=sys.stderr, flush=True)
     if "scenario" in params:
         result = bench(scenario, **options)
     else:
@@ -59,8 +60,21 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         print(json.dumps(result))
     else:
         for key, value in result.items():
-            print(f"{key:28s} {value}")
+            if isinstance(value, list) and value and all(isinstance(v, dict) for v in value):
+                print(f"{key}:")
+                print("\n".join("  " + line for line in table_lines(value)))
+            else:
+                print(f"{key:28s} {value}")
     return 0
+
+
+def table_lines(rows: list[dict]) -> list[str]:
+    """Rows of dicts as aligned text columns (the keys of the first row, in order)."""
+    keys = list(dict.fromkeys(k for r in rows for k in r))
+    cells = [[str(r.get(k, "")) for k in keys] for r in rows]
+    widths = [max(len(k), *(len(c[i]) for c in cells)) for i, k in enumerate(keys)]
+    return ["  ".join(k.rjust(w) for k, w in zip(keys, widths))] + [
+        "  ".join(c.rjust(w) for c, w in zip(row, widths)) for row in cells]
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:

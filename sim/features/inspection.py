@@ -114,8 +114,11 @@ class InspectionFeature(MissionFeature):
         leg["t_end_s"] = round(t_s, 2)
         ends = [e for e in self.guidance.events if e.object_id == leg["object_id"] and e.event in ("leg_end", "leg_dropped")
                 and e.t_s >= leg["t_assigned_s"] - 1e-9]
-        leg["outcome"] = "flown" if ends and ends[-1].event == "leg_end" else (
-            f"dropped: {ends[-1].detail}" if ends else "stopped")
+        started = any(e.event == "leg_start" and e.object_id == leg["object_id"] and e.t_s >= leg["t_assigned_s"] - 1e-9
+                      for e in self.guidance.events)
+        leg["started"] = started
+        leg["outcome"] = "completed" if ends and ends[-1].event == "leg_end" else (
+            f"ended early: {ends[-1].detail}" if ends else "stopped: mission ended")
         obj = self._object(leg["object_id"])
         leg["wm_2sigma_after_m"] = None if obj is None else round(semi_major_2sigma_m(obj.cov_ned[:2, :2]), 4)
         leg["look_2sigma_after_m"] = None if obj is None else round(self.guidance.planner.look_2sigma_m(obj), 4)
@@ -153,21 +156,34 @@ class InspectionFeature(MissionFeature):
                 wm_2sigma_m=round(semi_major_2sigma_m(obj.cov_ned[:2, :2]), 4),
                 look_2sigma_m=round(g.planner.look_2sigma_m(obj), 4)))
         coverage_done = next((e.t_s for e in g.events if e.event == "coverage_done"), None)
+        rnd = (lambda v: None if v is None else round(float(v), 2))
+        breaks = [e for e in g.events if e.event in ("break_off", "resume")]
         metrics["inspection"] = dict(
-            mode=cfg.mode, coverage_legs=int(g.plan.n_legs), coverage_spacing_m=round(float(g.plan.leg_spacing_m), 3)
-            if g.plan.n_legs > 1 else None, coverage_path_m=round(g.plan.path_length_m(), 2),
-            coverage_done_t_s=coverage_done, time_to_confident_map_s=g.confident_t_s,
+            mode=cfg.mode, coverage_legs=int(g.plan.n_legs), coverage_spacing_m=rnd(g.coverage_spacing_m),
+            coverage_path_m=round(g.plan.path_length_m(), 2),
+            coverage_done_t_s=rnd(coverage_done), time_to_confident_map_s=rnd(g.confident_t_s),
             end_reason=next((e.event for e in reversed(g.events) if e.event not in ("done", "leg_dropped")), None),
-            legs_sent=len(self.legs), legs_flown=sum(1 for leg in self.legs if leg["outcome"] == "flown"),
+            legs_sent=len(self.legs), legs_started=sum(1 for leg in self.legs if leg.get("started")),
+            legs_completed=sum(1 for leg in self.legs if leg["outcome"] == "completed"),
+            legs_ended_early=sum(1 for leg in self.legs if str(leg["outcome"]).startswith("ended early")),
+            break_offs=sum(1 for e in breaks if e.event == "break_off"),
             legs_at_false_objects=false_legs, objects=per_object,
             legs=[{k: v for k, v in leg.items() if k not in ("cov_before_ned", "pos_before_ned")} for leg in self.legs],
             events=[dict(t_s=round(e.t_s, 2), event=e.event, object_id=e.object_id, detail=e.detail) for e in g.events],
             note=("time_to_confident_map_s: mission time at which the planner first judged every confirmed object "
-                  "confident (null: never); legs_at_false_objects: legs aimed at objects that end up false (not in the "
-                  f"final world model, or more than {FALSE_RADIUS_M} m from every true object)"))
+                  "confident (null: never). A leg is sent when the planner aims the vehicle at an object, started when "
+                  "its first waypoint is reached, completed at its end, ended early when its object turns confident "
+                  "(the looks on the way sufficed) or unconfirmed. legs_at_false_objects: legs aimed at objects that "
+                  f"end up false (not in the final world model, or more than {FALSE_RADIUS_M} m from every true "
+                  "object). Two uncertainties: look_2sigma_m is the planner's look-geometry model (aspects and ranges "
+                  "of the looks; the legs shrink it and it decides confidence); wm_2sigma_m is the world model's "
+                  "covariance, which also holds the navigation error shared by all looks and so grows with the "
+                  "mission's navigation uncertainty even as looks are added. aspects: bearings (30 deg apart) the "
+                  "object was detected from; closest_look_m: shortest ground range of a detection"))
 
     def map_layers(self, layers: dict[str, Any]) -> None:
         legs = [(np.asarray(leg["start_ne_m"]), np.asarray(leg["end_ne_m"]), leg["object_id"]) for leg in self.legs]
+        breaks = [(e.event, e.pos_ne_m) for e in self.guidance.events if e.event in ("break_off", "resume", "coverage_done")]
         before = [(np.asarray(leg["pos_before_ned"]), np.asarray(leg["cov_before_ned"])) for leg in self.legs
                   if leg.get("cov_before_ned") is not None]
         path = list(self._phase_path)
@@ -177,20 +193,30 @@ class InspectionFeature(MissionFeature):
 
             pts = np.array([[n, e] for _, n, e in path]) if path else np.zeros((0, 2))
             inspect = np.array([ph == "inspect" for ph, _, _ in path])
-            if len(pts):
+            if len(pts) and inspect.any():
                 seg = np.where(inspect, pts[:, 0], np.nan), np.where(inspect, pts[:, 1], np.nan)
                 ax.plot(seg[1], seg[0], "-", color="tab:red", lw=2.4, alpha=0.55, zorder=2.4,
-                        label="inspection legs (flown)")
+                        label="path while on inspection legs")
             for k, (s, e, oid) in enumerate(legs):
                 ax.annotate("", xy=(e[1], e[0]), xytext=(s[1], s[0]), zorder=2.6,
-                            arrowprops=dict(arrowstyle="->", color="tab:red", lw=1.0, ls=":"))
-                ax.text(s[1], s[0], f"{k + 1}", color="tab:red", fontsize=7, zorder=2.7)
+                            arrowprops=dict(arrowstyle="->", color="darkred", lw=1.0, ls=":"))
+                ax.text(s[1], s[0], f"L{k + 1}", color="darkred", fontsize=6.5, zorder=2.7,
+                        bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="darkred", lw=0.5))
+            if legs:
+                ax.plot([], [], ls=":", color="darkred", lw=1.0, label="planned legs L1, L2, ... (in order)")
+            marks = {"coverage_done": ("k", "|", "coverage pass ends"), "break_off": ("tab:orange", "v", "break-off"),
+                     "resume": ("tab:green", "^", "coverage resumed")}
+            for kind, (color, marker, label) in marks.items():
+                at = [p for ev, p in breaks if ev == kind and p is not None]
+                if at:
+                    ax.plot([p[1] for p in at], [p[0] for p in at], ls="none", marker=marker, color=color, ms=7,
+                            zorder=2.9, label=label)
             for j, (pos, cov) in enumerate(before):
                 vals, vecs = np.linalg.eigh(cov)
                 ang = math.degrees(math.atan2(vecs[0, 1], vecs[1, 1]))  # x east, y north
                 ax.add_patch(Ellipse((pos[1], pos[0]), 4.0 * math.sqrt(max(vals[1], 0)), 4.0 * math.sqrt(max(vals[0], 0)),
                                      angle=ang, fill=False, ls="--", color="tab:purple", lw=0.9, zorder=2.8,
-                                     label="2-sigma before inspection" if j == 0 else None))
+                                     label="world-model 2-sigma when its leg was planned" if j == 0 else None))
 
         layers["overlays"].append(draw)
         if legs:
@@ -204,9 +230,11 @@ class InspectionFeature(MissionFeature):
         objs = ins["objects"]
         n_conf = sum(1 for o in objs if o["confirmed"])
         n_ok = sum(1 for o in objs if o["confirmed"] and o["confident"])
-        return [f"inspection ({ins['mode']}): {ins['coverage_legs']} coverage leg(s), {ins['legs_flown']} of "
-                f"{ins['legs_sent']} inspection legs flown, {ins['legs_at_false_objects']} aimed at false objects; "
-                f"{n_ok}/{n_conf} confirmed objects confident, confident map at "
+        breaks = f", {ins['break_offs']} break-off(s)" if ins.get("break_offs") else ""
+        return [f"inspection ({ins['mode']}): {ins['coverage_legs']} coverage leg(s){breaks}; {ins['legs_sent']} "
+                f"inspection leg(s) sent, {ins['legs_started']} started, {ins['legs_completed']} completed, "
+                f"{ins['legs_ended_early']} ended early (object confident on the way), {ins['legs_at_false_objects']} "
+                f"aimed at false objects; {n_ok}/{n_conf} confirmed objects confident, confident map at "
                 f"{_fmt(ins['time_to_confident_map_s'], '.0f', ' s')}; ended: {ins['end_reason']}"]
 
 

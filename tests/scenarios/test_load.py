@@ -110,3 +110,15 @@ def test_cli_errors_without_traceback(tmp_path):
 def test_cli_lists_scenarios(capsys):
     assert main(["scenarios"]) == 0
     assert "cssn_lawnmower" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("override, allowed", [
+    ("autonomy.guidance.survey.leg_spacing_m=from_swat", "allowed: a number or 'from_swath' (got 'from_swat')"),
+    ("autonomy.guidance.inspection.coverage_spacing_m=-3", "allowed: a number (greater than 0) or 'from_swath' (got -3)"),
+])
+def test_a_value_failing_every_member_of_a_union_is_one_line(override, allowed):
+    with pytest.raises(ScenarioError) as err:
+        load_scenario("cssn_inspect", [override])
+    text = str(err.value)
+    assert "\n" not in text and allowed in text and "constrained-float" not in text
+    assert override.split("=")[0] in text

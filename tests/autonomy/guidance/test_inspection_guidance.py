@@ -9,7 +9,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from autonomy.guidance.config import InspectionConfig, LosConfig, SurveyConfig
-from autonomy.guidance.inspection import InspectionGuidance
+from autonomy.guidance.inspection import InspectionGuidance, rejoin_path
 from autonomy.messages import NavEstimate
 
 SURVEY = SurveyConfig(origin_ne_m=(8.0, 0.0), leg_heading_deg=90.0, length_m=32.0, width_m=16.0, speed_mps=0.5,
@@ -99,6 +99,8 @@ def test_interleaved_breaks_off_and_resumes_coverage():
     events = [e.event for e in g.events]
     assert "break_off" in events and "resume" in events
     assert events.index("break_off") < events.index("resume") < events.index("coverage_done")
+    brk = next(e for e in g.events if e.event == "break_off")
+    assert brk.object_id == 0 and abs(brk.pos_ne_m[0]) < 2.0, "breaks off on the coverage line, not on the way to it"
     assert aimed == [0]
     assert path[:, 1].max() > 30.0, "coverage resumed to the end of the leg (E 32 m)"
 
@@ -109,3 +111,10 @@ def test_time_budget_ends_the_mission():
     _, _, t = fly(g, [Obj(0, np.array([-7.0, 12.0, 4.0]))])
     assert g.finished and 30.0 <= t <= 30.2
     assert [e.event for e in g.events][-2:] == ["budget", "done"]
+
+
+def test_rejoin_path_starts_at_the_nearest_point_of_the_rest():
+    path = np.array([[0.0, 0.0], [0.0, 10.0], [-4.0, 10.0], [-4.0, 0.0]])
+    np.testing.assert_allclose(rejoin_path(path, (1.0, 6.0)), [[0.0, 6.0], [0.0, 10.0], [-4.0, 10.0], [-4.0, 0.0]])
+    np.testing.assert_allclose(rejoin_path(path, (-5.0, 3.0)), [[-4.0, 3.0], [-4.0, 0.0]])
+    np.testing.assert_allclose(rejoin_path(path[:1], (3.0, 3.0)), path[:1])

@@ -24,9 +24,13 @@ SHORT = ["world.targets=[{name: OPI1, shape: half_sphere, pos_ned: [0.0, 10.0, 4
 class Goals(ObserverBase):
     def __init__(self) -> None:
         self.goals: list[InspectionGoal] = []
+        self.modes: set[str] = set()
 
     def on_start(self, info): pass
     def on_end(self, summary): pass
+
+    def on_step(self, record):
+        self.modes.add(record.mode)
 
     def on_message(self, name, msg):
         if isinstance(msg, InspectionGoal):
@@ -42,17 +46,20 @@ def flown():
     feature = mission.feature(InspectionFeature)
     metrics: dict = {}
     feature.add_metrics(metrics, None)
-    yield summary, metrics["inspection"], goals.goals, mission.perception.world_model_metrics()
+    yield summary, metrics["inspection"], goals, mission.perception.world_model_metrics()
     mission.close()
 
 
 def test_a_target_seen_from_afar_is_inspected_and_its_look_ellipse_shrinks(flown):
-    summary, ins, goals, wm = flown
+    summary, ins, seen, wm = flown
+    goals = seen.goals
+    assert {"survey", "inspect", "surface"} <= seen.modes  # the step records' mode names the leg
+    assert ins["legs_started"] >= 1 and ins["legs_sent"] == ins["legs_completed"] + ins["legs_ended_early"]
     assert summary.finished and not summary.aborted
     assert wm["matched"] == 2 and wm["false"] == 0
     assert ins["legs"], "OPI4, seen from the centre line only, is sent a leg"
     for leg in ins["legs"]:  # flown to its end, or ended early once the looks on the way made it confident
-        assert leg["outcome"] in ("flown", "dropped: object confident"), leg
+        assert leg["outcome"] in ("completed", "ended early: object confident"), leg
         assert leg["look_2sigma_after_m"] < leg["look_2sigma_before_m"] * 0.9
         assert leg["t_end_s"] > leg["t_assigned_s"]
     assert ins["legs_at_false_objects"] == 0
