@@ -224,6 +224,11 @@ class InspectionGuidance:
         return self.phase == "done"
 
     @property
+    def pos_ne_m(self) -> np.ndarray:
+        """(2,) the vehicle's position at the last update (navigation estimate), m NED."""
+        return self._pos.copy()
+
+    @property
     def mode_label(self) -> str:
         """``inspect`` while a leg is flown, else ``survey`` (the coverage pass)."""
         return "inspect" if self.phase == "inspect" else "survey"

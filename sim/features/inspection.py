@@ -94,11 +94,10 @@ class InspectionFeature(MissionFeature):
                     cov_before_ned=None if obj is None else np.asarray(obj.cov_ned)[:2, :2].tolist(),
                     pos_before_ned=None if obj is None else np.asarray(obj.pos_ned).tolist()))
             self._leg = g.leg
-        if self._phase_path is not None and g.phase != "done":
-            p = g._pos
+        if g.phase != "done":  # the path by phase, a point a second (and at each change), for the map
+            p = g.pos_ne_m
             if not self._phase_path or self._phase_path[-1][0] != g.phase or t_s - self._t_s >= 1.0:
-                self._phase_path.append((g.phase if g.leg is None or g.phase != "inspect" else "inspect",
-                                         float(p[0]), float(p[1])))
+                self._phase_path.append((g.phase, float(p[0]), float(p[1])))
                 self._t_s = t_s
         goal = g.goal
         key = None if goal is None else (goal["phase"], goal.get("object_id"), tuple(goal["tour"]))
