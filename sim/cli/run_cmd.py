@@ -57,12 +57,15 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from sim.mission.run import run_mission
 
     overrides = list(args.overrides)
+    flags: dict[str, str] = {}
     if args.seed is not None:
         overrides.append(f"seed={args.seed}")
+        flags[overrides[-1]] = f"--seed {args.seed}"
     if args.detector is not None:
         overrides.append(f"autonomy.atr.detector={args.detector}")
+        flags[overrides[-1]] = f"--detector {args.detector}"
     refuse_sweep_only(args.scenario, "run")
-    scenario = load_scenario_noting(args.scenario, overrides, "run")
+    scenario = load_scenario_noting(args.scenario, overrides, "run", flags)
     rosbag, ping360_log, xtf = (_optional_output(args, scenario, *spec) for spec in OPTIONAL_OUTPUTS)
     fls_every = args.rosbag_fls_every if args.rosbag_fls_every is not None else scenario.outputs.rosbag_fls_every
     metrics = run_mission(scenario, args.out, nav_source=args.nav, rerun=not args.no_rerun,

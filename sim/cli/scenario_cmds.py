@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from scenarios.load import list_scenarios, load_scenario
+from scenarios.load import ScenarioError, list_scenarios, load_scenario
 from sim.cli.errors import CliError
 
 DEFAULT_SCENARIO = "cssn_lawnmower"
@@ -20,11 +20,21 @@ def add_scenario_args(p: argparse.ArgumentParser, *, positional: bool = True) ->
                    help="dotted override, e.g. --set vehicle.mass_kg=36 (repeatable; values parsed as YAML)")
 
 
-def load_scenario_noting(name: str, overrides: list[str], command: str):
+def load_scenario_noting(name: str, overrides: list[str], command: str, flags: dict[str, str] | None = None):
     """:func:`scenarios.load.load_scenario`, its notes (a preset's defaults replacing the
-    file's values) printed to stderr as ``auvsim COMMAND: note: ...``."""
+    file's values) printed to stderr as ``auvsim COMMAND: note: ...``. ``flags``: override item
+    -> the command-line option it came from (``--detector none``), which an error then names
+    instead of ``--set``."""
     notes: list[str] = []
-    scenario = load_scenario(name, overrides, notes=notes)
+    try:
+        scenario = load_scenario(name, overrides, notes=notes)
+    except ScenarioError as exc:
+        text = str(exc)
+        for item, flag in (flags or {}).items():
+            text = text.replace(f"(from --set {item})", f"(from {flag})")
+        if text == str(exc):
+            raise
+        raise ScenarioError(text) from None
     for line in notes:
         print(f"auvsim {command}: note: {line}", file=sys.stderr, flush=True)
     return scenario

@@ -419,3 +419,12 @@ def test_render_fls_example_needs_out_and_leaves_the_docs_figure_alone(capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "render_fls_example.py: error:" in err[0] and "--out" in err[0], err
     assert (hashlib.sha256(figure.read_bytes()).hexdigest(), figure.stat().st_mtime_ns) == before
+
+
+@pytest.mark.parametrize("args, flag", [(["--detector", "none"], "(from --detector none)"),
+                                        (["--set", "autonomy.atr.detector=none"], "(from --set autonomy.atr.detector=none)")])
+def test_an_error_names_the_option_that_set_the_value(sandbox, capsys, args, flag):
+    code, err = run_cli(["run", "cssn_inspect", "--out", "runs/insp", *args], capsys)
+    assert_clean_error(code, err, flag)
+    assert len(err.strip().splitlines()) == 1
+    assert not (sandbox / "runs" / "insp").exists()
