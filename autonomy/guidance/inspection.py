@@ -286,12 +286,13 @@ class InspectionGuidance:
         self._log(t_s, why)
         self._log(t_s, "done")
 
-    def _object(self, object_id: int):
+    def object_by_id(self, object_id: int):
+        """The world-model object ``object_id`` of the last update, or None."""
         return next((o for o in self.objects if o.id == object_id), None)
 
     def _leg_still_wanted(self) -> str | None:
         """None when the current leg is still wanted, else why not."""
-        obj = self._object(self.leg.object_id)
+        obj = self.object_by_id(self.leg.object_id)
         if obj is None:
             return "object left the world model"
         if not self.planner.confirmed(obj):

@@ -64,17 +64,12 @@ class InspectionFeature(MissionFeature):
         self.legs: list[dict[str, Any]] = []
         self._leg = None
         self._last_goal: tuple | None = None
-        self._last_objects: tuple = ()
         self._phase_path: list[tuple[str, float, float]] = []
         self._t_s = 0.0
 
     def _on_result(self, name: str, result: PerceptionResult) -> None:
         with self._ports.timer.stage("inspection_planner"):
             self.guidance.on_world_model(result.t_s, result.world_objects)
-        self._last_objects = tuple(result.world_objects)
-
-    def _object(self, object_id: int):
-        return next((o for o in self._last_objects if o.id == object_id), None)
 
     def end_of_step(self) -> None:
         g = self.guidance
@@ -83,7 +78,7 @@ class InspectionFeature(MissionFeature):
             if self._leg is not None and self.legs and self.legs[-1]["t_end_s"] is None:
                 self._close_leg(t_s)
             if g.leg is not None:
-                obj = self._object(g.leg.object_id)
+                obj = self.guidance.object_by_id(g.leg.object_id)
                 self.legs.append(dict(
                     object_id=g.leg.object_id, heading_deg=round(math.degrees(g.leg.heading_rad), 1),
                     start_ne_m=[round(v, 3) for v in g.leg.start_ne_m], end_ne_m=[round(v, 3) for v in g.leg.end_ne_m],
@@ -118,7 +113,7 @@ class InspectionFeature(MissionFeature):
         leg["started"] = started
         leg["outcome"] = "completed" if ends and ends[-1].event == "leg_end" else (
             f"ended early: {ends[-1].detail}" if ends else "stopped: mission ended")
-        obj = self._object(leg["object_id"])
+        obj = self.guidance.object_by_id(leg["object_id"])
         leg["wm_2sigma_after_m"] = None if obj is None else round(semi_major_2sigma_m(obj.cov_ned[:2, :2]), 4)
         leg["look_2sigma_after_m"] = None if obj is None else round(self.guidance.planner.look_2sigma_m(obj), 4)
 
@@ -128,8 +123,8 @@ class InspectionFeature(MissionFeature):
 
     # -- a run's outputs -------------------------------------------------------------------
     def _final_objects(self) -> list:
-        feature = next((f for f in (self.ctx.features.get(SurveyPerceptionFeature),) if f is not None), None)
-        return feature.results().world_objects() if feature is not None else list(self._last_objects)
+        feature = self.ctx.features.get(SurveyPerceptionFeature)
+        return feature.results().world_objects() if feature is not None else list(self.guidance.objects)
 
     def add_metrics(self, metrics: dict[str, Any], log: Any) -> None:
         g, cfg = self.guidance, self.ctx.scenario.autonomy.guidance.inspection
