@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from scenarios.config.world import BathymetryFileConfig
+from autonomy.guidance.survey import plan_from_config
 
 KEY = "world.seabed.file"
 
@@ -162,8 +163,6 @@ def read_depth_grid(cfg: BathymetryFileConfig) -> DepthGrid:
 def bathymetry_problems(scenario) -> list[str]:
     """Placement problems of a ``kind: file`` seabed: the file itself, and the vehicle start,
     survey waypoints and targets lying outside the grid or over nodata, or below the bed."""
-    from autonomy.guidance.survey import plan_from_config
-
     try:
         grid = read_depth_grid(scenario.world.seabed.file)
     except BathymetryError as exc:

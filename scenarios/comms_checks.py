@@ -41,6 +41,7 @@ import numpy as np
 from autonomy.comms import wire
 from autonomy.comms.messages import DETECTION_TYPE, USBL_FIX_TYPE, message_size_bytes
 from scenarios.schema import Scenario
+from scenarios.bathymetry import BathymetryError, read_depth_grid
 
 #: Range sigmas of a USBL fix's error allowed for in the depth envelope.
 USBL_SIGMAS = 4.0
@@ -59,8 +60,6 @@ def deepest_seabed_m(scenario: Scenario) -> tuple[float, str]:
 
     c = scenario.world.seabed
     if c.kind == "file":
-        from scenarios.bathymetry import BathymetryError, read_depth_grid
-
         try:
             grid = read_depth_grid(c.file)
         except BathymetryError:

@@ -19,6 +19,15 @@ import yaml
 from pydantic import ValidationError
 
 from scenarios.schema import Scenario, without_default_gps_indoors
+from scenarios.config.sensor import DEFAULT_ENTRIES, sensor_config_kinds
+from scenarios.config.fls import PRESET_KEYS, FlsConfig, FlsPresetName
+from scenarios.fls_presets import PRESETS, resolve_geometry
+from autonomy.atr.model_file import ModelFileError
+from scenarios.sensor_links import atr_sonar_name, sensor_link_problems
+from scenarios.comms_checks import comms_problems
+from scenarios.mission_limits import mission_limit_problems
+from scenarios.placement import placement_problems
+from scenarios.timing_checks import timing_problems
 
 
 class ScenarioError(ValueError):
@@ -74,8 +83,6 @@ def scenario_yaml(scenario: Scenario) -> str:
     """``scenario`` fully resolved as YAML that :func:`load_scenario` reads back to an equal
     scenario: every field, and ``null`` for each default sensor entry the scenario removed
     (left out, the default suite would add it again)."""
-    from scenarios.config.sensor import DEFAULT_ENTRIES
-
     data = scenario.model_dump(mode="json")
     sensors = data.get("sensors") or {}
     for name in DEFAULT_ENTRIES:
@@ -263,7 +270,6 @@ def _allowed_keys(loc: tuple[Any, ...], data: dict[str, Any] | None = None) -> l
 
     from pydantic import BaseModel
 
-    from scenarios.config.sensor import sensor_config_kinds
 
     model: Any = Scenario
     if len(loc) >= 2 and loc[0] == "sensors":
@@ -327,7 +333,6 @@ def reset_preset_keys(file_data: dict[str, Any], data: dict[str, Any],
     """
     from typing import get_args
 
-    from scenarios.config.fls import PRESET_KEYS, FlsConfig, FlsPresetName
 
     file_sensors, sensors = file_data.get("sensors"), data.get("sensors")
     if not isinstance(file_sensors, dict) or not isinstance(sensors, dict):
@@ -402,7 +407,6 @@ def _new_sensor_entries(file_data: dict[str, Any], data: dict[str, Any], overrid
                         source: str) -> list[str]:
     """Notes for sensor entries an override created, and a :class:`ScenarioError` for one that
     names no sensor kind (a misspelt entry name, say ``fsl``), with the closest name."""
-    from scenarios.config.sensor import DEFAULT_ENTRIES, sensor_config_kinds
 
     before = file_data.get("sensors") or {}
     after = data.get("sensors") or {}
@@ -446,7 +450,6 @@ def _sensor_problems(scenario: Scenario) -> list[str]:
     for name, cfg in scenario.sensors.root.items():
         if getattr(cfg, "kind", None) != "fls" or not cfg.enabled:
             continue
-        from scenarios.fls_presets import resolve_geometry
 
         try:
             resolve_geometry(cfg)
@@ -462,7 +465,6 @@ def _model_fan_hw(path: str, mtime_ns: int, size: int) -> tuple[int, int] | str:
     """The (height, width) fan a CNN model file was trained on, or why it cannot be used
     (cached by the file's identity: loading a scenario should not rebuild the session)."""
     from autonomy.atr.cnn_detector import CnnDetector
-    from autonomy.atr.model_file import ModelFileError
 
     try:
         return CnnDetector(path).fan_hw
@@ -485,8 +487,6 @@ def _atr_model_problems(scenario: Scenario) -> list[str]:
     fan_hw = _model_fan_hw(str(model), st.st_mtime_ns, st.st_size)
     if isinstance(fan_hw, str):
         return [f"autonomy.atr.model_path: {fan_hw}"]
-    from scenarios.sensor_links import atr_sonar_name
-    from scenarios.fls_presets import PRESETS, resolve_geometry
 
     name = atr_sonar_name(scenario)
     if scenario.autonomy.tracking.enabled or name is None or atr.accept_any_fan_size:
@@ -522,12 +522,6 @@ def check_scenario(scenario: Scenario, source: str, overrides: list[str] | tuple
     Raises:
         ScenarioError: listing every problem found, one per line.
     """
-    from scenarios.comms_checks import comms_problems
-    from scenarios.mission_limits import mission_limit_problems
-    from scenarios.placement import placement_problems
-    from scenarios.sensor_links import sensor_link_problems
-    from scenarios.timing_checks import timing_problems
-
     problems = (placement_problems(scenario) + _sensor_problems(scenario) + sensor_link_problems(scenario)
                 + _atr_model_problems(scenario) + comms_problems(scenario) + mission_limit_problems(scenario)
                 + timing_problems(scenario))

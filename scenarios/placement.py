@@ -19,6 +19,7 @@ import numpy as np
 from scenarios.config.world import DEBRIS_TARGET_SHAPES
 from scenarios.schema import Scenario
 from scenarios.vehicle_presets import surface_hull_span_m, vehicle_envelope_m, vehicle_half_height_m
+from scenarios.bathymetry import bathymetry_problems
 
 # Relief allowed around the mean plane of a rough seabed, in rms heights (a Gaussian field
 # exceeds 4 sigma on about 6e-5 of its area).
@@ -189,8 +190,6 @@ def _survey_problems(scenario: Scenario, relief_m: float) -> list[str]:
 def placement_problems(scenario: Scenario) -> list[str]:
     """Every impossible placement in ``scenario``, one message each (empty if none)."""
     if scenario.world.seabed.kind == "file":
-        from scenarios.bathymetry import bathymetry_problems
-
         return bathymetry_problems(scenario)
     problems: list[str] = []
     relief = seabed_relief_m(scenario)

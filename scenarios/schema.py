@@ -23,6 +23,7 @@ from scenarios.config.outputs import OutputsConfig
 from scenarios.config.sensor import SensorConfig, fill_sensor_entries, sensor_config_kinds
 from scenarios.config.vehicle import SurfaceVehicleConfig, VehicleConfig
 from scenarios.config.world import WorldConfig
+from scenarios.fls_presets import resolve_geometry
 
 
 #: Names an extra vehicle may not take: the AUV's name in ``Physics.vehicles`` and its
@@ -215,7 +216,6 @@ class Scenario(StrictModel):
         if ins.leg_start_range_m == "from_beam":
             import math
 
-            from scenarios.fls_presets import resolve_geometry
 
             fls = enabled[name] if name is not None else next(c for c in enabled.values() if c.kind == "fls")
             vbw = resolve_geometry(fls).vertical_beamwidth_rad

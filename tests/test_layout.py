@@ -32,6 +32,24 @@ def test_the_cycle_scan_finds_a_cycle_when_there_is_one():
     assert ic.cycles(ic.package_edges(edges)) == [["sim.a", "sim.b"]]
 
 
+def test_every_function_level_import_defers_a_costly_package():
+    ic = _cycles_script()
+    edges, local, third = ic.graph(with_third=True)
+    rows = ic.audit(edges, local, third)
+    assert len(rows) > 30  # the scan saw the lazy imports (CLI commands, workers, optional extras)
+    idle = [f"{m}:{line} -> {target}" for m, line, target, deferred in rows if not deferred]
+    assert idle == [], "function-level imports that defer nothing (move them to the module's top): " + ", ".join(idle)
+
+
+def test_the_import_audit_sees_what_a_lazy_import_defers():
+    ic = _cycles_script()
+    edges = {"sim.a": {"sim.b", "sim.c"}, "sim.b": set(), "sim.c": set(), "sim": set()}
+    local = {"sim.a": [(10, "sim.b"), (20, "sim.c")], "sim.b": [], "sim.c": [], "sim": []}
+    third = {"sim.a": {"numpy"}, "sim.b": {"torch"}, "sim.c": {"numpy", "json"}, "sim": set()}
+    assert [(m, t, d) for m, _, t, d in ic.audit(edges, local, third)] == [
+        ("sim.a", "sim.b", {"torch"}), ("sim.a", "sim.c", set())]
+
+
 def test_sim_has_rooms_not_flat_modules():
     flat = sorted(p.name for p in (ROOT / "sim").glob("*.py"))
     assert flat == ["__init__.py", "rng.py"], flat  # rng: the seed streams every room draws from

@@ -1,7 +1,7 @@
 """Estimation roles shared by the world model, trackers and mappers.
 
 Transition models, measurement models, predictor, updater, gater, data associator,
-same-scan clusterer, initiator and deleter, each a small swappable part checked alone against an oracle (the
+same-scan clusterer, initiator, deleter and out-of-sequence re-processing, each a small swappable part checked alone against an oracle (the
 split of the Stone Soup tracking framework, https://stonesoup.readthedocs.io).
 """
 
@@ -17,6 +17,7 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(__name__, submod_attrs={
     "initiator": ["SingleMeasurementInitiator"],
     "measurement": ["PositionFix", "RangeAzimuth", "RangeBearingElevation"],
     "predictor": ["KalmanPredictor"],
+    "reprocessing": ["ReprocessingHistory"],
     "transition": ["ConstantPosition", "ConstantVelocity"],
-    "updater": ["ExtendedKalmanUpdater", "KalmanUpdater"],
+    "updater": ["ExtendedKalmanUpdater", "KalmanUpdater", "kalman_update"],
 })

@@ -1,7 +1,12 @@
 """Kalman updaters (the updater role): a Gaussian prior corrected by one measurement.
 
-Both use the Joseph form ``P+ = (I - K H) P (I - K H)^T + K R K^T`` (Bucy and Joseph 1968),
-which stays symmetric positive semi-definite for any gain, and return ``(mean, covar)``.
+Every update uses the Joseph form ``P+ = (I - K H) P (I - K H)^T + K R K^T`` (Bucy and Joseph
+1968), which stays symmetric positive semi-definite for any gain, obtains the gain by a
+linear solve (never an explicit inverse) and returns ``(mean, covar)``. :func:`kalman_update`
+is the one update of a linearised measurement: the extended updater, the vehicle's
+navigation filter (:mod:`autonomy.navigation.ekf`), the surface vessel's
+(:mod:`autonomy.surface.navigation`) and the target tracker use it; :class:`KalmanUpdater`
+is the same update for a measurement that selects state entries, batched for the world model.
 """
 
 from __future__ import annotations
@@ -14,8 +19,40 @@ from autonomy.estimation.measurement import PositionFix, RangeAzimuth, RangeBear
 FloatArray = NDArray[np.float64]
 
 
+def kalman_update(mean: ArrayLike, covar: ArrayLike, residual: ArrayLike, H: ArrayLike,
+                  noise_covar: ArrayLike) -> tuple[FloatArray, FloatArray]:
+    """The Kalman update of a prior ``mean`` (n,), ``covar`` (n, n) by an innovation
+    ``residual`` (m,) (``z - h(x)``, angles wrapped by the caller) with measurement Jacobian
+    ``H`` (m, n) and noise ``noise_covar`` (m, m) ([BarShalom2001] sections 5.2 and 10.3;
+    extended when ``H`` is a linearisation):
+
+        S = H P H^T + R,   K = P H^T S^-1 (a linear solve),   x+ = x + K r,
+        P+ = (I - K H) P (I - K H)^T + K R K^T   (Joseph form, symmetrised).
+
+    Returns the posterior mean (n,) and covariance (n, n).
+
+    Raises:
+        numpy.linalg.LinAlgError: a singular innovation covariance.
+    """
+    x = np.asarray(mean, dtype=float)
+    P = np.asarray(covar, dtype=float)
+    H = np.asarray(H, dtype=float)
+    R = np.asarray(noise_covar, dtype=float)
+    PHt = P @ H.T
+    S = H @ PHt + R
+    K = np.linalg.solve(S, PHt.T).T  # P H^T S^-1 (P, S symmetric)
+    x_new = x + K @ np.asarray(residual, dtype=float)
+    I_KH = np.eye(x.size) - K @ H
+    P_new = I_KH @ P @ I_KH.T + K @ R @ K.T
+    return x_new, 0.5 * (P_new + P_new.T)
+
+
 class KalmanUpdater:
-    """Kalman update for a linear :class:`PositionFix` (Kalman 1960).
+    """Kalman update for a linear :class:`PositionFix` (Kalman 1960), batched: the
+    measurement selects state entries (``model.mapping``), so ``H P``, ``P H^T`` and
+    ``I - K H`` are taken by indexing, for many (prior, measurement) pairs in one call (the
+    world model's). The same update as :func:`kalman_update` with ``H`` the selection matrix
+    (to rounding).
 
     ``S = H P H^T + R``, ``K = P H^T S^-1``, ``x+ = x + K (z - H x)``. The gain is obtained
     with a linear solve (``S`` and ``P`` symmetric), never an explicit inverse.
@@ -38,17 +75,10 @@ class KalmanUpdater:
         Raises:
             numpy.linalg.LinAlgError: singular innovation covariance.
         """
-        model = self.model
-        x = np.asarray(mean, dtype=float)
-        P = np.asarray(covar, dtype=float)
-        R = model.covar() if noise_covar is None else np.asarray(noise_covar, dtype=float)
-        S = model.project_covar(P) + R
-        K = np.linalg.solve(S, model.cross_covar(P)).T  # P H^T S^-1 (P, S symmetric)
-        x_new = x + K @ model.residual(z, model.function(x))
-        I_KH = np.eye(model.ndim_state)
-        I_KH[:, model.mapping] -= K
-        P_new = I_KH @ P @ I_KH.T + K @ R @ K.T
-        return x_new, 0.5 * (P_new + P_new.T)
+        R = self.model.covar() if noise_covar is None else np.asarray(noise_covar, dtype=float)
+        x, P = self.update_batch(np.asarray(mean, dtype=float)[None], np.asarray(covar, dtype=float)[None],
+                                 np.asarray(z, dtype=float)[None], R[None])
+        return x[0], P[0]
 
     def update_batch(self, mean: ArrayLike, covar: ArrayLike, z: ArrayLike,
                      noise_covar: ArrayLike) -> tuple[FloatArray, FloatArray]:
@@ -56,9 +86,9 @@ class KalmanUpdater:
         measurements (N, m) and their noise (N, m, m) -> posterior means (N, n) and
         covariances (N, n, n).
 
-        Each pair goes through the same floating-point operations as :meth:`update` (numpy's
-        batched ``solve`` and ``matmul`` run the per-matrix kernels of the single calls), so
-        row i equals ``update(mean[i], covar[i], z[i], noise_covar[i])`` bit for bit.
+        :meth:`update` is this with one pair, so a pair updated alone and in a batch give
+        the same bits (numpy's batched ``solve`` and ``matmul`` run the per-matrix kernels
+        whatever the batch size; the world model relies on it).
 
         Raises:
             numpy.linalg.LinAlgError: a singular innovation covariance (in any pair).
@@ -150,13 +180,5 @@ class ExtendedKalmanUpdater:
             numpy.linalg.LinAlgError: singular innovation covariance.
         """
         x = np.asarray(mean, dtype=float)
-        P = np.asarray(covar, dtype=float)
-        R = np.asarray(noise_covar, dtype=float)
-        H = self.model.jacobian(x)
-        PHt = P @ H.T
-        S = H @ PHt + R
-        K = np.linalg.solve(S, PHt.T).T
-        x_new = x + K @ self.model.residual(z, self.model.function(x))
-        I_KH = np.eye(x.size) - K @ H
-        P_new = I_KH @ P @ I_KH.T + K @ R @ K.T
-        return x_new, 0.5 * (P_new + P_new.T)
+        return kalman_update(x, covar, self.model.residual(z, self.model.function(x)), self.model.jacobian(x),
+                             noise_covar)

@@ -11,8 +11,9 @@ rolls the filter back to the last copy before its measurement time, replays the 
 events up to that time, fuses the fix there and replays the rest: the result is the
 estimate the filter would have had with the fix on time (exactly, for the same sequence of
 events): the re-processing solution to out-of-sequence measurements ([BarShalom2001-OOSM]
-section 10.8, docs/references.md), which the target tracker already uses for its late USBL
-fixes.
+section 10.8, docs/references.md), through the shared
+:class:`autonomy.estimation.reprocessing.ReprocessingHistory`, as the target tracker does for its
+late USBL fixes.
 
 Fixes older than the history (``horizon_s``) are refused. The wrapper has the filter's
 interface (``predict``, ``estimate``, ``message_handlers``, ``t_s``, ``state``,
@@ -21,13 +22,13 @@ interface (``predict``, ``estimate``, ``message_handlers``, ``t_s``, ``state``,
 
 from __future__ import annotations
 
-import bisect
 from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
 from autonomy.estimation.gater import mahalanobis2
+from autonomy.estimation.reprocessing import ReprocessingHistory
 from autonomy.messages import NavEstimate, PositionFixMsg
 from autonomy.navigation.ekf import NavigationFilter
 
@@ -58,13 +59,15 @@ class DelayedFixFilter:
         self.horizon_s = float(horizon_s)
         self.snapshot_every_s = float(snapshot_every_s)
         self.gate_chi2 = gate_chi2
+        self._methods = {_PREDICT: nav.predict, _LATE_FIX: self._fuse}
         handlers = nav.message_handlers()
+        self._methods.update({fn.__name__: fn for fn in handlers.values()})
         self._handlers = {t: self._recording(fn.__name__) for t, fn in handlers.items()}
-        # events: (filter time after it, method name, argument); snapshots: (filter time, event index, state)
-        self._events: list[tuple[float, str, Any]] = []
-        self._snaps: list[tuple[float, int, dict[str, Any]]] = []
+        # events: (method name, argument), re-run in order from the last copy of the filter's state
+        self._history: ReprocessingHistory[tuple[str, Any], dict[str, Any]] = ReprocessingHistory(
+            self._apply, self._copy_state, self._restore, lambda: self.nav.t_s,
+            checkpoint_every_s=self.snapshot_every_s, keep_s=self.horizon_s + self.snapshot_every_s)
         self.n_late_fused = self.n_late_gated = self.n_late_too_old = 0
-        self._snapshot()
 
     # ------------------------------------------------------------------ the filter's interface
     @property
@@ -83,7 +86,7 @@ class DelayedFixFilter:
         return self.nav.estimate()
 
     def predict(self, t_s: float) -> None:
-        self._run(_PREDICT, float(t_s), record=True)
+        self._history.append((_PREDICT, float(t_s)))
 
     def message_handlers(self) -> dict[type, Callable[[Any], Any]]:
         """The filter's handlers, each recording its message for re-processing."""
@@ -94,27 +97,14 @@ class DelayedFixFilter:
         """Fuse a north/east fix of the body origin measured at ``msg.t_s`` (at or before the
         filter time). Returns whether it was fused (inside the history and the gate)."""
         t_m = float(msg.t_s)
-        if t_m >= self.nav.t_s:
-            return self._count(self._run(_LATE_FIX, msg, record=True))
-        i = bisect.bisect_right([s[0] for s in self._snaps], t_m) - 1
-        if i < 0 or t_m < self.nav.t_s - self.horizon_s:
+        if t_m < self.nav.t_s - self.horizon_s:
             self.n_late_too_old += 1
             return False
-        t_snap, k, state = self._snaps[i]
-        self._restore(state)
-        del self._snaps[i + 1:]
-        tail = self._events[k:]
-        del self._events[k:]
-        j = 0
-        while j < len(tail) and tail[j][0] <= t_m:
-            self._replay(tail[j])
-            j += 1
-        fused = self._run(_LATE_FIX, msg, record=True)
-        for event in tail[j:]:
-            self._replay(event)
-        return self._count(fused)
-
-    def _count(self, fused: bool) -> bool:
+        try:
+            fused = self._history.insert((_LATE_FIX, msg), t_m)
+        except ValueError:  # older than the oldest copy kept
+            self.n_late_too_old += 1
+            return False
         if fused:
             self.n_late_fused += 1
         else:
@@ -124,25 +114,11 @@ class DelayedFixFilter:
     # ------------------------------------------------------------------ internals
     def _recording(self, name: str) -> Callable[[Any], Any]:
         def handle(msg: Any) -> Any:
-            return self._run(name, msg, record=True)
+            return self._history.append((name, msg))
         return handle
 
-    def _replay(self, event: tuple[float, str, Any]) -> None:
-        self._run(event[1], event[2], record=True)
-
-    def _run(self, name: str, arg: Any, *, record: bool) -> Any:
-        nav = self.nav
-        if nav.t_s - self._snaps[-1][0] >= self.snapshot_every_s:
-            self._snapshot()
-        if name == _PREDICT:
-            out = nav.predict(arg)
-        elif name == _LATE_FIX:
-            out = self._fuse(arg)
-        else:
-            out = getattr(nav, name)(arg)
-        if record:
-            self._events.append((nav.t_s, name, arg))
-        return out
+    def _apply(self, event: tuple[str, Any]) -> Any:
+        return self._methods[event[0]](event[1])
 
     def _fuse(self, msg: PositionFixMsg) -> bool:
         nav = self.nav
@@ -153,17 +129,6 @@ class DelayedFixFilter:
             if mahalanobis2(r, S) > self.gate_chi2:
                 return False
         return nav.on_position_fix(msg)
-
-    def _snapshot(self) -> None:
-        self._snaps.append((self.nav.t_s, len(self._events), self._copy_state()))
-        t_old = self.nav.t_s - self.horizon_s - self.snapshot_every_s
-        drop = 0
-        while drop + 1 < len(self._snaps) and self._snaps[drop + 1][0] <= t_old:
-            drop += 1
-        if drop:
-            k = self._snaps[drop][1]
-            del self._events[:k]
-            self._snaps = [(t, idx - k, s) for t, idx, s in self._snaps[drop:]]
 
     def _copy_state(self) -> dict[str, Any]:
         """The filter's mutable state: its arrays copied, its scalars (its models and

@@ -40,6 +40,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from autonomy.estimation.gater import mahalanobis2
+from autonomy.estimation.updater import kalman_update
 from autonomy.estimation.measurement import PositionFix, RangeBearingElevation
 from autonomy.frames import cross3, euler_rate_matrix, rot_from_euler, rot_x, rot_y, rot_z, wrap_angle
 from autonomy.messages import (AltimeterMsg, DepthMsg, DvlMsg, GpsMsg, ImuMsg, NavEstimate, PositionFixMsg, UsblMsg,
@@ -323,12 +324,7 @@ class NavigationFilter:
         S = H @ P @ H.T + R_meas
         if gate_chi2 is not None and mahalanobis2(residual, S) > gate_chi2:
             return False
-        S_inv = np.linalg.inv(S)
-        K = P @ H.T @ S_inv
-        self._x += K @ residual
-        I_KH = np.eye(N_STATES) - K @ H
-        self._P = I_KH @ P @ I_KH.T + K @ R_meas @ K.T
-        self._P = 0.5 * (self._P + self._P.T)
+        self._x, self._P = kalman_update(self._x, P, residual, H, R_meas)
         return True
 
     def on_imu(self, msg: ImuMsg) -> None:

@@ -25,6 +25,7 @@ from collections.abc import Iterable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from autonomy.estimation.updater import kalman_update
 from autonomy.messages import GpsMsg
 from autonomy.surface.config import SurfaceNavigationConfig
 
@@ -107,11 +108,7 @@ class GnssDisturbanceFilter:
                 self.t_s = float(msg.t_s)
             else:
                 self.predict(float(msg.t_s))
-                S = H @ self.P @ H.T + r * np.eye(2)
-                K = self.P @ H.T @ np.linalg.inv(S)
-                self.x = self.x + K @ (z - H @ self.x)
-                self.P = (np.eye(6) - K @ H) @ self.P
-                self.P = 0.5 * (self.P + self.P.T)
+                self.x, self.P = kalman_update(self.x, self.P, z - H @ self.x, H, r * np.eye(2))
             self.last_fix_t_s = max(self.last_fix_t_s, float(msg.t_s))
             used += 1
         return used

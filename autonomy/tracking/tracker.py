@@ -41,6 +41,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from autonomy.estimation.gater import MahalanobisGater
 from autonomy.estimation.measurement import RangeBearingElevation
+from autonomy.estimation.reprocessing import ReprocessingHistory
 from autonomy.estimation.updater import ExtendedKalmanUpdater
 from autonomy.frames import rot_from_euler
 from autonomy.messages import UsblMsg
@@ -146,9 +147,9 @@ class TargetTracker:
     def reset(self) -> None:
         """Forget everything (no estimate until the first accepted measurement)."""
         self._poses: list[_Pose] = []
-        self._events: list[_Event] = []
-        self._checkpoints: list[tuple[float, FloatArray, FloatArray] | None] = []
-        self._base: tuple[float, FloatArray, FloatArray] | None = None  # state before the kept history
+        self._state: tuple[float, FloatArray, FloatArray] | None = None  # after the newest event
+        self._history: ReprocessingHistory[_Event, tuple[float, FloatArray, FloatArray] | None] = \
+            ReprocessingHistory(self._apply_event, lambda: self._state, self._set_state, self._clock)
         self._seq = 0
         self._last_sonar_t = -math.inf  # time of the previous sonar detection (its error's correlation)
         self.rejected: list[tuple[float, str]] = []
@@ -168,7 +169,7 @@ class TargetTracker:
         horizon = t_s - self.cfg.history_s - 1.0
         while len(self._poses) > 2 and self._poses[1].t_s < horizon:
             self._poses.pop(0)
-        self._prune(t_s - self.cfg.history_s)
+        self._history.prune(t_s - self.cfg.history_s)  # older events folded into the oldest state
 
     def pose_at(self, t_s: float) -> tuple[FloatArray, FloatArray] | None:
         """Vehicle (position (3,), R_nb (3, 3)) at ``t_s`` by linear interpolation (yaw along
@@ -310,7 +311,7 @@ class TargetTracker:
     def used_counts(self) -> dict[str, int]:
         """Accepted updates per kind in the kept history."""
         out = {USBL: 0, SONAR: 0}
-        for e in self._events:
+        for e in self._history.events:
             out[e.kind] += int(e.accepted)
         return out
 
@@ -331,7 +332,7 @@ class TargetTracker:
         if t_s > self.now_s + 1e-9:
             self._refuse(t_s, f"{what} measurement from the future (now {self.now_s:.3f} s)")
             return None
-        if self._base is not None and t_s < self._base[0]:
+        if t_s < self._history.oldest[0]:
             self._refuse(t_s, f"{what} measurement older than the kept history ({self.cfg.history_s} s)")
             return None
         pose = self.pose_at(t_s)
@@ -340,26 +341,20 @@ class TargetTracker:
         return pose
 
     def _last_state(self) -> tuple[float, FloatArray, FloatArray] | None:
-        for cp in reversed(self._checkpoints):
-            if cp is not None:
-                return cp
-        return self._base
+        return self._state
 
     def _insert(self, ev: _Event) -> None:
-        keys = [e.key for e in self._events]
-        i = bisect.bisect_right(keys, ev.key)
-        self._events.insert(i, ev)
-        del self._checkpoints[i:]
-        state = self._base if i == 0 else self._last_before(i)
-        for j in range(i, len(self._events)):
-            state = self._apply(state, self._events[j])
-            self._checkpoints.append(state)
+        """Apply ``ev`` at its time: re-processing the later events ([BarShalom2001-OOSM])."""
+        self._history.insert(ev, ev.t_s)
 
-    def _last_before(self, i: int) -> tuple[float, FloatArray, FloatArray] | None:
-        for cp in reversed(self._checkpoints[:i]):
-            if cp is not None:
-                return cp
-        return self._base
+    def _set_state(self, state: tuple[float, FloatArray, FloatArray] | None) -> None:
+        self._state = state
+
+    def _clock(self) -> float:
+        return -math.inf if self._state is None else self._state[0]
+
+    def _apply_event(self, ev: _Event) -> None:
+        self._state = self._apply(self._state, ev)
 
     def _apply(self, state: tuple[float, FloatArray, FloatArray] | None, ev: _Event
                ) -> tuple[float, FloatArray, FloatArray] | None:
@@ -389,7 +384,8 @@ class TargetTracker:
         """USBL fixes rejected in a row just before ``ev`` in the history (sonar events,
         clutter included, do not break the run)."""
         n = 0
-        for e in reversed(self._events[: self._events.index(ev)]):
+        events = self._history.events
+        for e in reversed(events[: events.index(ev)]):
             if e.kind != USBL:
                 continue
             if e.accepted:
@@ -460,15 +456,3 @@ class TargetTracker:
         var_h = 0.5 * (self.cfg.initial_surge_mps**2 + self.cfg.initial_surge_sigma_mps**2)
         P[3:6, 3:6] = np.diag([var_h, var_h, 0.05**2])
         return x, P
-
-    def _prune(self, t_keep_s: float) -> None:
-        """Fold events older than ``t_keep_s`` into the base state."""
-        n = 0
-        while n < len(self._events) and self._events[n].t_s < t_keep_s:
-            n += 1
-        if n == 0:
-            return
-        cp = self._last_before(n)
-        self._base = cp
-        del self._events[:n]
-        del self._checkpoints[:n]

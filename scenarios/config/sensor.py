@@ -20,6 +20,7 @@ from typing import Any
 from pydantic import Field
 
 from scenarios.config.base import StrictModel, Vec3
+import scenarios.config as pkg
 
 #: Entries (name = kind) every scenario gets unless its ``sensors:`` section sets them to
 #: ``null``: the navigation suite and the forward-looking sonar, in the order they fire.
@@ -73,7 +74,6 @@ def _discover() -> None:
     if _DISCOVERED:
         return
     _DISCOVERED = True
-    import scenarios.config as pkg
 
     for info in pkgutil.iter_modules(pkg.__path__):
         importlib.import_module(f"{pkg.__name__}.{info.name}")

@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from sim.events.records import MissionObserver
+from sim.outputs.ping360_log import Ping360LogRecorder
 
 
 class TimedObserver:
@@ -72,7 +73,6 @@ def _recorder(writer: str, folder: Path) -> MissionObserver:
         from sim.outputs.xtf_log import XtfRecorder
 
         return XtfRecorder(folder / "xtf")
-    from sim.outputs.ping360_log import Ping360LogRecorder
 
     return Ping360LogRecorder(folder / "ping360")
 

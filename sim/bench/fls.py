@@ -21,6 +21,7 @@ from sim.rng import component_rng
 from sim.sensors.fls import FlsSensor
 from sim.sensors.raycast import MujocoRayCaster
 from sim.scene.world import build_world
+from scenarios.fls_presets import PRESETS
 
 IDENTITY_FRAMES = 10  # frames rendered again, untimed, with and without the truth to compare
 
@@ -75,8 +76,6 @@ def run(scenario: Scenario, n_frames: int = 60, range_window_m: tuple[float, flo
     """
     base = scenario.sensors.fls
     if range_window_m is not None:
-        from scenarios.fls_presets import PRESETS
-
         p = PRESETS[base.preset]
         lo, hi = base.range_min_m or p.range_min_m, base.range_max_m or p.range_max_m
         near, far = max(range_window_m[0], lo), min(range_window_m[1], hi)

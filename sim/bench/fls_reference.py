@@ -51,6 +51,8 @@ from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
+from sim.sensors.fls_digest import update_with_render
+from sim.rng import component_rng
 
 CASES = ("bench", "train/0", "train/1", "wide/1", "wide/3")
 """The pinned renders: ``bench`` is ``auvsim bench fls``'s pose sequence (warm-up + 2 frames);
@@ -82,7 +84,6 @@ def capture(renders: CaseRenders) -> Iterator[CaseRenders]:
     """Hook :meth:`sim.sensors.fls.FlsSensor.render` while inside: each render's labels and
     image summaries go to ``renders`` and its bytes into its digest (set on exit)."""
     from sim.sensors.fls import FlsSensor
-    from sim.sensors.fls_digest import update_with_render
 
     h = hashlib.sha256()
     inner = FlsSensor.render
@@ -115,7 +116,6 @@ def render_case(case: str, perturb: Callable[[], object] | None = None) -> CaseR
     from sim.bench import fls as bench_fls
     from sim.dataset.generate import RANDOMIZATION_PRESETS, RenderSettings, fls_config, scene_spec
     from sim.dataset.scene_render import render_frames
-    from sim.rng import component_rng
 
     if perturb is not None:
         perturb()

@@ -25,6 +25,8 @@ import time
 from typing import Any
 
 from scenarios.schema import Scenario
+from sim.outputs.trajectory_log import TrajectoryLog
+from sim.events.stage_timer import NULL_TIMER, StageTimer
 
 SEGMENTS = 4  # alternating timed segments per loop when comparing serial and pipelined
 
@@ -66,8 +68,6 @@ def run(scenario: Scenario, sim_time_s: float = 120.0, warmup_s: float = 30.0, *
         ValueError: ``workers`` < 1.
     """
     from sim.mission import Mission
-    from sim.outputs.trajectory_log import TrajectoryLog
-    from sim.events.stage_timer import NULL_TIMER, StageTimer
 
     if workers < 1:
         raise ValueError(f"workers must be >= 1, got {workers}")

@@ -2,6 +2,11 @@
 
 from __future__ import annotations
 
+from autonomy.atr.model_file import ModelFileError
+from sim.dataset.errors import DatasetError
+from sim.mcm.errors import NoTileError
+from sim.outputs.run_dir import OutputDirError
+
 
 class CliError(Exception):
     """A user error: the message names the argument, key or file and what is allowed."""
@@ -17,11 +22,7 @@ EXIT_TERMINATED = 143
 
 def user_error_types() -> tuple[type[BaseException], ...]:
     """Exception types that mean bad input (one line, exit 2), not a bug."""
-    from autonomy.atr.model_file import ModelFileError
     from scenarios.load import ScenarioError
-    from sim.dataset.errors import DatasetError
-    from sim.mcm.errors import NoTileError
-    from sim.outputs.run_dir import OutputDirError
     from sim.sweep.runner import SweepError
 
     return (CliError, ScenarioError, OutputDirError, DatasetError, ModelFileError, SweepError, NoTileError)

@@ -10,6 +10,8 @@ import numpy as np
 
 from sim.cli.args import positive_int, probability
 from sim.cli.errors import CliError
+from autonomy.atr.model_file import ModelFileError
+from sim.dataset.errors import DatasetError, fls_fan_hw, require_dataset
 
 
 def _fmt(v) -> str:
@@ -22,7 +24,6 @@ NO_DETECTIONS = "n/a (no detections)"
 
 def _detector_config(args: argparse.Namespace):
     from autonomy.atr.build import model_path
-    from autonomy.atr.model_file import ModelFileError
     from autonomy.atr.config import AtrConfig
 
     if args.model is not None and args.detector != "cnn":
@@ -39,7 +40,6 @@ def _detector_config(args: argparse.Namespace):
 def _cmd_eval(args: argparse.Namespace) -> int:
     from autonomy.atr import build_detector
     from sim.evaluation.atr_metrics import choose_threshold, ensure_heldout, evaluate_detector, threshold_sweep
-    from sim.dataset.errors import DatasetError, fls_fan_hw, require_dataset
 
     cfg = _detector_config(args)
     data = require_dataset(args.data, "--data") if args.data is not None else None

@@ -8,12 +8,12 @@ import sys
 
 from sim.cli.args import non_negative_int, positive_float, positive_int
 from sim.cli.errors import CliError
+from sim.outputs.run_dir import StagedOutput, check_output_dir
 
 
 def _cmd_realism(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from sim.outputs.run_dir import StagedOutput, check_output_dir
     from sim.realism.real_frames import RealDataError
     from sim.realism.report import FORMATIONS, realism_report, report_lines, side_by_side_png
 

@@ -9,6 +9,9 @@ from pathlib import Path
 
 from sim.cli.args import non_negative_int, positive_float, positive_int, size_hw, size_hw_or_none
 from sim.cli.errors import CliError
+from sim.dataset.errors import fls_fan_hw, require_dataset
+from sim.training import TORCH_HINT
+from sim.training.train import ARCH_NAMES, DEFAULT_INPUT_HW, CheckpointError, TrainParams, train_atr
 
 
 def _check_model_out(path: str, overwrite: bool) -> Path:
@@ -36,14 +39,10 @@ def _require_writable_folder(path: Path, flag: str) -> None:
 
 
 def _cmd_train(args: argparse.Namespace) -> int:
-    from sim.dataset.errors import require_dataset
-    from sim.training import TORCH_HINT
-
     try:
         import torch  # noqa: F401
     except ImportError:
         raise CliError(f"train-atr: {TORCH_HINT}") from None
-    from sim.training.train import TrainParams, train_atr
 
     dirs = [d.strip() for d in str(args.data).split(",") if d.strip()]
     if not dirs:
@@ -68,8 +67,6 @@ def _cmd_train(args: argparse.Namespace) -> int:
             raise CliError(f"--checkpoint {ckpt}: file exists; pass --resume to continue that run, or name a new file")
         _require_writable_folder(ckpt, "--checkpoint")
     if args.input == "native":
-        from sim.dataset.errors import fls_fan_hw
-
         fan_h, fan_w = fls_fan_hw(data[0], "--data")
         input_hw, transform = (-(-fan_h // 16) * 16, -(-fan_w // 16) * 16), "pad"
     else:
@@ -79,7 +76,6 @@ def _cmd_train(args: argparse.Namespace) -> int:
                          threads=args.threads, seed=args.seed, size_loss_weight=args.size_loss_weight,
                          light_heads=args.light_heads, arch=args.arch, input_transform=transform,
                          classes=tuple(c.strip() for c in args.classes.split(",")) if args.classes else None)
-    from sim.training.train import CheckpointError
 
     try:
         summary = train_atr(data if len(data) > 1 else data[0], out, params, val_data=val,
@@ -110,8 +106,6 @@ def _input_arg(text: str):
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    from sim.training.train import ARCH_NAMES, DEFAULT_INPUT_HW, TrainParams
-
     p = sub.add_parser("train-atr", help="train the ATR CNN on a dataset and export ONNX (needs auvsim[train])")
     p.add_argument("--data", required=True,
                    help="dataset folder written by `auvsim dataset` (comma-separated: several, concatenated)")

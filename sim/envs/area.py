@@ -10,6 +10,7 @@ from numpy.typing import NDArray
 from autonomy.guidance.lawnmower import fls_swath_width_m
 from autonomy.guidance.survey import plan_from_config
 from scenarios.schema import Scenario
+from scenarios.fls_presets import resolve_geometry
 
 FloatArray = NDArray[np.float64]
 
@@ -48,8 +49,6 @@ def survey_area(scenario: Scenario, margin_m: float) -> OperatingArea:
     survey = scenario.autonomy.guidance.survey
     swath = None
     if survey.leg_spacing_m == "from_swath":
-        from scenarios.fls_presets import resolve_geometry
-
         g = resolve_geometry(scenario.sensors.fls)
         swath = fls_swath_width_m(survey.altitude_m, np.deg2rad(scenario.sensors.fls.tilt_deg), g.fov_rad,
                                   g.vertical_beamwidth_rad, g.window_near_m, g.window_far_m)

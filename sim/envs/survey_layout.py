@@ -18,10 +18,11 @@ from numpy.typing import NDArray
 
 from autonomy.guidance.lawnmower import fls_swath_width_m
 from scenarios.schema import Scenario
-from sim.envs.area import OperatingArea
+from sim.envs.area import OperatingArea, survey_area
 from sim.rng import component_rng
 from sim.scene.seabed import Seabed, make_seabed
 from scenarios.fls_presets import resolve_geometry
+from scenarios.config.world import SeabedConfig
 
 FloatArray = NDArray[np.float64]
 START_INSET_M = 1.0  # start this far inside the south-west corner
@@ -60,8 +61,6 @@ def make_layout(base: Scenario, size_ne_m: tuple[float, float], margin_m: float,
         ValueError: an area not larger than the sonar's reach on both sides, or a clearance
             that leaves no room for the objects.
     """
-    from sim.envs.area import survey_area
-
     fls = base.sensors.fls
     g = resolve_geometry(fls)
     reach = float(g.window_far_m)
@@ -95,8 +94,6 @@ def _seabed(base: Scenario, layout: SurveyLayout) -> dict:
 
 def episode_seabed(base: Scenario, layout: SurveyLayout) -> Seabed:
     """The episode seabed (the same every episode: it depends on the scenario's seed only)."""
-    from scenarios.config.world import SeabedConfig
-
     return make_seabed(SeabedConfig.model_validate(_seabed(base, layout)), component_rng(base.seed, "seabed"))
 
 

@@ -28,6 +28,7 @@ from autonomy.sonar_geometry import FanGeometry
 from sim.dataset.coco_io import ANNOTATIONS_FILE, coco_bbox_to_xyxy, xyxy_to_coco_bbox
 from sim.dataset.errors import DatasetError, require_dataset
 from sim.evaluation.detection_matching import match_frame
+from autonomy.atr.cnn_detector import CnnDetector
 
 DEFAULT_RANGE_BANDS_M = (0.0, 10.0, 20.0, 30.0, math.inf)
 
@@ -260,8 +261,6 @@ def bench_atr(data_dir: str | Path | None = None, n_frames: int = 50, repeats: i
         out[f"{kind}_frames_per_s"] = len(frames) / best
         out[f"{kind}_ms_per_frame"] = 1000.0 * best / len(frames)
     if model is not None:
-        from autonomy.atr.cnn_detector import CnnDetector
-
         cfg = AtrConfig(detector="cnn", intra_op_threads=1)
         pair = {"shipped": build_detector(cfg),
                 "model": CnnDetector(model, score_threshold=cfg.score_threshold, intra_op_threads=1)}

@@ -29,6 +29,8 @@ hook                        when
 ``after_physics``           each period, after the physics substeps and sensor firings
 (delivery)                  messages whose latency has passed go to their handlers
 ``before_nav``              each period, before the navigation filter predicts to now
+(autonomy events)           the periodic events declared in the ``AUTONOMY`` phase
+                            (:meth:`LoopPorts.every`: the acoustic link)
 ``after_nav``               each period, with the navigation estimate of now
 ``setpoint``                each period, for the feature that ``drives_guidance``: its setpoint
                             replaces the survey state machine's (a gym env's replaces both)
@@ -54,6 +56,7 @@ from autonomy.control.setpoint import Setpoint
 from autonomy.messages import NavEstimate
 from scenarios.schema import Scenario
 from sim.events.records import MissionObserver
+from sim.events.scheduler import PHYSICS
 from sim.dynamics.truth import VehicleTruth
 
 if TYPE_CHECKING:
@@ -121,16 +124,24 @@ class LoopPorts:
     def consume(self, msg_type: type, handler: Callable[[str, Any], None]) -> None:
         self._loop._consumers[msg_type] = handler
 
-    def every(self, name: str, rate_hz: float, event: Callable[[VehicleTruth], None], *, stage: str) -> None:
-        """Declare a periodic event to the loop's scheduler: ``event(auv_truth)`` at the first
+    def every(self, name: str, rate_hz: float, event: Callable[[VehicleTruth], None], *, stage: str,
+              phase: str = PHYSICS) -> None:
+        """Declare a periodic event to the loop's scheduler, timed as ``stage``.
+
+        ``phase`` :data:`sim.events.scheduler.PHYSICS`: ``event(auv_truth)`` at the first
         autonomy tick at or after each ``k / rate_hz`` s (k = 0 at reset), ordered with the
-        sensors' firings (after those of the same time), timed as ``stage``.
+        sensors' firings (after those of the same time). :data:`sim.events.scheduler.AUTONOMY`:
+        ``event(auv_truth)`` at the first tick at or after each ``(k + 1) / rate_hz`` s, once
+        the period's messages are delivered and the features' ``before_nav`` hooks have run,
+        before the navigation filter predicts (an onboard process that reads what was
+        delivered: the acoustic link), with the true state at the tick.
 
         Raises:
-            ValueError: ``rate_hz`` not positive or above the autonomy rate.
+            ValueError: ``rate_hz`` not positive or above the autonomy rate; an unknown phase.
         """
         loop = self._loop
-        loop.parts.scheduler.add(name, rate_hz, quantum_s=loop.autonomy_dt_s)
+        loop.parts.scheduler.add(name, rate_hz, quantum_s=loop.autonomy_dt_s, phase=phase,
+                                 offset_s=0.0 if phase == PHYSICS else 1.0 / rate_hz)
         loop._events[name] = (event, stage)
 
     def has_result_handler(self, result_type: type) -> bool:
@@ -151,6 +162,11 @@ class LoopPorts:
     @property
     def t_s(self) -> float:
         return self._loop.physics.t_s
+
+    @property
+    def autonomy_rate_hz(self) -> float:
+        """The loop's period as a rate (the fastest a declared event may run), Hz."""
+        return 1.0 / self._loop.autonomy_dt_s
 
     @property
     def others(self) -> Mapping[str, VehicleTruth]:

@@ -17,6 +17,8 @@ from sim.features.base import FeatureContext, LoopPorts, MissionFeature
 from sim.outputs.json_files import write_json
 from sim.features.base import fmt_or_na as _fmt
 from sim.events.records import MissionObserver
+from sim.mcm.full_mode import McmFullObserver, SssTileProcessor, no_tile_message
+from sim.mcm.figures import confirmed_objects_overlay, summarise, write_figures
 
 
 class McmFullFeature(MissionFeature):
@@ -31,8 +33,6 @@ class McmFullFeature(MissionFeature):
     name = "mcm_full"
 
     def __init__(self, ctx: FeatureContext) -> None:
-        from sim.mcm.full_mode import SssTileProcessor
-
         self.ctx = ctx
         self.processor = SssTileProcessor(ctx.scenario)
         self.recorder: Any = None
@@ -48,8 +48,6 @@ class McmFullFeature(MissionFeature):
 
     # -- a run's outputs -------------------------------------------------------------------
     def observers(self, options: Mapping[str, Any]) -> list[MissionObserver]:
-        from sim.mcm.full_mode import McmFullObserver
-
         self.recorder = McmFullObserver(self.ctx.scenario)
         return [self.recorder]
 
@@ -57,26 +55,21 @@ class McmFullFeature(MissionFeature):
         if self.recorder is None:
             return
         if not self.recorder.tiles:  # too short a run: its other outputs still count
-            from sim.mcm.full_mode import no_tile_message
 
             metrics["mcm"] = {"tiles": 0, "note": no_tile_message(self.ctx.scenario)}
             return
-        from sim.mcm.figures import summarise
 
         self.result = self.recorder.results(self.ctx.seed)
         metrics["mcm"] = {**summarise([self.result]), "detector": self.result["detector"]}
 
     def map_layers(self, layers: dict[str, Any]) -> None:
         if self.result is not None:
-            from sim.mcm.figures import confirmed_objects_overlay
-
             overlay = confirmed_objects_overlay(self.result)  # None: no object confirmed
             if overlay is not None:
                 layers["overlays"].append(overlay)
 
     def write_outputs(self, out_dir: Path, metrics: dict[str, Any], title: str) -> None:
         if self.result is not None:
-            from sim.mcm.figures import write_figures
             write_json(out_dir / "mcm.json", self.result)
             write_figures(out_dir, [self.result], title=title)
 

@@ -19,6 +19,7 @@ from sim.features.base import FeatureContext, LoopPorts, MissionFeature
 from sim.features.base import fmt_or_na as _fmt
 from sim.events.records import MissionObserver
 from sim.rng import component_rng
+from sim.outputs.msis_overlay import basin_outline_ne, msis_overlay
 
 
 class MsisLocalizationFeature(MissionFeature):
@@ -68,8 +69,6 @@ class MsisLocalizationFeature(MissionFeature):
 
     def map_layers(self, layers: dict[str, Any]) -> None:
         if self.evaluation is not None and self.evaluation.err_fused_m:
-            from sim.outputs.msis_overlay import basin_outline_ne, msis_overlay
-
             basin = self.ctx.scenario.world.basin
             layers["overlays"].append(msis_overlay(self.evaluation, basin, self.localizer))
             layers["extents"].append(basin_outline_ne(basin))

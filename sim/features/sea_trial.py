@@ -18,6 +18,7 @@ import numpy as np
 
 from autonomy.navigation.delayed import DelayedFixFilter
 from sim.comms.vehicle_link import VehicleLink
+from sim.events.scheduler import AUTONOMY
 from sim.features.base import FeatureContext, LoopPorts, MissionFeature
 from sim.outputs.json_files import with_geodetic, write_json
 from sim.features.base import fmt_or_na as _fmt
@@ -25,12 +26,13 @@ from sim.events.records import PerceptionResult
 from sim.features.surface_runner import SurfaceVehicleRunner
 from sim.features.survey_perception import SurveyPerceptionFeature
 from sim.dynamics.truth import VehicleTruth
+from sim.features.perception import target_objects, world_model_metrics
 
 
 class SeaTrialFeature(MissionFeature):
     """Extra vehicles, their sensors and autonomy declared as periodic events of the loop's
-    clock, and, with ``comms.acoustic`` on, the link (ticked every autonomy period, after the
-    messages of the period are delivered).
+    clock, and, with ``comms.acoustic`` on, the link (an event of the clock's autonomy phase:
+    ticked every autonomy period, after the messages of the period are delivered).
 
     Attributes:
         surface_vehicles: name -> :class:`sim.features.surface_runner.SurfaceVehicleRunner`.
@@ -85,6 +87,9 @@ class SeaTrialFeature(MissionFeature):
                                     () if perception is None else perception.class_names, self.ctx.seed,
                                     footprint=None if perception is None else perception.sonar_footprint())
             ports.on_result(PerceptionResult, self._send_detections)
+            # the link's slots on the loop's clock: every autonomy period, once its messages
+            # (and so its detections) are delivered
+            ports.every("comms/acoustic_link", ports.autonomy_rate_hz, self._link_tick, stage="link", phase=AUTONOMY)
         self.vehicle_contacts = Counter()
 
     def _send_detections(self, name: str, result: PerceptionResult) -> None:
@@ -98,9 +103,8 @@ class SeaTrialFeature(MissionFeature):
             for pair in self.ctx.physics.vehicles_in_contact():
                 self.vehicle_contacts[pair] += 1
 
-    def before_nav(self, t_s: float, truth: VehicleTruth) -> None:
-        if self.link is None:
-            return
+    def _link_tick(self, truth: VehicleTruth) -> None:
+        t_s = truth.t_s
         timer = self._ports.timer
         with timer.stage("link"):
             fixes = self.link.tick(t_s, truth, self._ports.others[self.link.node], timer)
@@ -138,8 +142,6 @@ class SeaTrialFeature(MissionFeature):
         surface = self.link.surface_world_model
         perception = self._perception_feature.results() if self._perception_feature is not None else None
         if surface is not None and perception is not None:
-            from sim.features.perception import world_model_metrics
-
             sw = world_model_metrics(surface.world_model(), perception.truth_targets)
             sw["world_model_json_objects"] = len(surface.world_model())
             sw["note"] = ("the world model on the surface vehicle, from the detections the acoustic link delivered "
@@ -148,8 +150,6 @@ class SeaTrialFeature(MissionFeature):
 
     def map_layers(self, layers: dict[str, Any]) -> None:
         if self.link is not None and self.link.surface_world_model is not None:
-            from sim.features.perception import target_objects
-
             layers["surface_estimates_ned"] = [o.pos_ned for o in
                                                target_objects(self.link.surface_world_model.world_model())]
 

@@ -20,6 +20,7 @@ from sim.features.perception import Perception
 from sim.events.records import MissionObserver, PerceptionResult
 from sim.process.sonar_pipeline import FrameTicket, SonarPipeline
 from sim.dynamics.truth import VehicleTruth
+from sim.evaluation.detection_scoring import DetectionScorer
 
 
 class SurveyPerceptionFeature(MissionFeature):
@@ -114,7 +115,6 @@ class SurveyPerceptionFeature(MissionFeature):
     def observers(self, options: Mapping[str, Any]) -> list[MissionObserver]:
         if not options.get("score_detections", True):
             return []
-        from sim.evaluation.detection_scoring import DetectionScorer
 
         self.scorer = DetectionScorer(self.sonar.name, self.ctx.scenario.autonomy.atr.detector)
         return [self.scorer]

@@ -23,6 +23,7 @@ from sim.features.base import FeatureContext, LoopPorts, MissionFeature
 from sim.features.base import fmt_or_na as _fmt
 from sim.events.records import MissionObserver
 from sim.dynamics.truth import VehicleTruth
+from autonomy.tracking.onboard import TrackingStack
 
 
 class TrackingFeature(MissionFeature):
@@ -38,8 +39,6 @@ class TrackingFeature(MissionFeature):
     name = "tracking"
 
     def __init__(self, ctx: FeatureContext) -> None:
-        from autonomy.tracking.onboard import TrackingStack  # scipy.stats: only missions that track
-
         self.ctx = ctx
         auto = ctx.scenario.autonomy
         usbl, self.sonar = ctx.parts.sensors[auto.tracking.usbl_sensor], ctx.parts.sonar

@@ -13,8 +13,9 @@ when a study is added ([dmcontrol2020]):
 3. delivery of the messages whose latency has passed: by type to the navigation filter's
    handlers and the features', by source to the onboard processing a feature registered; the
    results to the features' result handlers, then to the observers;
-4. the features' ``before_nav`` (the acoustic link); the navigation filter predicts to now;
-   the features' ``after_nav`` (the trackers);
+4. the features' ``before_nav`` (the pipelined perception's results of the period); the
+   periodic events declared in the autonomy phase (the acoustic link); the navigation
+   filter predicts to now; the features' ``after_nav`` (the trackers);
 5. guidance: a gym env's setpoint, else the feature that drives the guidance (buddy), else the
    survey state machine; the autopilots and the thrust allocation;
 6. the step record to the observers; the features' ``end_of_step`` (pipelined perception).
@@ -42,6 +43,7 @@ from sim.features.survey_perception import SurveyPerceptionFeature
 from sim.features.base import LoopPorts, MissionFeature
 from sim.mission.parts import NAV_SOURCES, MissionParts, build_mission_parts
 from sim.scene.physics import Physics
+from sim.events.scheduler import AUTONOMY
 from sim.events.records import MissionInfo, MissionObserver, MissionSummary, StepRecord
 from sim.sensors.base import SceneView
 from sim.events.stage_timer import NULL_TIMER, StageTimer
@@ -290,6 +292,8 @@ class Mission:
             self._deliver(name, msg)
         for feature in features:
             feature.before_nav(t_s, truth)
+        for _, name in self.parts.scheduler.take_due(t_s, AUTONOMY):
+            self._fire(name, truth, None)
         with timer.stage("nav_filter"):
             self.nav_filter.predict(t_s)
             nav = self.nav_filter.estimate()

@@ -27,6 +27,12 @@ from sim.outputs.progress import MissionProgress
 from sim.outputs.run_dir import StagedOutput, check_output_dir
 from sim.outputs.trajectory_log import TrajectoryLog
 from sim.scene.movers import BUBBLE_CLASS
+from sim.outputs.tracking_overlay import extent_points_ne, mover_paths_ned, tracking_overlay
+from scenarios.load import scenario_yaml
+from sim.outputs.rerun_recording import RerunRecorder
+from sim.ros2bag.recorder import RosbagRecorder
+from sim.outputs.ping360_log import Ping360LogRecorder
+from sim.outputs.xtf_log import XtfRecorder
 
 METRICS_DECIMALS = 4
 
@@ -121,8 +127,6 @@ def map_layers(mission: Mission, sim_time_s: float) -> dict[str, Any]:
     draws, extents = layers.pop("overlays"), layers.pop("extents")
     tracker = layers.pop("tracker_estimate_ned", None)
     if movers:
-        from sim.outputs.tracking_overlay import extent_points_ne, mover_paths_ned, tracking_overlay
-
         paths = mover_paths_ned(mission.physics.movers, sim_time_s)
         est, label = tracker if tracker is not None else (None, "tracker estimate")
         draws.append(tracking_overlay(paths, est, label))
@@ -203,28 +207,20 @@ def run_mission(
         mission.observers.extend(evaluations)  # before the recorders, which colour detections by the scorer
         scorer = next((o for o in evaluations if isinstance(o, DetectionScorer)), None)
         if rerun:
-            from sim.outputs.rerun_recording import RerunRecorder
-
             mission.observers.append(RerunRecorder(partial / "recording.rrd", scorer=scorer))
         if rosbag is None:
             rosbag = scenario.outputs.rosbag
         if rosbag_fls_every is None:
             rosbag_fls_every = scenario.outputs.rosbag_fls_every
         if rosbag:
-            from sim.ros2bag.recorder import RosbagRecorder
-
             mission.observers.append(RosbagRecorder(partial / "rosbag", fls_every=rosbag_fls_every))
         if ping360_log is None:
             ping360_log = scenario.outputs.ping360_log
         if ping360_log:
-            from sim.outputs.ping360_log import Ping360LogRecorder
-
             mission.observers.append(Ping360LogRecorder(partial / "ping360"))
         if xtf is None:
             xtf = scenario.outputs.xtf
         if xtf:
-            from sim.outputs.xtf_log import XtfRecorder
-
             mission.observers.append(XtfRecorder(partial / "xtf"))
         label = next((f.progress_label() for f in mission.features if f.progress_label() is not None), None)
         mission.observers.append(_ProgressObserver(MissionProgress(scenario.name, planned_length_s(mission),
@@ -253,7 +249,6 @@ def run_mission(
             **layers,
         )
         write_json(partial / "metrics.json", metrics, decimals=METRICS_DECIMALS)
-        from scenarios.load import scenario_yaml
 
         (partial / "scenario.yaml").write_text(scenario_yaml(scenario))  # `auvsim run OUT/scenario.yaml` reruns it
         staged.commit()

@@ -25,6 +25,11 @@ from numpy.typing import NDArray
 
 from autonomy.sonar_geometry import FanGeometry
 from sim.realism.real_frames import MARINE_DEBRIS_CLASSES
+from autonomy.frames import rot_from_euler
+from sim.rng import component_rng
+from sim.sensors.raycast import MujocoRayCaster
+from sim.sensors.sonar.display import FanRemap
+from sim.realism.image_measures import fan_radius_px
 
 CLASS_ID = {name: cid for cid, name in MARINE_DEBRIS_CLASSES.items()}
 
@@ -169,15 +174,11 @@ def render_tank_frames(scenes: list[TankScene], geom: FanGeometry, *, seed: int,
     """Render each scene's frames with the ``aris3000`` sonar over ``geom``'s range window and
     resample them onto ``geom``'s pixels. ``fls_overrides``: further :class:`FlsConfig` fields
     (gain, noise floor, image formation). Speckle and noise from ``component_rng(seed, "fls")``."""
-    from autonomy.frames import rot_from_euler
     from scenarios.config.fls import FlsConfig
     from scenarios.config.world import SeabedConfig, WorldConfig
     from scenarios.schema import Scenario
-    from sim.rng import component_rng
     from sim.scene.world import build_world
     from sim.sensors.fls import FlsSensor
-    from sim.sensors.raycast import MujocoRayCaster
-    from sim.sensors.sonar.display import FanRemap
 
     rng = component_rng(seed, "fls")
     pose_rng = component_rng(seed, "realism_poses")
@@ -215,8 +216,6 @@ def render_tank_frames(scenes: list[TankScene], geom: FanGeometry, *, seed: int,
 def background_grey(frames: list[SimFrame] | list[tuple[NDArray, NDArray]], geom: FanGeometry) -> float:
     """Median grey of the unlabelled fan pixels in the middle third of the range window
     (the level the display gain is matched on)."""
-    from sim.realism.image_measures import fan_radius_px
-
     rad, az = fan_radius_px(geom)
     near_px, far_px = geom.range_min_m / geom.m_per_px, geom.range_max_m / geom.m_per_px
     mid = (rad > near_px + (far_px - near_px) / 3) & (rad < far_px - (far_px - near_px) / 3) & (

@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from scenarios.config.world import SeabedConfig
+from scenarios.bathymetry import read_depth_grid
 
 if TYPE_CHECKING:
     import trimesh
@@ -192,8 +193,6 @@ def make_seabed(cfg: SeabedConfig, rng: np.random.Generator) -> Seabed:
     if cfg.kind in ("plane", "slope"):
         return Seabed(cfg)
     if cfg.kind == "file":
-        from scenarios.bathymetry import read_depth_grid
-
         g = read_depth_grid(cfg.file)
         span = max(g.n_m[-1] - g.n_m[0], g.e_m[-1] - g.e_m[0])
         centre = (0.5 * float(g.n_m[0] + g.n_m[-1]), 0.5 * float(g.e_m[0] + g.e_m[-1]))

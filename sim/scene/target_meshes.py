@@ -21,6 +21,7 @@ from numpy.typing import NDArray
 
 from scenarios.config.world import DEBRIS_TARGET_SHAPES, TargetConfig
 from sim.scene.triangle_mesh import TriangleMesh
+from sim.scene.debris_meshes import debris_mesh as build
 
 MERGE_DIGITS = 8  # vertices equal to 1e-8 m are one vertex (trimesh's ``tol.merge``)
 # unit cube corners and faces in trimesh's order (``trimesh.creation.box``)
@@ -112,8 +113,6 @@ def debris_mesh(shape: str, size_m: tuple[float, float, float]) -> TriangleMesh:
     Raises:
         ValueError: not a debris shape, or a size that is not three positive lengths.
     """
-    from sim.scene.debris_meshes import debris_mesh as build
-
     return build(shape, tuple(float(x) for x in size_m))
 
 

@@ -28,6 +28,8 @@ from sim.scene.seabed import Seabed, make_seabed
 from sim.sensors.raycast import BACKGROUND_ID
 from sim.dynamics.hull import VEHICLE_BODY, build_hull_spec
 from sim.scene.target_meshes import target_mesh
+from sim.scene.movers import add_mover_bodies
+from scenarios.vehicle_params import load_params_file, load_vehicle_params, params_path
 
 ACOUSTIC_GROUP = 0
 COLLISION_PROXY_GROUP = 3
@@ -253,7 +255,6 @@ def build_world(scenario: Scenario, *, with_vehicle: bool = True) -> World:
         target_geoms.append(geom)
         objects.append(obj)
 
-    from sim.scene.movers import add_mover_bodies
 
     mover_geoms = add_mover_bodies(spec, wcfg.movers, ACOUSTIC_GROUP)
     for j, mg in enumerate(mover_geoms):
@@ -264,12 +265,9 @@ def build_world(scenario: Scenario, *, with_vehicle: bool = True) -> World:
             height_m=mg.height_m, reflectivity=mg.reflectivity))
 
     if with_vehicle:
-        from scenarios.vehicle_params import load_vehicle_params
-
         hull = build_hull_spec(load_vehicle_params(scenario.vehicle))
         frame = spec.worldbody.add_frame()
         frame.attach_body(hull.body(VEHICLE_BODY), HULL_PREFIX, "")
-    from scenarios.vehicle_params import load_params_file, params_path
 
     for name, vcfg in scenario.vehicles.items():  # after the AUV: its ids stay those of a single-vehicle scene
         extra = build_hull_spec(load_params_file(params_path(vcfg.preset)))

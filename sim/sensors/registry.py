@@ -22,6 +22,7 @@ from numpy.typing import ArrayLike
 from scenarios.config.sensor import SensorConfig
 from sim.rng import component_rng
 from sim.sensors.base import Mount, Sensor
+import sim.sensors as pkg
 
 S = TypeVar("S", bound=type[Sensor])
 
@@ -68,7 +69,6 @@ def _discover() -> None:
     if _DISCOVERED:
         return
     _DISCOVERED = True
-    import sim.sensors as pkg
 
     for info in pkgutil.walk_packages(pkg.__path__, prefix=f"{pkg.__name__}."):
         importlib.import_module(info.name)

@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING, Any
 import yaml
 
 from sim.outputs.run_dir import OutputDirError, check_output_dir, is_output_of, write_marker
+from sim.mcm.figures import summarise, write_figures, write_grid_figure
 
 if TYPE_CHECKING:
     from scenarios.schema import Scenario
@@ -155,7 +156,6 @@ def run_grid(out: str | os.PathLike[str], spec: SweepSpec, grid: dict[str, list[
         summary = run_sweep(folder / point_folder_name(point), sub, emit=emit_point, label=label, **kwargs)
         rows.append({"point": point, "folder": point_folder_name(point), "summary": summary})
     _write_atomic(folder / "grid_summary.json", json.dumps({"grid": grid, "points": rows}, indent=1))
-    from sim.mcm.figures import write_grid_figure
 
     write_grid_figure(folder / "grid_summary.png", spec.scenario, rows, spec.runs)
     return {"runs": spec.runs * len(points), "points": rows}
@@ -206,8 +206,6 @@ def _mcm_job(args: tuple[dict, int]) -> dict:
 
 
 def _mcm_finish(out: Path, spec: SweepSpec, results: list[dict]) -> dict:
-    from sim.mcm.figures import summarise, write_figures
-
     summary = summarise(results)
     write_figures(out, results, scenario=spec.scenario)
     return summary

@@ -11,6 +11,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sim.dataset.coco_io import ANNOTATIONS_FILE, coco_bbox_to_xyxy
+from sim.dataset.errors import DatasetError
 
 
 @dataclass
@@ -112,8 +113,6 @@ def check_training_classes(data_dirs: list[Path], classes: tuple[str, ...] | lis
             object in the datasets (the message lists the classes present, with their counts);
             or the datasets list different classes.
     """
-    from sim.dataset.errors import DatasetError
-
     counts = [labelled_class_counts(d) for d in data_dirs]
     for d, c in zip(data_dirs[1:], counts[1:]):
         if list(c) != list(counts[0]):

@@ -10,6 +10,8 @@ from pathlib import Path
 import numpy as np
 
 from sim.training import require_torch
+from sim.dataset.errors import DatasetError, fls_fan_hw
+from sim.training.targets import encode_targets
 
 DEFAULT_INPUT_HW = (240, 448)
 #: The architectures of :data:`sim.training.model.ARCHITECTURES` (named here without torch).
@@ -131,8 +133,6 @@ def _load_all(data_dirs: list[Path], input_hw: tuple[int, int], classes, input_t
     first = parts[0]
     for d, a in zip(data_dirs[1:], parts[1:]):
         if a.class_names != first.class_names or a.fan_hw != first.fan_hw:
-            from sim.dataset.errors import DatasetError
-
             raise DatasetError(f"train-atr: dataset {d} has classes {a.class_names} / fan {a.fan_hw}, "
                              f"{data_dirs[0]} has {first.class_names} / {first.fan_hw}")
     if len(parts) == 1:
@@ -251,11 +251,9 @@ def train_atr(data_dir: str | Path | list, out_path: str | Path, params: TrainPa
     """
     torch = require_torch()
     from autonomy.atr.config import AtrConfig
-    from sim.dataset.errors import DatasetError, fls_fan_hw
     from sim.training.data import check_training_classes
     from sim.training.export import export_onnx
     from sim.training.model import ARCHITECTURES
-    from sim.training.targets import encode_targets
 
     torch.manual_seed(params.seed)
     torch.set_num_threads(params.threads)

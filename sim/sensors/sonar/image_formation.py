@@ -44,6 +44,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sim.sensors.sonar.beam_pattern import SINC_3DB
+from sim.sensors.sonar.speckle import complement_uniform_f32
 
 
 def beam_amplitude_kernel(spacing_rad: float, beamwidth_rad: float, extent_beamwidths: float) -> NDArray[np.float32]:
@@ -114,8 +115,6 @@ def standard_normal_pair_f32(rng: np.random.Generator, shape: tuple[int, ...]
     of two uniform draws (:func:`sim.sensors.sonar.speckle.complement_uniform_f32`, in (0, 1]):
     ``sqrt(-2 ln u1) (cos, sin)(2 pi u2)``, with OpenCV's SIMD log, sqrt and polar-to-Cartesian
     passes; about three times faster than two ``rng.standard_normal`` calls."""
-    from sim.sensors.sonar.speckle import complement_uniform_f32
-
     u1 = complement_uniform_f32(rng, shape)
     u2 = complement_uniform_f32(rng, shape)
     mag = cv2.log(u1, dst=u1)

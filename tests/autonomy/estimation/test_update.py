@@ -127,3 +127,28 @@ def test_batched_kalman_update_is_bit_identical_to_one_by_one(ndim_state, mappin
         assert np.array_equal(xi, xb[i]) and np.array_equal(Pi, Pb[i])
     with pytest.raises(np.linalg.LinAlgError):
         updater.update_batch(x[:2], np.zeros((2, ndim_state, ndim_state)), z[:2], np.zeros((2, m, m)))
+
+
+@pytest.mark.parametrize("ndim_state, mapping", [(3, (0, 1, 2)), (6, (0, 1, 2)), (4, (3, 1))])
+def test_the_selection_update_is_the_general_update_with_a_selection_matrix(ndim_state, mapping):
+    """KalmanUpdater (H by indexing) against kalman_update with H written out, and the
+    information form of the posterior (P+^-1 = P^-1 + H^T R^-1 H) as an independent oracle."""
+    from autonomy.estimation.updater import kalman_update
+
+    rng = np.random.default_rng(11)
+    model = PositionFix(ndim_state, mapping)
+    H = np.zeros((len(mapping), ndim_state))
+    H[np.arange(len(mapping)), list(mapping)] = 1.0
+    for _ in range(20):
+        P = _random_spd(rng, ndim_state)
+        R = _random_spd(rng, len(mapping))
+        x = rng.normal(0.0, 3.0, ndim_state)
+        z = H @ x + rng.normal(0.0, 1.0, len(mapping))
+        xa, Pa = KalmanUpdater(model).update(x, P, z, R)
+        xb, Pb = kalman_update(x, P, z - H @ x, H, R)
+        np.testing.assert_allclose(xa, xb, rtol=1e-10, atol=1e-10)
+        np.testing.assert_allclose(Pa, Pb, rtol=1e-10, atol=1e-12)
+        info = np.linalg.inv(P) + H.T @ np.linalg.solve(R, H)
+        np.testing.assert_allclose(Pb, np.linalg.inv(info), rtol=1e-8, atol=1e-10)
+        x_info = np.linalg.solve(info, np.linalg.solve(P, x) + H.T @ np.linalg.solve(R, z))
+        np.testing.assert_allclose(xb, x_info, rtol=1e-8, atol=1e-8)

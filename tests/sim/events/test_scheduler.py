@@ -69,3 +69,33 @@ def test_first_firing_at_the_reset_time_and_ties_in_table_order():
     assert sch.take_due(0.0) == [(0.0, "a"), (0.0, "b")]
     assert sch.next_fire_s == pytest.approx(0.01)
     assert sch.take_due(0.02) == [(0.01, "b"), (0.02, "a"), (0.02, "b")]
+
+
+def test_phases_are_taken_apart_and_an_offset_delays_the_first_firing():
+    from sim.events.scheduler import AUTONOMY
+
+    sch = SensorScheduler()
+    sch.add("imu", 10.0)
+    sch.add("link", 2.0, quantum_s=0.1, phase=AUTONOMY, offset_s=0.5)
+    sch.reset(0.0)
+    assert sch.next_fire_s == 0.0  # the physics phase's next firing only
+    physics, autonomy = [], []
+    for k in range(0, 21):  # 0 .. 2 s in 0.1 s ticks
+        t = round(k * 0.1, 10)
+        physics += sch.due(t)
+        autonomy += [(round(t_f, 9), name) for t_f, name in sch.take_due(t, AUTONOMY)]
+    assert physics == ["imu"] * 21  # the autonomy channel is never taken with the physics one
+    assert autonomy == [(0.5, "link"), (1.0, "link"), (1.5, "link"), (2.0, "link")]  # from one period on
+    added = SensorScheduler()  # added after a reset: the offset applies from the first firing too
+    added.add("link", 2.0, first_fire_s=1.0, quantum_s=0.1, phase=AUTONOMY, offset_s=0.5)
+    assert added.take_due(1.4, AUTONOMY) == [] and added.take_due(1.5, AUTONOMY) == [(1.5, "link")]
+    sch.reset(3.0)
+    assert sch.take_due(3.0, AUTONOMY) == [] and sch.take_due(3.5, AUTONOMY) == [(3.5, "link")]
+
+
+def test_bad_phase_and_offset_rejected():
+    sch = SensorScheduler()
+    with pytest.raises(ValueError, match="phase must be one of"):
+        sch.add("x", 1.0, phase="later")
+    with pytest.raises(ValueError, match="offset_s must be >= 0"):
+        sch.add("x", 1.0, offset_s=-1.0)

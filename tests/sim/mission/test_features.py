@@ -17,6 +17,7 @@ from sim.features import (FEATURES, McmFullFeature, MsisLocalizationFeature, Sea
                           TrackingFeature)
 from sim.mission import Mission
 from sim.features.base import MissionFeature
+from sim.events.scheduler import AUTONOMY
 
 ROOT = Path(__file__).resolve().parents[3]
 QUIET = ["autonomy.atr.detector=none", "duration_s=3"]
@@ -103,6 +104,35 @@ def test_a_feature_of_ones_own_is_called_at_each_declared_point_in_order():
     delivered = m.summary().messages_delivered
     assert len(rec.depth_results) == delivered["depth"] > 0
     assert rec.dvl_seen == delivered["dvl"] > 0
+
+
+class _Ticker(_Recorder):
+    """Declares one periodic event in each phase of the loop's clock."""
+
+    name = "ticker"
+
+    def reset(self, ports) -> None:
+        super().reset(ports)
+        ports.every("ticker/physics", 2.0, lambda truth: self.calls.append(("physics_event", truth.t_s)),
+                    stage="ticker")
+        ports.every("ticker/autonomy", ports.autonomy_rate_hz,
+                    lambda truth: self.calls.append(("autonomy_event", truth.t_s)), stage="ticker", phase=AUTONOMY)
+
+
+def test_declared_events_fire_in_their_phase_of_the_period():
+    m = Mission(load_scenario("cssn_lawnmower", QUIET), perception=False, features=[_Ticker])
+    m.run(progress=False)
+    calls = _Ticker.calls
+    # the physics-phase event fires at t = 0 (reset) and every 0.5 s, within the physics substeps
+    assert [t for n, t in calls if n == "physics_event"] == pytest.approx([0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0])
+    assert calls.index(("physics_event", 0.0)) < calls.index(("start", 0.0))
+    # the autonomy-phase event: once a period from the first period on, after the features'
+    # before_nav, before the navigation filter (after_nav)
+    per_step = [c for c in calls if c[0] != "physics_event"][2:-1]
+    assert len(per_step) == 5 * round(3.0 / m.autonomy_dt_s)
+    for k in range(0, len(per_step), 5):
+        names = [c[0] for c in per_step[k:k + 5]]
+        assert names == ["after_physics", "before_nav", "autonomy_event", "after_nav", "end_of_step"], names
 
 
 def test_the_feature_that_drives_the_guidance_replaces_the_survey_state_machine():
