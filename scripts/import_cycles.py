@@ -12,8 +12,9 @@ counts; exit status 1 when there is one. ``--functions`` also lists the function
 imports. ``--audit`` says, for each function-level import of a project module, which of the
 costly third-party packages (:data:`COSTLY`) a module-level import would load in addition to
 those the importing module already loads (its start-up time: the reason for importing inside
-the function), or the reason it is kept (:data:`KEPT`); one that defers none is listed as
-``defers nothing`` (exit status 1: it belongs at the top of its module).
+the function), or the reason it is kept (:data:`KEPT`, :data:`WORKER_MODULES`); one that
+defers none is listed as ``defers nothing`` (exit status 1: it belongs at the top of its
+module).
 """
 
 from __future__ import annotations
@@ -53,9 +54,20 @@ def is_costly(name: str) -> bool:
 #: Subpackages of costly packages that cost little.
 LIGHT = frozenset({"scipy.special", "scipy.linalg"})
 
-#: Function-level imports kept for another reason than start-up time: (module, target) -> why.
+#: Function-level imports kept for another reason than a costly third-party package: (module,
+#: target) -> why.
 KEPT = {
     ("sim.cli", "sim.cli.app"): "inside main's KeyboardInterrupt guard: Ctrl-C while the libraries load exits 130",
+}
+#: Modules whose function-level imports keep a spawned worker's start-up to what its job needs
+#: (project modules too: a dataset worker loads no navigation filter, estimation role or target
+#: mesh it does not use; ``tests/sim/dataset/test_worker_imports.py`` checks what they load).
+WORKER_MODULES = {
+    "sim.dataset.generate": "dataset driver and workers: each job imports only its sensor's modules",
+    "sim.dataset.randomization": "dataset driver: target meshes only in the jobs that build them",
+    "sim.dataset.scene_render": "dataset workers: the scene and ray caster only in the FLS jobs",
+    "sim.dataset.sss_generate": "dataset workers: the scene and ray caster only in the side-scan jobs",
+    "sim.process.sonar_workers": "sonar pipeline workers: each worker imports only its stage's modules",
 }
 
 
@@ -193,7 +205,7 @@ def audit(edges, local, third) -> list[tuple[str, int, str, set[str]]]:
     for m, items in sorted(local.items()):
         mine = closure(m)
         for line, target in sorted(set(items)):
-            kept = KEPT.get((m, target))
+            kept = KEPT.get((m, target)) or WORKER_MODULES.get(m)
             out.append((m, line, target, {kept} if kept else {n for n in closure(target) - mine if is_costly(n)}))
     return out
 

@@ -35,7 +35,7 @@ from scenarios.config.fls import FlsConfig
 from sim.dataset.coco_io import (ANNOTATIONS_FILE, IMAGES_DIR, LABELS_DIR, write_atomic, write_coco, write_png_atomic,
                                  yolo_lines)
 from sim.dataset.errors import DatasetError
-from sim.dataset.sss_generate import SssRandomization, SssSettings, render_sss_scene, sss_randomization, sss_scene_spec
+from sim.dataset.sss_generate import SssRandomization, SssSettings
 from sim.dataset.randomization import (HELDOUT_RANDOMIZATION, TRAIN_RANDOMIZATION, WIDE_RANDOMIZATION,
                                       CLASS_NAMES, Randomization, SceneSpec, draw_world_seed_and_seabed_kind,
                                       sample_scene, seabed_depth_fn)
@@ -43,8 +43,6 @@ from sim.outputs.run_dir import check_output_dir, write_marker
 from sim.rng import component_rng
 from sim.process.spawn_guard import exit_if_spawn_reimport, main_guard_missing
 from sim.process.worker_signals import ignore_sigint, sigint_blocked
-from sim.dataset.scene_render import render_frames
-from scenarios.config.sss import SssConfig
 
 GENERATOR_VERSION = "1.3.0"
 MANIFEST_FILE = "manifest.json"
@@ -86,6 +84,7 @@ def render_scene(spec: SceneSpec, seed: int, settings: RenderSettings, frame_ids
                  out_dir: Path) -> dict:
     """Render the frames of one scene, write their PNGs; return the scene's label part."""
 
+    from sim.dataset.scene_render import render_frames
 
     records = render_frames(spec, fls_config(spec, settings), component_rng(seed, f"dataset/fls/{spec.index}"),
                             len(frame_ids))
@@ -120,6 +119,8 @@ def _scene_job(job: tuple) -> int:
     seed, index, rz_json, settings, frame_ids, out_dir = job
     out_dir = Path(out_dir)
     if isinstance(settings, SssSettings):
+        from sim.dataset.sss_generate import render_sss_scene, sss_scene_spec
+
         rz_sss = SssRandomization.model_validate_json(rz_json)
         part = render_sss_scene(sss_scene_spec(seed, index, rz_sss, settings), seed, settings, frame_ids, out_dir)
     else:
@@ -137,6 +138,8 @@ def _manifest(n_frames: int, seed: int, rz, settings: RenderSettings | SssSettin
     if rz_json.get("basin") is None:
         rz_json.pop("basin", None)  # datasets without basin walls keep their earlier manifests
     if isinstance(settings, SssSettings):
+        from scenarios.config.sss import SssConfig
+
         return {"generator_version": GENERATOR_VERSION, "sensor": "sss", "seed": seed, "n_frames": n_frames,
                 "classes": list(CLASS_NAMES), "randomization": rz_json, "render": settings.__dict__.copy(),
                 "sss_defaults": SssConfig().model_dump(mode="json")}
@@ -203,6 +206,8 @@ def generate_dataset(out_dir: str | Path, n_frames: int, seed: int = 0, workers:
     if n_frames < 1:
         raise DatasetError(f"--n: must be >= 1, got {n_frames}")
     if isinstance(settings, SssSettings):
+        from sim.dataset.sss_generate import sss_randomization
+
         settings.check()
         randomization = sss_randomization(randomization, settings)  # what the side-scan scenes draw from
     if use_ray:

@@ -14,7 +14,6 @@ from scenarios.config.base import StrictModel
 from scenarios.config.world import BasinConfig, SeabedConfig, TargetConfig
 from sim.rng import component_rng
 from sim.scene.seabed import make_seabed
-from sim.scene.target_meshes import target_mesh
 
 #: The labelled classes of the FLS datasets, in COCO category order (id = index + 1).
 CLASS_NAMES = ("opi", "rock", "debris")
@@ -228,6 +227,8 @@ def resting_depth(target: TargetConfig, seabed_depth) -> float:
         base at depth 0: a lying cylinder's axis ends up one radius above a flat bed, a tilted
         rock's lowest corner on it.
     """
+    from sim.scene.target_meshes import target_mesh
+
     R = rot_from_euler(*np.deg2rad(target.rpy_deg))
     v = target_mesh(target).vertices @ R.T
     v[:, :2] += np.asarray(target.pos_ned[:2], dtype=float)

@@ -12,9 +12,6 @@ from autonomy.sonar_geometry import FanGeometry
 from scenarios.config.fls import FlsConfig
 from sim.dataset.coco_io import mask_annotation
 from sim.dataset.randomization import SceneSpec
-from scenarios.config.world import WorldConfig
-from scenarios.schema import Scenario
-from sim.sensors.raycast import MujocoRayCaster
 
 
 @dataclass(frozen=True)
@@ -47,7 +44,10 @@ class FrameRecord:
 
 def render_frames(spec: SceneSpec, fls_cfg: FlsConfig, rng: np.random.Generator, n_frames: int) -> list[FrameRecord]:
     """Build ``spec``'s world and render its first ``n_frames`` poses (noise drawn from ``rng``)."""
+    from scenarios.config.world import WorldConfig
+    from scenarios.schema import Scenario
     from sim.sensors.fls import FlsSensor
+    from sim.sensors.raycast import MujocoRayCaster
     from sim.scene.world import build_world
 
     scenario = Scenario(name=f"dataset_scene_{spec.index}", seed=spec.world_seed,

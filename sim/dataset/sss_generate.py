@@ -24,15 +24,11 @@ from numpy.typing import NDArray
 
 from pydantic import model_validator
 
-from scenarios.config.world import SeabedConfig, TargetConfig, WorldConfig
+from scenarios.config.world import SeabedConfig, TargetConfig
 from sim.dataset.coco_io import IMAGES_DIR, write_png_atomic
 from sim.dataset.errors import DatasetError
 from sim.dataset.randomization import CLASS_NAMES, Range, Randomization, SceneRanges, _object, _u, seabed_depth_fn
 from sim.rng import component_rng
-from scenarios.config.sss import SssConfig
-from autonomy.frames import rot_from_euler
-from scenarios.schema import Scenario
-from sim.sensors.raycast import MujocoRayCaster
 
 #: Side-scan altitude over the seabed as a fraction of the slant range per side: the usual
 #: survey practice (the ``mcm_survey_full`` scenario flies 8 m with a 75 m range, 11 %). Much
@@ -225,6 +221,8 @@ def sss_scene_spec(seed: int, index: int, rz: Randomization | SssRandomization,
 
 
 def sss_config(spec: SssSceneSpec, settings: SssSettings):
+    from scenarios.config.sss import SssConfig
+
     base = SssConfig()
     kw = dict(range_max_m=settings.range_max_m, n_bins=settings.n_bins, elevation_rays=settings.elevation_rays,
               gain_db=settings.gain_db + spec.gain_db,
@@ -239,6 +237,10 @@ def render_sss_scene(spec: SssSceneSpec, seed: int, settings: SssSettings, tile_
                      out_dir: Path) -> dict:
     """Ping along the scene's line, cut the waterfall into tiles, write the first
     ``len(tile_ids)`` tiles' PNGs; return the scene's label part (COCO images/annotations)."""
+    from autonomy.frames import rot_from_euler
+    from scenarios.config.world import WorldConfig
+    from scenarios.schema import Scenario
+    from sim.sensors.raycast import MujocoRayCaster
     from sim.sensors.sss import SssSensor, Waterfall
     from sim.dataset.sss_tiles import cut_tiles
     from sim.scene.world import build_world

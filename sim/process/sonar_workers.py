@@ -37,8 +37,6 @@ from typing import Any
 
 from sim.process.frame_transport import FrameRing, shared_objects
 from sim.process.worker_signals import ignore_sigint
-from sim.process.gc_policy import set_loop_thresholds
-from sim.sensors.raycast import MujocoRayCaster
 
 
 def _worker_start() -> None:
@@ -46,6 +44,7 @@ def _worker_start() -> None:
     thread and set the garbage collector for the loop (:mod:`sim.process.gc_policy`)."""
     import cv2
 
+    from sim.process.gc_policy import set_loop_thresholds
 
     set_loop_thresholds()
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
@@ -85,6 +84,7 @@ def render_main(conn: Any, to_detection: Any, ring_detection: FrameRing, to_main
         import mujoco
 
         from sim.sensors.base import SceneView
+        from sim.sensors.raycast import MujocoRayCaster
 
         s = pickle.loads(conn.recv_bytes())
         sonar, model, moving = s["sonar"], s["model"], s["moving_geoms"]
