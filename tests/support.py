@@ -296,3 +296,43 @@ def write_fan_dataset(folder: Path, n_images: int = 4, fan_hw: tuple[int, int] =
     cats = [{"id": k + 1, "name": n} for k, n in enumerate(FAN_DATASET_CLASSES)]
     (folder / "annotations.json").write_text(json.dumps({"images": images, "annotations": anns, "categories": cats}))
     return folder
+
+
+# -- hand-made folders in the watertank layout (images/, boxes/*.xml, masks/) of real labelled frames
+#: The fan of the hand-made watertank frames: an ARIS 3000 window of 0.7-2.9 m, 30 deg, on the
+#: 320 x 480 px grid of the Marine Debris set.
+WATERTANK_GEOM = FanGeometry(320, 480, 0.7, 2.9, np.deg2rad(30.0), 0.0050, 159.4, 602.5)
+
+
+def watertank_box_xml(boxes: list[tuple[str, tuple[int, int, int, int]]]) -> str:
+    """A box file of the watertank layout: one ``object`` per (class, (x, y, w, h) px)."""
+    objs = "".join(f"<object><name>{c}</name><bndbox><x>{x}</x><y>{y}</y><w>{w}</w><h>{h}</h></bndbox></object>"
+                   for c, (x, y, w, h) in boxes)
+    return f"<annotation><filename>f.png</filename>{objs}</annotation>"
+
+
+def write_watertank_folder(root: Path, frames: list[list[tuple[str, tuple[int, int, int, int]]]],
+                           seed: int = 0) -> Path:
+    """One frame per entry of ``frames`` (its boxes: class and (x, y, w, h) px): speckle inside
+    :data:`WATERTANK_GEOM`'s fan, black outside, each box filled brighter, its class id in the
+    mask; names ``frame-0.png`` ... in natural order."""
+    from sim.dataset.real_frames import MARINE_DEBRIS_CLASSES
+
+    ids = {n: k for k, n in MARINE_DEBRIS_CLASSES.items()}
+    g = WATERTANK_GEOM
+    yy, xx = np.mgrid[0:g.height_px, 0:g.width_px]
+    r, a = g.pixel_to_polar(xx, yy)
+    inside = g.inside(r, a)
+    rng = np.random.default_rng(seed)
+    for sub in ("images", "boxes", "masks"):
+        (root / sub).mkdir(parents=True, exist_ok=True)
+    for i, boxes in enumerate(frames):
+        img = np.clip(rng.exponential(30.0, inside.shape) + 1, 1, 255)
+        mask = np.zeros(inside.shape, np.uint8)
+        for c, (x, y, w, h) in boxes:
+            img[y:y + h, x:x + w] = 220
+            mask[y:y + h, x:x + w] = ids[c]
+        cv2.imwrite(str(root / "images" / f"frame-{i}.png"), np.where(inside, img, 0).astype(np.uint8))
+        cv2.imwrite(str(root / "masks" / f"frame-{i}.png"), mask)
+        (root / "boxes" / f"frame-{i}.xml").write_text(watertank_box_xml(boxes))
+    return root

@@ -12,9 +12,26 @@ from autonomy.atr.detector import Detector, NullDetector
 SHIPPED_MODEL_PATH = Path(__file__).resolve().parent / "models" / "atr_centernet.onnx"
 
 
+def shipped_model_names() -> tuple[str, ...]:
+    """Names of the models shipped in ``autonomy/atr/models/`` (file stems)."""
+    return tuple(sorted(p.stem for p in SHIPPED_MODEL_PATH.parent.glob("*.onnx")))
+
+
+def resolve_model(name_or_path: str | Path) -> Path:
+    """The ONNX file a user names: a path, or the name of a shipped model
+    (:func:`shipped_model_names`, e.g. ``atr_centernet``). A path that exists wins; the
+    returned path need not exist (the caller reports a missing file)."""
+    p = Path(name_or_path).expanduser()
+    text = str(name_or_path)
+    if p.exists() or "/" in text or "\\" in text or text.endswith(".onnx"):
+        return p
+    shipped = SHIPPED_MODEL_PATH.parent / f"{text}.onnx"
+    return shipped if shipped.is_file() else p
+
+
 def model_path(cfg: AtrConfig) -> Path:
     """The ONNX file ``cfg`` selects (the shipped model when ``model_path`` is None)."""
-    return SHIPPED_MODEL_PATH if cfg.model_path is None else Path(cfg.model_path).expanduser()
+    return SHIPPED_MODEL_PATH if cfg.model_path is None else resolve_model(cfg.model_path)
 
 
 def build_detector(cfg: AtrConfig) -> Detector:

@@ -23,7 +23,7 @@ NO_DETECTIONS = "n/a (no detections)"
 
 
 def _detector_config(args: argparse.Namespace):
-    from autonomy.atr.build import model_path
+    from autonomy.atr.build import model_path, shipped_model_names
     from autonomy.atr.config import AtrConfig
 
     if args.model is not None and args.detector != "cnn":
@@ -33,7 +33,8 @@ def _detector_config(args: argparse.Namespace):
     cfg = AtrConfig(detector=args.detector, model_path=args.model, intra_op_threads=1,
                     **({} if args.threshold is None else {"score_threshold": args.threshold}))
     if args.detector == "cnn" and not model_path(cfg).is_file():
-        raise ModelFileError(f"--model {args.model}: no such file")
+        raise ModelFileError(f"--model {args.model}: no such file, and no shipped model of that name (shipped: "
+                             f"{', '.join(shipped_model_names())})")
     return cfg
 
 
@@ -76,9 +77,19 @@ def _cmd_eval(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(res, indent=1))
         return 0
-    print(f"eval-atr {res['detector']} on {res['data']} ({res['frames']} frames, classes {res['classes']})")
-    for k in ("score_threshold", "precision", "recall", "false_alarms_per_frame", "ap50", "ap50_95", "frames_per_s"):
+    print(f"eval-atr {res['detector']} on {res['data']} ({res['layout']} layout, {res['frames']} frames, "
+          f"classes {', '.join(res['classes'])})")
+    keys = ("score_threshold", "precision", "recall", "false_alarms_per_frame", "ap50", "ap50_95", "frames_per_s")
+    if len(res["classes"]) > 1:
+        keys = ("score_threshold", "precision", "recall", "false_alarms_per_frame", "map50", "map50_95",
+                "frames_per_s")
+    for k in keys:
         print(f"  {k:24s} {NO_DETECTIONS if k == 'precision' and res[k] is None else _fmt(res[k])}")
+    if len(res["classes"]) > 1 or res["ap50_scored_apart"]:
+        print("  AP50 by class" + (" (no ground truth: -)" if None in res["ap50_by_class"].values() else ""))
+        for name, v in {**res["ap50_by_class"], **{f"{k} (scored apart)": v
+                                                   for k, v in res["ap50_scored_apart"].items()}}.items():
+            print(f"    {name:26s} {_fmt(v)}")
     print("  range band       gt   recall   det  precision")
     for b in res["by_range_band"]:
         lo, hi = b["range_m"]
@@ -89,9 +100,12 @@ def _cmd_eval(args: argparse.Namespace) -> int:
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("eval-atr", help="evaluate the ATR detector on a held-out set")
-    p.add_argument("--data", default=None, help="dataset folder (default: generate the held-out set)")
+    p.add_argument("--data", default=None,
+                   help="labelled folder: a dataset of `auvsim dataset` (annotations.json), or real frames in the "
+                        "watertank layout (images/, boxes/*.xml, masks/); default: generate the held-out set")
     p.add_argument("--detector", choices=["cnn", "classical"], default="cnn")
-    p.add_argument("--model", default=None, help="ONNX model (default: the shipped one)")
+    p.add_argument("--model", default=None,
+                   help="ONNX model: a path, or the name of a shipped model (default: the shipped survey model)")
     p.add_argument("--threshold", type=probability, default=None,
                    help="operating threshold, 0 to 1 (default: the detector config's)")
     p.add_argument("--max-images", type=positive_int, default=None)

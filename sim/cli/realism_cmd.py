@@ -14,7 +14,7 @@ from sim.outputs.run_dir import StagedOutput, check_output_dir
 def _cmd_realism(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from sim.realism.real_frames import RealDataError
+    from sim.dataset.real_frames import RealDataError
     from sim.realism.report import FORMATIONS, realism_report, report_lines, side_by_side_png
 
     formations = tuple(FORMATIONS) if args.formation == "both" else (args.formation,)

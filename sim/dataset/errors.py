@@ -14,11 +14,14 @@ class DatasetError(ValueError):
 
 
 def require_dataset(path: str | Path, arg: str = "--data") -> Path:
-    """A finished dataset folder written by ``auvsim dataset``; returns it resolved.
+    """A finished dataset folder written by ``auvsim dataset``, or a labelled folder in the
+    watertank layout (``images/`` and ``boxes/``, :mod:`sim.dataset.labelled_folder`); returns
+    it resolved.
 
     Raises:
-        DatasetError: ``path`` does not exist, is not a folder, or has no
-            ``annotations.json`` (not a dataset, or generation did not finish).
+        DatasetError: ``path`` does not exist, is not a folder, or has neither
+            ``annotations.json`` (not a dataset, or generation did not finish) nor the
+            watertank layout.
     """
     from sim.dataset.coco_io import ANNOTATIONS_FILE
 
@@ -30,8 +33,11 @@ def require_dataset(path: str | Path, arg: str = "--data") -> Path:
     if not p.is_dir():
         raise DatasetError(f"{arg} {p}: is a file, expected a dataset folder written by `auvsim dataset`")
     ann = p / ANNOTATIONS_FILE
+    if not ann.is_file() and (p / "images").is_dir() and (p / "boxes").is_dir():
+        return p.resolve()  # the watertank layout (sim.dataset.labelled_folder)
     if not ann.is_file():
-        raise DatasetError(f"{arg} {p}: no {ANNOTATIONS_FILE} here (not a dataset folder, or its generation "
+        raise DatasetError(f"{arg} {p}: no {ANNOTATIONS_FILE} here (not a dataset folder written by `auvsim "
+                           "dataset`, nor a watertank-layout folder with images/ and boxes/; or its generation "
                            "did not finish: rerun `auvsim dataset` with the same arguments to complete it)")
     try:
         doc = json.loads(ann.read_text())
@@ -55,6 +61,14 @@ def fls_fan_hw(path: str | Path, arg: str = "--data") -> tuple[int, int]:
     from sim.dataset.coco_io import ANNOTATIONS_FILE
 
     p = Path(path)
+    if not (p / ANNOTATIONS_FILE).is_file():  # the watertank layout: its PNGs' size (one size, checked on loading)
+        import cv2
+
+        first = next(iter(sorted((p / "images").glob("*.png"))), None)
+        img = cv2.imread(str(first), cv2.IMREAD_GRAYSCALE) if first is not None else None
+        if img is None:
+            raise DatasetError(f"{arg} {p}: no readable PNG image in images/")
+        return int(img.shape[0]), int(img.shape[1])
     images = json.loads((p / ANNOTATIONS_FILE).read_text())["images"]
     if not images:
         raise DatasetError(f"{arg} {p}: the dataset holds no images")

@@ -26,7 +26,8 @@ import numpy as np
 from autonomy.messages import FlsFrame
 from autonomy.sonar_geometry import FanGeometry
 from sim.dataset.coco_io import ANNOTATIONS_FILE, coco_bbox_to_xyxy, xyxy_to_coco_bbox
-from sim.dataset.errors import DatasetError, require_dataset
+from sim.dataset.labelled_folder import SCORED_APART, load_labelled_folder
+from sim.dataset.errors import DatasetError
 from sim.evaluation.detection_matching import match_frame
 from autonomy.atr.cnn_detector import CnnDetector
 
@@ -51,35 +52,50 @@ def _pr(tp: int, fp: int, n_gt: int) -> tuple[float | None, float | None]:
 
 
 def evaluate_detector(detector, data_dir: str | Path, score_threshold: float,
-                      target_classes: Sequence[str] = ("opi",), min_score: float = 0.05,
+                      target_classes: Sequence[str] | None = None, min_score: float = 0.05,
                       range_bands_m: Sequence[float] = DEFAULT_RANGE_BANDS_M,
                       max_images: int | None = None, coco_ap: bool = True) -> dict:
-    """Evaluate ``detector`` (``.detect(frame, score_threshold=...)``) on ``data_dir``.
+    """Evaluate ``detector`` (``.detect(frame, score_threshold=...)``) on a labelled folder of
+    either layout (:mod:`sim.dataset.labelled_folder`: a dataset of ``auvsim dataset``, or
+    the watertank layout of real frames).
 
-    Detections down to ``min_score`` feed COCOeval; the operating point uses
-    ``score_threshold``. Returns a JSON-serialisable dict (AP figures NaN if not ``coco_ap``);
-    ``precision`` is None when the detector made no detection at ``score_threshold``
-    (undefined: no detection is neither right nor wrong), as a band's precision without
-    detections.
+    Detections down to ``min_score`` feed COCOeval (pycocotools, [COCO]): ``map50`` and
+    ``map50_95`` are the mean over ``target_classes`` (default: the folder's, ``opi`` for the
+    project's datasets, every class but the wall for the watertank layout) of each class's
+    AP at IoU 0.5 and averaged over IoU 0.5:0.95, ``ap50_by_class`` each class's, and
+    ``ap50_scored_apart`` the wall's where the folder has one (``ap50``, ``ap50_95``: the
+    same means, the names of the single-class report). The operating point (precision,
+    recall, false alarms, range bands) uses ``score_threshold`` over the target classes.
+    Returns a JSON-serialisable dict (AP figures NaN if not ``coco_ap``); ``precision`` is
+    None when the detector made no detection at ``score_threshold`` (undefined: no detection
+    is neither right nor wrong), as a band's precision without detections.
 
     Raises:
-        DatasetError: the folder is not a dataset, lacks a target class, holds no image or
-            no labelled target in the frames evaluated, or an image cannot be read.
+        DatasetError: the folder is not a labelled folder, lacks a target class, holds no image
+            or no labelled target in the frames evaluated, an image cannot be read, or the
+            detector names none of the target classes.
     """
     from pycocotools.coco import COCO
-    from pycocotools.cocoeval import COCOeval
 
-    data_dir = require_dataset(data_dir, "--data")
+    folder = load_labelled_folder(data_dir, "--data")
+    data_dir = folder.root
     if max_images is not None and max_images < 1:
         raise DatasetError(f"--max-images: must be >= 1, got {max_images}")
-    ann_path = data_dir / ANNOTATIONS_FILE
     with contextlib.redirect_stdout(io.StringIO()):
-        coco_gt = COCO(str(ann_path))
+        coco_gt = COCO()
+        coco_gt.dataset = folder.coco
+        coco_gt.createIndex()
     name_to_cat = {c["name"]: c["id"] for c in coco_gt.loadCats(coco_gt.getCatIds())}
+    target_classes = tuple(folder.target_classes if target_classes is None else target_classes)
     missing = [c for c in target_classes if c not in name_to_cat]
     if missing:
-        raise DatasetError(f"--data {data_dir}: classes {missing} not in {ann_path} (it has {sorted(name_to_cat)})")
+        raise DatasetError(f"--data {data_dir}: classes {missing} not in its labels (it has {sorted(name_to_cat)})")
+    det_classes = getattr(detector, "class_names", None)
+    if det_classes is not None and not set(det_classes) & set(target_classes):
+        raise DatasetError(f"--data {data_dir}: the detector's classes ({', '.join(det_classes)}) are none of the "
+                           f"data's ({', '.join(target_classes)}); give a model trained on these classes (--model)")
     target_cats = [name_to_cat[c] for c in target_classes]
+    apart_cats = [name_to_cat[c] for c in SCORED_APART if c in name_to_cat and c not in target_classes]
     img_ids = sorted(coco_gt.getImgIds())[:max_images]
     if not img_ids:
         raise DatasetError(f"--data {data_dir}: the dataset holds no images")
@@ -98,10 +114,7 @@ def evaluate_detector(detector, data_dir: str | Path, score_threshold: float,
     infer_s = 0.0
     for img_id in img_ids:
         rec = coco_gt.loadImgs(img_id)[0]
-        fan = cv2.imread(str(data_dir / rec["file_name"]), cv2.IMREAD_GRAYSCALE)
-        if fan is None:
-            raise DatasetError(f"--data {data_dir}: cannot read image {rec['file_name']} (dataset damaged)")
-        frame = frame_from_record(rec, fan)
+        frame = frame_from_record(rec, folder.image(rec))
         t0 = time.perf_counter()
         dets = detector.detect(frame, score_threshold=min_score)
         infer_s += time.perf_counter() - t0
@@ -134,18 +147,19 @@ def evaluate_detector(detector, data_dir: str | Path, score_threshold: float,
                 band_fp[b] += int(((db == b) & (state == 0)).sum())
     n_img = len(img_ids)
     ap50 = ap = float("nan")
+    by_class: dict[str, float | None] = {c: (float("nan") if not coco_ap else None) for c in target_classes}
+    apart: dict[str, float | None] = {}
     if coco_dets and coco_ap:
-        with contextlib.redirect_stdout(io.StringIO()):
-            coco_dt = coco_gt.loadRes(coco_dets)
-            ev = COCOeval(coco_gt, coco_dt, "bbox")
-            ev.params.imgIds = img_ids
-            ev.params.catIds = target_cats
-            ev.evaluate()
-            ev.accumulate()
-            ev.summarize()
-        ap, ap50 = float(ev.stats[0]), float(ev.stats[1])
+        ap, ap50, per_cat = _coco_ap(coco_gt, coco_dets, img_ids, target_cats + apart_cats)
+        by_class = {c: per_cat[name_to_cat[c]] for c in target_classes}
+        apart = {coco_gt.loadCats(c)[0]["name"]: per_cat[c] for c in apart_cats}
+        present = [v for v in by_class.values() if v is not None]
+        ap50 = float(np.mean(present)) if present else 0.0  # the targets' mean (not the wall's)
+        ap = _coco_ap(coco_gt, coco_dets, img_ids, target_cats)[0] if apart_cats else ap
     elif n_gt and coco_ap:
         ap = ap50 = 0.0
+        by_class = {c: (0.0 if coco_gt.getAnnIds(imgIds=img_ids, catIds=[name_to_cat[c]]) else None)
+                    for c in target_classes}
     precision, recall = _pr(tp, fp, n_gt)
     by_band = []
     for b in range(n_bands):
@@ -157,8 +171,31 @@ def evaluate_detector(detector, data_dir: str | Path, score_threshold: float,
     return {"frames": n_img, "classes": list(target_classes), "score_threshold": score_threshold,
             "ground_truth": n_gt, "true_positives": tp, "false_positives": fp,
             "precision": precision, "recall": recall, "false_alarms_per_frame": fp / n_img if n_img else 0.0,
-            "ap50": ap50, "ap50_95": ap, "by_range_band": by_band,
+            "ap50": ap50, "ap50_95": ap, "map50": ap50, "map50_95": ap, "ap50_by_class": by_class,
+            "ap50_scored_apart": apart, "layout": folder.layout, "by_range_band": by_band,
             "frames_per_s": n_img / infer_s if infer_s > 0 else float("nan")}
+
+
+def _coco_ap(coco_gt, coco_dets: list[dict], img_ids: list[int], cat_ids: list[int]
+             ) -> tuple[float, float, dict[int, float | None]]:
+    """COCOeval on ``cat_ids``: (AP50:95, AP50 over the categories, AP50 per category id; None
+    for a category without ground truth in ``img_ids``)."""
+    from pycocotools.cocoeval import COCOeval
+
+    with contextlib.redirect_stdout(io.StringIO()):
+        coco_dt = coco_gt.loadRes(coco_dets)
+        ev = COCOeval(coco_gt, coco_dt, "bbox")
+        ev.params.imgIds = img_ids
+        ev.params.catIds = cat_ids
+        ev.evaluate()
+        ev.accumulate()
+        ev.summarize()
+    prec = ev.eval["precision"]  # (IoU thresholds, recall points, categories, areas, max dets)
+    per_cat = {}
+    for k, cat in enumerate(ev.params.catIds):
+        p = prec[0, :, k, 0, -1]
+        per_cat[cat] = float(p[p > -1].mean()) if (p > -1).any() else None
+    return float(ev.stats[0]), float(ev.stats[1]), per_cat
 
 
 class _MemoDetector:

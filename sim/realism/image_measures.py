@@ -1,7 +1,7 @@
 """What a sonar image looks like, in numbers: the measures the realism report compares.
 
 Every measure reads fan images (H, W) uint8 with a class-id mask (0 background, 11 the wall,
-other ids objects; :data:`sim.realism.real_frames.MARINE_DEBRIS_CLASSES`) on one
+other ids objects; :data:`sim.dataset.real_frames.MARINE_DEBRIS_CLASSES`) on one
 :class:`autonomy.sonar_geometry.FanGeometry`, so real and simulated frames are measured by the
 same code on the same pixel grid. Polar measures resample the fan onto (range, azimuth): one
 pixel per range step, :data:`AZ_PER_BEAM` samples per beam.

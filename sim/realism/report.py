@@ -1,7 +1,7 @@
 """The realism report: real forward-looking sonar frames against a matched simulated set.
 
 :func:`realism_report` reads the real frames from a folder, fits their fan
-(:func:`sim.realism.real_frames.fit_fan_outline`), draws matched water-tank scenes with a fixed
+(:func:`sim.dataset.real_frames.fit_fan_outline`), draws matched water-tank scenes with a fixed
 seed (:mod:`sim.realism.tank_scenes`), matches the display gain on the mid-range background,
 renders them onto the real pixel grid, and measures both sets with the same code
 (:mod:`sim.realism.image_measures`): the statistics table, the range profile and the classifier
@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sim.realism.image_measures import MEASURES, FrameSetMeasures
-from sim.realism.real_frames import RealFrames, fan_groups, fit_fan_outline, load_real_frames
+from sim.dataset.real_frames import RealFrames, fan_groups, fit_fan_outline, load_real_frames
 from sim.realism.tank_scenes import (TANK, TANK_FORMATION, TankGeometry, background_grey, calibrate_gain_db,
                                      draw_scenes, render_tank_frames)
 from sim.realism.two_sample import (TwoSampleResult, balanced_sets, cnn_judge, feature_judges,
@@ -209,7 +209,7 @@ def realism_report(real_dir: str, *, n_sim: int = 200, seed: int = 0, near_m: fl
     """Measure the real frames of ``real_dir`` against ``n_sim`` simulated ones per formation.
 
     Args:
-        real_dir: folder of real frames (:func:`sim.realism.real_frames.load_real_frames`).
+        real_dir: folder of real frames (:func:`sim.dataset.real_frames.load_real_frames`).
         n_sim: simulated frames per formation (one per drawn scene).
         seed: root seed of the scenes, the noise and the patch draws.
         near_m: the real window's near range, m (sets the metric scale).
@@ -218,12 +218,12 @@ def realism_report(real_dir: str, *, n_sim: int = 200, seed: int = 0, near_m: fl
         limit_real: read at most this many real frames.
         progress: ``progress(label, total)`` returns a per-item callback (a progress bar).
 
-    The real frames are sorted by fan outline (:func:`sim.realism.real_frames.fan_groups`):
+    The real frames are sorted by fan outline (:func:`sim.dataset.real_frames.fan_groups`):
     the largest group is measured and matched, the others (recorded with another window or
     exported at another aspect) are left out and named in ``notes``.
 
     Raises:
-        sim.realism.real_frames.RealDataError: the folder cannot be read, or its frames hold
+        sim.dataset.real_frames.RealDataError: the folder cannot be read, or its frames hold
             no sonar fan.
         ValueError: a bad argument (named in the message), or a ``near_m`` outside
             :func:`near_range_limits_m` for the fitted fan.

@@ -1,7 +1,7 @@
 """Water-tank scenes matched to a real forward-looking sonar set, and their frames on its pixel grid.
 
 The geometry is estimated from the real frames (``docs/studies/realism.md`` gives the estimate and
-how it was made): the fan outline (:func:`sim.realism.real_frames.fit_fan_outline`) gives
+how it was made): the fan outline (:func:`sim.dataset.real_frames.fit_fan_outline`) gives
 the near/far ratio of the window; the preset's minimum range (0.7 m for the ARIS 3000, its
 nearest window start) gives the metric scale. The sonar looks down at a flat tank floor from
 :data:`TANK.height_m` with its boresight tilted :data:`TANK.tilt_deg` down; a wall crosses the
@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from autonomy.sonar_geometry import FanGeometry
-from sim.realism.real_frames import MARINE_DEBRIS_CLASSES
+from sim.dataset.real_frames import MARINE_DEBRIS_CLASSES
 from autonomy.frames import rot_from_euler
 from sim.rng import component_rng
 from sim.sensors.raycast import MujocoRayCaster

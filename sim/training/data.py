@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -11,6 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sim.dataset.coco_io import ANNOTATIONS_FILE, coco_bbox_to_xyxy
+from sim.dataset.labelled_folder import folder_layout, load_labelled_folder
 from sim.dataset.errors import DatasetError
 
 
@@ -51,10 +51,10 @@ def load_detection_arrays(data_dir: str | Path, input_hw: tuple[int, int],
         FileNotFoundError: no annotations file, or an image that cannot be read.
     """
     data_dir = Path(data_dir)
-    ann_path = data_dir / ANNOTATIONS_FILE
-    if not ann_path.is_file():
-        raise FileNotFoundError(f"no {ANNOTATIONS_FILE} in dataset directory {data_dir}")
-    coco = json.loads(ann_path.read_text())
+    if not data_dir.is_dir() or folder_layout(data_dir) is None:
+        raise FileNotFoundError(f"no {ANNOTATIONS_FILE} (nor images/ and boxes/) in dataset directory {data_dir}")
+    folder = load_labelled_folder(data_dir)
+    coco = folder.coco
     cats = {c["id"]: c["name"] for c in coco["categories"]}
     names = class_names if class_names is not None else [cats[k] for k in sorted(cats)]
     name_to_idx = {n: i for i, n in enumerate(names)}
@@ -65,7 +65,7 @@ def load_detection_arrays(data_dir: str | Path, input_hw: tuple[int, int],
     fan_hw = None
     h, w = input_hw
     for im in sorted(coco["images"], key=lambda r: r["id"]):
-        fan = cv2.imread(str(data_dir / im["file_name"]), cv2.IMREAD_GRAYSCALE)
+        fan = cv2.imread(str(folder.root / im["file_name"]), cv2.IMREAD_GRAYSCALE)
         if fan is None:
             raise FileNotFoundError(f"dataset {data_dir}: cannot read image {im['file_name']}")
         if fan_hw is None:
@@ -93,9 +93,10 @@ def load_detection_arrays(data_dir: str | Path, input_hw: tuple[int, int],
 
 
 def labelled_class_counts(data_dir: str | Path) -> dict[str, int]:
-    """Class name -> labelled (not ``iscrowd``) objects in ``data_dir``'s COCO file, for every
-    category it lists (0 for a category without one), in category id order."""
-    coco = json.loads((Path(data_dir) / ANNOTATIONS_FILE).read_text())
+    """Class name -> labelled (not ``iscrowd``) objects in ``data_dir``'s labels (either layout,
+    :mod:`sim.dataset.labelled_folder`), for every category it lists (0 for a category without
+    one), in category id order."""
+    coco = load_labelled_folder(data_dir).coco
     cats = {c["id"]: c["name"] for c in coco["categories"]}
     counts = {cats[k]: 0 for k in sorted(cats)}
     for a in coco["annotations"]:

@@ -158,13 +158,14 @@ def detection_check(model_path: str | Path, data_dirs: list[Path], classes: list
     import cv2
 
     from autonomy.atr.cnn_detector import CnnDetector
-    from sim.dataset.coco_io import ANNOTATIONS_FILE
+    from sim.dataset.labelled_folder import load_labelled_folder
     from sim.evaluation.atr_metrics import frame_from_record
 
     det = CnnDetector(model_path, score_threshold=score_threshold, classes=tuple(classes))
     frames = objects = detections = 0
     for d in data_dirs:
-        coco = json.loads((d / ANNOTATIONS_FILE).read_text())
+        folder = load_labelled_folder(d)
+        coco = folder.coco
         cats = {c["id"] for c in coco["categories"] if c["name"] in classes}
         by_image: dict[int, int] = {}
         for a in coco["annotations"]:
@@ -175,7 +176,7 @@ def detection_check(model_path: str | Path, data_dirs: list[Path], classes: list
                 break
             if rec["id"] not in by_image:
                 continue
-            fan = cv2.imread(str(d / rec["file_name"]), cv2.IMREAD_GRAYSCALE)
+            fan = cv2.imread(str(folder.root / rec["file_name"]), cv2.IMREAD_GRAYSCALE)
             if fan is None:
                 continue
             frames += 1
@@ -262,11 +263,12 @@ def train_atr(data_dir: str | Path | list, out_path: str | Path, params: TrainPa
     data_dirs = [Path(d) for d in (data_dir if isinstance(data_dir, (list, tuple)) else [data_dir])]
     val_dirs = None if val_data is None else [Path(d) for d in (val_data if isinstance(val_data, (list, tuple))
                                                                 else [val_data])]
-    for d in data_dirs + (val_dirs or []):
-        from sim.dataset.coco_io import ANNOTATIONS_FILE
+    from sim.dataset.coco_io import ANNOTATIONS_FILE
+    from sim.dataset.labelled_folder import folder_layout
 
-        if not (d / ANNOTATIONS_FILE).is_file():
-            raise FileNotFoundError(f"no {ANNOTATIONS_FILE} in dataset directory {d}")
+    for d in data_dirs + (val_dirs or []):
+        if not d.is_dir() or folder_layout(d) is None:
+            raise FileNotFoundError(f"no {ANNOTATIONS_FILE} (nor images/ and boxes/) in dataset directory {d}")
     check_training_classes(data_dirs, params.classes)
     fans = {d: fls_fan_hw(d, "--data") for d in data_dirs}
     if val_dirs is not None:

@@ -10,7 +10,7 @@ import pytest
 
 from autonomy.sonar_geometry import FanGeometry
 from sim.realism.image_measures import FrameSetMeasures, _fwhm
-from sim.realism.real_frames import RealDataError, fan_groups, fit_fan_outline, load_real_frames
+from sim.dataset.real_frames import RealDataError, fan_groups, fit_fan_outline, load_real_frames
 from sim.realism.two_sample import PATCH_FEATURES, balanced_sets, feature_judges, patch_features
 from tests.support import assert_clean_error, run_cli
 

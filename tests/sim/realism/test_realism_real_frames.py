@@ -17,7 +17,7 @@ pytestmark = pytest.mark.skipif(not (REAL_DIR / "images").is_dir(),
 
 
 def test_real_fan_outline_is_the_aris_fan():
-    from sim.realism.real_frames import fit_fan_outline, load_real_frames
+    from sim.dataset.real_frames import fit_fan_outline, load_real_frames
 
     real = load_real_frames(REAL_DIR, limit=120)
     fit = fit_fan_outline(real.images)
@@ -48,7 +48,7 @@ def test_the_tank_formation_is_closer_to_real_than_the_preset(tmp_path):
 
 
 def test_the_development_split_holds_two_fans_and_the_report_measures_the_larger():
-    from sim.realism.real_frames import fan_groups, fit_fan_outline, load_real_frames
+    from sim.dataset.real_frames import fan_groups, fit_fan_outline, load_real_frames
 
     real = load_real_frames(REAL_DIR)
     groups = fan_groups(real.images)

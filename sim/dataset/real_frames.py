@@ -109,13 +109,17 @@ def load_real_frames(folder: str | Path, *, limit: int | None = None) -> RealFra
             if m is None or m.shape != img.shape:
                 raise RealDataError(f"{mp}: missing, unreadable or not the size of its image")
             masks.append(m)
-        boxes.append(_read_boxes(box_dir / f"{p.stem}.xml") if has_boxes else ())
+        boxes.append(read_box_file(box_dir / f"{p.stem}.xml") if has_boxes else ())
     return RealFrames(names=tuple(p.stem for p in paths), images=np.stack(images),
                       masks=np.stack(masks) if has_masks else None, boxes=tuple(boxes))
 
 
-def _read_boxes(path: Path) -> tuple[RealBox, ...]:
-    """The ``object`` entries of one box file (``x y w h`` in px); a missing file: none."""
+def read_box_file(path: Path) -> tuple[RealBox, ...]:
+    """The ``object`` entries of one box file (``x y w h`` in px); a missing file: none.
+
+    Raises:
+        RealDataError: a file that is not XML with ``object/name`` and ``bndbox x y w h``.
+    """
     if not path.exists():
         return ()
     try:
