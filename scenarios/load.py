@@ -270,7 +270,6 @@ def _allowed_keys(loc: tuple[Any, ...], data: dict[str, Any] | None = None) -> l
 
     from pydantic import BaseModel
 
-
     model: Any = Scenario
     if len(loc) >= 2 and loc[0] == "sensors":
         entry = ((data or {}).get("sensors") or {}).get(loc[1])
@@ -332,7 +331,6 @@ def reset_preset_keys(file_data: dict[str, Any], data: dict[str, Any],
         one note per entry reset, naming the ``--set``, the keys and both presets.
     """
     from typing import get_args
-
 
     file_sensors, sensors = file_data.get("sensors"), data.get("sensors")
     if not isinstance(file_sensors, dict) or not isinstance(sensors, dict):

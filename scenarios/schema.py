@@ -216,7 +216,6 @@ class Scenario(StrictModel):
         if ins.leg_start_range_m == "from_beam":
             import math
 
-
             fls = enabled[name] if name is not None else next(c for c in enabled.values() if c.kind == "fls")
             vbw = resolve_geometry(fls).vertical_beamwidth_rad
             tilt = math.radians(fls.tilt_deg)

@@ -255,7 +255,6 @@ def build_world(scenario: Scenario, *, with_vehicle: bool = True) -> World:
         target_geoms.append(geom)
         objects.append(obj)
 
-
     mover_geoms = add_mover_bodies(spec, wcfg.movers, ACOUSTIC_GROUP)
     for j, mg in enumerate(mover_geoms):
         target_geoms.append(mg.geom)
