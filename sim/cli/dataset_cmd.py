@@ -11,14 +11,23 @@ from sim.cli.errors import CliError
 
 
 def _cmd_dataset(args: argparse.Namespace) -> int:
-    from sim.dataset.generate import RANDOMIZATION_PRESETS, RAY_HINT, generate_dataset
+    from sim.dataset.generate import RANDOMIZATION_PRESETS, RAY_HINT, generate_dataset, generation_args
+    from sim.dataset.spec import load_spec
 
     if args.heldout and args.randomization not in (None, "heldout"):
         raise CliError(f"--heldout and --randomization {args.randomization} contradict each other; give one "
                        "(--heldout is --randomization heldout)")
+    if args.spec is not None:
+        given = [opt for opt, v in (("--sensor", args.sensor), ("--randomization", args.randomization),
+                                    ("--heldout", args.heldout or None), ("--tile-length", args.tile_length),
+                                    ("--line-length", args.line_length)) if v is not None]
+        if given:
+            raise CliError(f"--spec {args.spec}: the spec sets the sonar and the scenes; leave out {', '.join(given)}")
     preset = "heldout" if args.heldout else (args.randomization or "train")
     kw = {}
-    if args.sensor == "sss":
+    if args.spec is not None:
+        kw = generation_args(load_spec(args.spec))
+    elif args.sensor == "sss":
         from sim.dataset.sss_generate import SssSettings
 
         defaults = SssSettings()
@@ -37,7 +46,8 @@ def _cmd_dataset(args: argparse.Namespace) -> int:
     try:
         path = generate_dataset(args.out, args.n, seed=args.seed, workers=workers,
                                 use_ray=args.ray is not None, ray_address=args.ray or None,
-                                randomization=RANDOMIZATION_PRESETS[preset], progress=not args.no_progress, **kw)
+                                **{"randomization": RANDOMIZATION_PRESETS[preset], **kw},
+                                progress=not args.no_progress)
     except ImportError as exc:
         if str(exc) == RAY_HINT:
             raise CliError(f"--ray: {RAY_HINT}") from None
@@ -59,7 +69,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("dataset", help="render a labelled, domain-randomised FLS or side-scan dataset")
     p.add_argument("--n", type=frame_count, required=True,
                    help=f"number of frames, or side-scan tiles (1 to {MAX_DATASET_FRAMES})")
-    p.add_argument("--sensor", choices=("fls", "sss"), default="fls",
+    p.add_argument("--spec", default=None, metavar="NAME|FILE.yaml",
+                   help="dataset spec: a shipped one by name (fls_train, fls_wide, fls_heldout, "
+                        "marine_debris_watertank) or a YAML file of your own (sonar, scenes, objects, formats)")
+    p.add_argument("--sensor", choices=("fls", "sss"), default=None,
                    help="fls: forward-looking fan images (default); sss: side-scan waterfall tiles")
     p.add_argument("--tile-length", type=positive_float, default=None, metavar="M",
                    help="sss: along-track tile length, m (default 50)")

@@ -36,7 +36,8 @@ from sim.dataset.coco_io import (ANNOTATIONS_FILE, IMAGES_DIR, LABELS_DIR, write
                                  yolo_lines)
 from sim.dataset.errors import DatasetError
 from sim.dataset.sss_generate import SssRandomization, SssSettings
-from sim.dataset.randomization import (HELDOUT_RANDOMIZATION, TRAIN_RANDOMIZATION, WIDE_RANDOMIZATION,
+from sim.dataset.tank_generate import TankSettings
+from sim.dataset.randomization import (RANDOMIZATION_PRESETS, TRAIN_RANDOMIZATION,  # noqa: F401 (presets re-exported)
                                       CLASS_NAMES, Randomization, SceneSpec, draw_world_seed_and_seabed_kind,
                                       sample_scene, seabed_depth_fn)
 from sim.outputs.run_dir import check_output_dir, write_marker
@@ -47,7 +48,6 @@ from sim.process.worker_signals import ignore_sigint, sigint_blocked
 GENERATOR_VERSION = "1.3.0"
 MANIFEST_FILE = "manifest.json"
 PARTS_DIR = "parts"
-RANDOMIZATION_PRESETS = {"train": TRAIN_RANDOMIZATION, "wide": WIDE_RANDOMIZATION, "heldout": HELDOUT_RANDOMIZATION}
 RAY_HINT = "--ray needs Ray: pip install 'auvsim[scale]' (or pip install ray)"
 
 
@@ -123,6 +123,10 @@ def _scene_job(job: tuple) -> int:
 
         rz_sss = SssRandomization.model_validate_json(rz_json)
         part = render_sss_scene(sss_scene_spec(seed, index, rz_sss, settings), seed, settings, frame_ids, out_dir)
+    elif isinstance(settings, TankSettings):
+        from sim.dataset.tank_generate import render_tank_scene
+
+        part = render_tank_scene(seed, index, settings, frame_ids, out_dir)
     else:
         rz = Randomization.model_validate_json(rz_json)
         part = render_scene(scene_spec(seed, index, rz), seed, settings, frame_ids, out_dir)
@@ -130,10 +134,14 @@ def _scene_job(job: tuple) -> int:
     return len(frame_ids)
 
 
-def _manifest(n_frames: int, seed: int, rz, settings: RenderSettings | SssSettings) -> dict:
+def _manifest(n_frames: int, seed: int, rz, settings: RenderSettings | SssSettings | TankSettings) -> dict:
     """The manifest of a dataset: ``randomization`` holds the ranges its scenes were drawn
     from (a side-scan dataset's :class:`~sim.dataset.sss_generate.SssRandomization`, ``rz``
     as passed for FLS frames)."""
+    if isinstance(settings, TankSettings):
+        return {"generator_version": GENERATOR_VERSION, "sensor": "fls", "scene": "tank", "seed": seed,
+                "n_frames": n_frames, "classes": list(settings.classes), "formats": list(settings.spec.formats),
+                "spec": settings.spec.model_dump(mode="json"), "fls_defaults": FlsConfig().model_dump(mode="json")}
     rz_json = rz.model_dump(mode="json")
     if rz_json.get("basin") is None:
         rz_json.pop("basin", None)  # datasets without basin walls keep their earlier manifests
@@ -160,8 +168,23 @@ def merge_parts(out_dir: Path, manifest: dict) -> None:
     annotations.sort(key=lambda a: (a["image_id"], a["attributes"]["object"]))
     for i, a in enumerate(annotations, start=1):
         a["id"] = i
-    categories = [{"id": i + 1, "name": n, "supercategory": "target" if i == 0 else "clutter"}
-                  for i, n in enumerate(CLASS_NAMES)]
+    classes = manifest.get("classes", list(CLASS_NAMES))
+    if manifest.get("scene") == "tank":
+        categories = [{"id": i + 1, "name": n, "supercategory": "structure" if n == "Wall" else "object"}
+                      for i, n in enumerate(classes)]
+    else:
+        categories = [{"id": i + 1, "name": n, "supercategory": "target" if i == 0 else "clutter"}
+                      for i, n in enumerate(classes)]
+    write_atomic(out_dir / "classes.txt", "\n".join(classes) + "\n")
+    info = {"description": "auvsim synthetic FLS ATR dataset", "version": GENERATOR_VERSION,
+            "seed": manifest["seed"]}
+    if manifest.get("sensor") == "sss":
+        info = {**info, "description": "auvsim synthetic side-scan (SSS) tile dataset", "sensor": "sss"}
+    if manifest.get("scene") == "tank":
+        info = {**info, "description": f"auvsim synthetic FLS tank frames, spec {manifest['spec']['name']}"}
+    if "yolo" not in manifest.get("formats", ("yolo",)):
+        write_coco(out_dir / ANNOTATIONS_FILE, images, annotations, categories, info)
+        return
     (out_dir / LABELS_DIR).mkdir(exist_ok=True)
     by_image: dict[int, list[dict]] = {}
     for a in annotations:
@@ -172,22 +195,19 @@ def merge_parts(out_dir: Path, manifest: dict) -> None:
         txt = yolo_lines(np.array([a["bbox"] for a in anns]).reshape(-1, 4),
                          np.array([a["category_id"] - 1 for a in anns]), im["width"], im["height"])
         write_atomic(out_dir / LABELS_DIR / f"{im['id']:06d}.txt", txt)
-    write_atomic(out_dir / "classes.txt", "\n".join(CLASS_NAMES) + "\n")
-    info = {"description": "auvsim synthetic FLS ATR dataset", "version": GENERATOR_VERSION,
-            "seed": manifest["seed"]}
-    if manifest.get("sensor") == "sss":
-        info = {**info, "description": "auvsim synthetic side-scan (SSS) tile dataset", "sensor": "sss"}
     write_coco(out_dir / ANNOTATIONS_FILE, images, annotations, categories, info)
 
 
 def generate_dataset(out_dir: str | Path, n_frames: int, seed: int = 0, workers: int | None = None,
                      ray_address: str | None = None, use_ray: bool = False,
                      randomization: Randomization | SssRandomization = TRAIN_RANDOMIZATION,
-                     settings: RenderSettings | SssSettings = RenderSettings(), progress: bool = True) -> Path:
+                     settings: RenderSettings | SssSettings | TankSettings = RenderSettings(),
+                     progress: bool = True) -> Path:
     """Write (or finish) a dataset of ``n_frames`` frames in ``out_dir``; returns the COCO file.
 
-    ``settings``: :class:`RenderSettings` for FLS fan images, :class:`SssSettings` for
-    side-scan tiles (``n_frames`` tiles, ``settings.tiles_per_scene()`` per scene; their
+    ``settings``: :class:`RenderSettings` for FLS fan images, a
+    :class:`sim.dataset.tank_generate.TankSettings` for a tank spec's frames
+    (``randomization`` unused), :class:`SssSettings` for side-scan tiles (``n_frames`` tiles, ``settings.tiles_per_scene()`` per scene; their
     ranges are :func:`sim.dataset.sss_generate.sss_randomization` of ``randomization``, which
     may also be an ``SssRandomization``).
     ``workers``: local processes (default: all cores; 1 = in this process). ``use_ray``:
@@ -231,7 +251,13 @@ def generate_dataset(out_dir: str | Path, n_frames: int, seed: int = 0, workers:
                                f"(differs in {', '.join(diff)}); use a new --out folder")
     write_atomic(man_path, json.dumps({**manifest, "complete": False}, indent=1))
     write_marker(out_dir, "dataset")
-    fps = settings.tiles_per_scene() if isinstance(settings, SssSettings) else randomization.frames_per_scene
+    if isinstance(settings, TankSettings) and "watertank" in settings.spec.formats:
+        from sim.dataset.tank_generate import BOXES_DIR, MASKS_DIR
+
+        (out_dir / BOXES_DIR).mkdir(exist_ok=True)
+        (out_dir / MASKS_DIR).mkdir(exist_ok=True)
+    fps = (settings.tiles_per_scene() if isinstance(settings, SssSettings) else
+           settings.frames_per_scene if isinstance(settings, TankSettings) else randomization.frames_per_scene)
     n_scenes = math.ceil(n_frames / fps)
     rz_json = randomization.model_dump_json()
     jobs = []
@@ -256,12 +282,14 @@ def generate_dataset(out_dir: str | Path, n_frames: int, seed: int = 0, workers:
     return out_dir / ANNOTATIONS_FILE
 
 
-def worker_modules(settings: RenderSettings | SssSettings) -> tuple[str, ...]:
+def worker_modules(settings: RenderSettings | SssSettings | TankSettings) -> tuple[str, ...]:
     """Modules a scene job imports beyond this one (lazily: a process that renders nothing skips them)."""
     shared = ("cv2", "scenarios.schema", "sim.sensors.raycast", "sim.scene.world", "sim.scene.seabed",
               "sim.scene.target_meshes")
     if isinstance(settings, SssSettings):
         return shared + ("scenarios.config.sss", "sim.dataset.sss_generate", "sim.sensors.sss", "sim.dataset.sss_tiles")
+    if isinstance(settings, TankSettings):
+        return shared + ("sim.dataset.tank_generate", "sim.dataset.tank_scenes", "sim.sensors.fls")
     return shared + ("sim.dataset.scene_render", "sim.sensors.fls")
 
 
@@ -312,7 +340,7 @@ def _builds_terrain_mesh(job: tuple) -> bool:
     """Whether an FLS scene job's seabed is a terrain mesh (a few times the work of a flat one:
     the mesh to build and compile); side-scan jobs count as flat (their order is kept)."""
     seed, index, rz_json, settings = job[:4]
-    if isinstance(settings, SssSettings):
+    if isinstance(settings, (SssSettings, TankSettings)):
         return False
     rz = Randomization.model_validate_json(rz_json)
     _, kind = draw_world_seed_and_seabed_kind(component_rng(seed, f"dataset/scene/{index}"), rz)
@@ -387,3 +415,17 @@ def _run_ray(jobs: list[tuple], address: str | None, bar) -> None:
     finally:
         if started:
             ray.shutdown()
+
+
+def generation_args(spec) -> dict:
+    """The ``randomization`` and ``settings`` arguments of :func:`generate_dataset` for a
+    :class:`sim.dataset.spec.DatasetSpec`."""
+    if spec.scene.kind == "tank":
+        return {"settings": TankSettings(spec.model_dump_json())}
+    rays = spec.sonar.elevation_rays
+    return {"randomization": spec.scene.build(),
+            "settings": RenderSettings(preset=spec.sonar.preset,
+                                       elevation_rays=RenderSettings.elevation_rays if rays is None else rays,
+                                       azimuth_columns=spec.sonar.azimuth_columns,
+                                       min_visible_fraction=spec.labels.min_visible_fraction,
+                                       min_area_px=spec.labels.min_area_px)}

@@ -47,6 +47,9 @@ SCORED_APART = ("Wall",)
 #: Window start assumed for a watertank folder's metric scale, m (the ARIS 3000's nearest).
 WATERTANK_NEAR_M = 0.7
 BOXES_DIR, MASKS_DIR = "boxes", "masks"
+#: A pixel is inside the fan when lit in more than this share of a group's frames (low: frames
+#: whose shadows or walls darken part of the fan still outline it together).
+FAN_LIT_SHARE = 0.1
 LAYOUTS = ("coco", "watertank")
 
 
@@ -120,6 +123,25 @@ def _natural_key(path: Path) -> tuple:
     return tuple((0, int(t)) if t.isdigit() else (1, t) for t in re.split(r"(\d+)", path.stem) if t)
 
 
+def _fan_geometries(stack: np.ndarray, near_m: float, root: Path, arg: str) -> list[FanGeometry]:
+    """Each frame's fan geometry: frames grouped by outline (two recordings exported with other
+    windows), each group fitted; when a group's frames do not outline a fan on their own (dark
+    parts of the fan: shadows, walls, few frames), all frames fitted as one fan."""
+    geoms: list[FanGeometry] = [None] * len(stack)  # type: ignore[list-item]
+    try:
+        for group in fan_groups(stack):
+            g = fit_fan_outline(stack[group], lit_share=FAN_LIT_SHARE).geometry(near_m)
+            for i in group:
+                geoms[i] = g
+        return geoms
+    except RealDataError:
+        pass
+    try:
+        return [fit_fan_outline(stack, lit_share=FAN_LIT_SHARE).geometry(near_m)] * len(stack)
+    except RealDataError as exc:
+        raise DatasetError(f"{arg} {root}: {exc}") from None
+
+
 def _watertank(root: Path, arg: str, near_m: float) -> LabelledFolder:
     paths = sorted((root / IMAGES_DIR).glob("*.png"), key=_natural_key)
     if not paths:
@@ -134,15 +156,7 @@ def _watertank(root: Path, arg: str, near_m: float) -> LabelledFolder:
                                f"{images[0].shape[1]} x {images[0].shape[0]}; all frames must have one size")
         images.append(img)
     stack = np.stack(images)
-    geoms: list[FanGeometry | None] = [None] * len(paths)
-    for group in fan_groups(stack):
-        try:
-            outline = fit_fan_outline(stack[group])
-        except RealDataError as exc:
-            raise DatasetError(f"{arg} {root}: {exc}") from None
-        g = outline.geometry(near_m)
-        for i in group:
-            geoms[i] = g
+    geoms = _fan_geometries(stack, near_m, root, arg)
     by_name = {name: cid for cid, name in WATERTANK_CLASSES.items()}
     coco: dict = {"images": [], "annotations": [],
                   "categories": [{"id": cid, "name": name} for cid, name in WATERTANK_CLASSES.items()]}

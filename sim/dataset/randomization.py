@@ -127,6 +127,9 @@ HELDOUT_RANDOMIZATION = Randomization(
     k_speckle_probability=0.6, k_shape=(1.0, 2.5),
 )
 
+#: The named randomisation presets (``auvsim dataset --randomization``, a spec's ``randomization``).
+RANDOMIZATION_PRESETS = {"train": TRAIN_RANDOMIZATION, "wide": WIDE_RANDOMIZATION, "heldout": HELDOUT_RANDOMIZATION}
+
 
 @dataclass(frozen=True)
 class ScenePose:

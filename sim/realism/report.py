@@ -2,7 +2,7 @@
 
 :func:`realism_report` reads the real frames from a folder, fits their fan
 (:func:`sim.dataset.real_frames.fit_fan_outline`), draws matched water-tank scenes with a fixed
-seed (:mod:`sim.realism.tank_scenes`), matches the display gain on the mid-range background,
+seed (:mod:`sim.dataset.tank_scenes`), matches the display gain on the mid-range background,
 renders them onto the real pixel grid, and measures both sets with the same code
 (:mod:`sim.realism.image_measures`): the statistics table, the range profile and the classifier
 two-sample tests on background and object patches (:mod:`sim.realism.two_sample`). It can do
@@ -21,8 +21,8 @@ from numpy.typing import NDArray
 
 from sim.realism.image_measures import MEASURES, FrameSetMeasures
 from sim.dataset.real_frames import RealFrames, fan_groups, fit_fan_outline, load_real_frames
-from sim.realism.tank_scenes import (TANK, TANK_FORMATION, TankGeometry, background_grey, calibrate_gain_db,
-                                     draw_scenes, render_tank_frames)
+from sim.dataset.tank_scenes import TANK, TANK_FORMATION, TankGeometry, draw_scenes, render_tank_frames
+from sim.realism.gain_match import background_grey, calibrate_gain_db
 from sim.realism.two_sample import (TwoSampleResult, balanced_sets, cnn_judge, feature_judges,
                                     patch_features)
 

@@ -111,3 +111,26 @@ def test_check_bag_readers_refuses(make, culprits, capsys, tmp_path):
     pytest.importorskip("rosbags")
     script_refusal(load_script("check_bag_readers"), [str(make(tmp_path))], capsys, "check_bag_readers.py: error:",
                    *culprits)
+
+
+@pytest.mark.parametrize("argv,culprits", [
+    (["--data", "{tank}", "--out", "{dir}/page.txt"], ("dataset_preview:", "--out", ".png")),
+    (["--data", "{tank}", "--out", "{dir}/nope/page.png"], ("--out", "does not exist")),
+    (["--data", "{tank}", "--out", "{dir}/page.png", "--frames", "0"], ("--frames 0", "1 to 64")),
+    (["--data", "{dir}/empty", "--out", "{dir}/page.png"], ("--data", "no such folder")),
+])
+def test_dataset_preview_refuses_and_draws(argv, culprits, capsys, tmp_path):
+    from tests.support import write_watertank_folder
+
+    tank = write_watertank_folder(tmp_path / "tank", [[("Bottle", (120, 200, 30, 14))], [("Tire", (150, 250, 40, 40))]])
+    mod = load_script("dataset_preview")
+    argv = [a.format(tank=tank, dir=tmp_path) for a in argv]
+    assert mod.main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and all(c in err for c in culprits), err
+    assert mod.main(["--data", str(tank), "--out", str(tmp_path / "ok.png"), "--frames", "2"]) == 0
+    import cv2
+
+    page = cv2.imread(str(tmp_path / "ok.png"))
+    assert page.shape == (480, 640, 3)
+    assert (page[200:215, 119:151] == (80, 220, 80)).all(axis=-1).any()  # the first class's box drawn

@@ -13,7 +13,8 @@ from pathlib import Path
 
 import pytest
 
-from sim.dataset.generate import TRAIN_RANDOMIZATION, WIDE_RANDOMIZATION, RenderSettings, fls_config, scene_spec
+from sim.dataset.generate import RenderSettings, fls_config, scene_spec
+from sim.dataset.randomization import TRAIN_RANDOMIZATION, WIDE_RANDOMIZATION
 from sim.dataset.scene_render import render_frames
 from sim.rng import component_rng
 from sim.bench import fls_reference as fr

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 import trimesh
 
-from sim.dataset.generate import TRAIN_RANDOMIZATION, WIDE_RANDOMIZATION, scene_spec
+from sim.dataset.generate import scene_spec
+from sim.dataset.randomization import TRAIN_RANDOMIZATION, WIDE_RANDOMIZATION
 from sim.rng import component_rng
 from sim.scene.seabed import make_seabed
 

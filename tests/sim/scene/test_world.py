@@ -112,7 +112,8 @@ def test_scene_without_vehicle_builds_no_target_hulls_and_rays_see_the_same_scen
     mesh's bounding-volume tree and the hits of rays fanned at every target are identical."""
     from scenarios.config.world import WorldConfig
     from scenarios.schema import Scenario
-    from sim.dataset.generate import WIDE_RANDOMIZATION, scene_spec
+    from sim.dataset.generate import scene_spec
+    from sim.dataset.randomization import WIDE_RANDOMIZATION
 
     spec = scene_spec(0, 3, WIDE_RANDOMIZATION)  # rippled terrain mesh, four targets
     scenario = Scenario(name="hulls", seed=spec.world_seed,

@@ -29,7 +29,6 @@ from autonomy.frames import rot_from_euler
 from sim.rng import component_rng
 from sim.sensors.raycast import MujocoRayCaster
 from sim.sensors.sonar.display import FanRemap
-from sim.realism.image_measures import fan_radius_px
 
 CLASS_ID = {name: cid for cid, name in MARINE_DEBRIS_CLASSES.items()}
 
@@ -113,80 +112,115 @@ class TankScene:
     gain_offset_db: float = 0.0
 
 
-def draw_scenes(n: int, seed: int, tank: TankGeometry = TANK) -> list[TankScene]:
-    """``n`` scenes drawn from one generator seeded with ``seed``."""
+@dataclass(frozen=True)
+class CatalogueEntry:
+    """One kind of object a tank scene may hold.
+
+    Attributes:
+        class_name: its label.
+        shape: a debris shape (:data:`sim.scene.debris_meshes.DEBRIS_SHAPES`) or ``tyre``.
+        pitch_deg: its pitch on the floor (90: stood up on its base).
+        weight: its share of the objects drawn (relative to the others').
+    """
+
+    class_name: str
+    shape: str
+    pitch_deg: float = 0.0
+    weight: float = 1.0
+
+
+#: The real set's objects: its classes, their shapes and their mix ([MarineDebrisFLS]).
+MARINE_DEBRIS_CATALOGUE: tuple[CatalogueEntry, ...] = tuple(
+    CatalogueEntry(name, CLASS_SHAPE[name][0], CLASS_SHAPE[name][1], float(CLASS_MIX[name])) for name in CLASS_MIX)
+
+
+def draw_scene(index: int, rng: np.random.Generator, tank: TankGeometry = TANK,
+               catalogue: tuple[CatalogueEntry, ...] = MARINE_DEBRIS_CATALOGUE) -> TankScene:
+    """One scene drawn from ``rng``: the sonar's height and tilt, one to ``tank.objects``
+    objects of ``catalogue`` (by weight; size scaled by 0.85-1.15, any yaw, within +-11 deg of
+    the boresight at ``tank.object_range_m``) and, in ``tank.wall_share`` of the scenes, a wall
+    (class ``Wall``) across the far fan."""
     from scenarios.config.world import TargetConfig
     from sim.scene.debris_meshes import debris_default_size_m
 
-    rng = np.random.default_rng(seed)
-    names = list(CLASS_MIX)
-    p = np.array([CLASS_MIX[k] for k in names], dtype=float)
+    p = np.array([c.weight for c in catalogue], dtype=float)
     p /= p.sum()
-    out = []
-    for i in range(n):
-        h = float(rng.uniform(*tank.height_m))
-        tilt = float(rng.uniform(*tank.tilt_deg))
-        targets = []
-        floor = tank.floor_depth_m
-        for j in range(int(rng.integers(tank.objects[0], tank.objects[1] + 1))):
-            cls = names[int(rng.choice(len(names), p=p))]
-            rng_m = float(rng.uniform(*tank.object_range_m))
-            az = float(rng.uniform(-11.0, 11.0))
-            north, east = rng_m * np.cos(np.deg2rad(az)), rng_m * np.sin(np.deg2rad(az))
-            yaw = float(rng.uniform(-180.0, 180.0))
-            shape, pitch = CLASS_SHAPE[cls]
-            scale = float(rng.uniform(0.85, 1.15))
-            if shape == "tyre":
-                radius = 0.14 * scale
-                targets.append(TargetConfig(name=f"obj{j}", shape="tyre", pos_ned=(north, east, floor),
-                                            rpy_deg=(0.0, 0.0, yaw), radius_m=radius, tube_radius_m=0.35 * radius,
-                                            reflectivity=0.9, class_name=cls, is_target=True))
-                continue
-            size = tuple(s * scale for s in debris_default_size_m(shape))
-            # standing (pitched 90 deg): raised by half its length, so its base end is on the floor
-            lift = 0.5 * size[0] if pitch else 0.0
-            targets.append(TargetConfig(name=f"obj{j}", shape=shape, pos_ned=(north, east, floor - lift),
-                                        rpy_deg=(0.0, pitch, yaw), size_m=size, reflectivity=0.9,
-                                        class_name=cls, is_target=True))
-        if rng.random() < tank.wall_share:
-            wr = float(rng.uniform(*tank.wall_range_m))
-            wyaw = float(rng.uniform(-35.0, 35.0))
-            targets.append(TargetConfig(name="wall", shape="box", pos_ned=(wr + 0.15, 0.0, floor),
-                                        rpy_deg=(0.0, 0.0, wyaw), size_m=(0.3, 8.0, floor), reflectivity=
-                                        tank.wall_reflectivity, class_name="Wall", is_target=False))
-        out.append(TankScene(i, h, tilt, float(rng.uniform(-5.0, 5.0)), tuple(targets),
-                             float(rng.normal(0.0, tank.gain_jitter_db))))
-    return out
+    h = float(rng.uniform(*tank.height_m))
+    tilt = float(rng.uniform(*tank.tilt_deg))
+    targets = []
+    floor = tank.floor_depth_m
+    for j in range(int(rng.integers(tank.objects[0], tank.objects[1] + 1))):
+        entry = catalogue[int(rng.choice(len(catalogue), p=p))]
+        cls = entry.class_name
+        rng_m = float(rng.uniform(*tank.object_range_m))
+        az = float(rng.uniform(-11.0, 11.0))
+        north, east = rng_m * np.cos(np.deg2rad(az)), rng_m * np.sin(np.deg2rad(az))
+        yaw = float(rng.uniform(-180.0, 180.0))
+        shape, pitch = entry.shape, entry.pitch_deg
+        scale = float(rng.uniform(0.85, 1.15))
+        if shape == "tyre":
+            radius = 0.14 * scale
+            targets.append(TargetConfig(name=f"obj{j}", shape="tyre", pos_ned=(north, east, floor),
+                                        rpy_deg=(0.0, 0.0, yaw), radius_m=radius, tube_radius_m=0.35 * radius,
+                                        reflectivity=0.9, class_name=cls, is_target=True))
+            continue
+        size = tuple(s * scale for s in debris_default_size_m(shape))
+        # standing (pitched 90 deg): raised by half its length, so its base end is on the floor
+        lift = 0.5 * size[0] if pitch else 0.0
+        targets.append(TargetConfig(name=f"obj{j}", shape=shape, pos_ned=(north, east, floor - lift),
+                                    rpy_deg=(0.0, pitch, yaw), size_m=size, reflectivity=0.9,
+                                    class_name=cls, is_target=True))
+    if rng.random() < tank.wall_share:
+        wr = float(rng.uniform(*tank.wall_range_m))
+        wyaw = float(rng.uniform(-35.0, 35.0))
+        targets.append(TargetConfig(name="wall", shape="box", pos_ned=(wr + 0.15, 0.0, floor),
+                                    rpy_deg=(0.0, 0.0, wyaw), size_m=(0.3, 8.0, floor), reflectivity=
+                                    tank.wall_reflectivity, class_name="Wall", is_target=False))
+    return TankScene(index, h, tilt, float(rng.uniform(-5.0, 5.0)), tuple(targets),
+                     float(rng.normal(0.0, tank.gain_jitter_db)))
+
+
+def draw_scenes(n: int, seed: int, tank: TankGeometry = TANK) -> list[TankScene]:
+    """``n`` scenes drawn from one generator seeded with ``seed`` (:func:`draw_scene`)."""
+    rng = np.random.default_rng(seed)
+    return [draw_scene(i, rng, tank) for i in range(n)]
 
 
 @dataclass(frozen=True)
 class SimFrame:
-    """A simulated frame on the real set's pixel grid: ``image`` (H, W) uint8 and ``mask``
-    (H, W) uint8 real-set class ids."""
+    """A simulated frame on the real set's pixel grid: ``image`` (H, W) uint8, ``mask`` (H, W)
+    uint8 real-set class ids (0 for a class it does not have), ``instances`` (H, W) int32 the
+    scene object seen at each pixel (-1: none) and ``object_classes`` each object id's class."""
 
     scene: int
     image: NDArray[np.uint8]
     mask: NDArray[np.uint8]
+    instances: NDArray[np.int32] | None = None
+    object_classes: dict[int, str] | None = None
 
 
 def render_tank_frames(scenes: list[TankScene], geom: FanGeometry, *, seed: int, frames_per_scene: int = 1,
-                       fls_overrides: dict | None = None, tank: TankGeometry = TANK) -> Iterator[SimFrame]:
-    """Render each scene's frames with the ``aris3000`` sonar over ``geom``'s range window and
+                       fls_overrides: dict | None = None, tank: TankGeometry = TANK, preset: str = "aris3000",
+                       rng: np.random.Generator | None = None, pose_rng: np.random.Generator | None = None
+                       ) -> Iterator[SimFrame]:
+    """Render each scene's frames with the ``preset`` sonar over ``geom``'s range window and
     resample them onto ``geom``'s pixels. ``fls_overrides``: further :class:`FlsConfig` fields
-    (gain, noise floor, image formation). Speckle and noise from ``component_rng(seed, "fls")``."""
+    (gain, noise floor, image formation). Speckle and noise from ``rng`` (default
+    ``component_rng(seed, "fls")``), the frames' small pose changes from ``pose_rng`` (default
+    ``component_rng(seed, "realism_poses")``)."""
     from scenarios.config.fls import FlsConfig
     from scenarios.config.world import SeabedConfig, WorldConfig
     from scenarios.schema import Scenario
     from sim.scene.world import build_world
     from sim.sensors.fls import FlsSensor
 
-    rng = component_rng(seed, "fls")
-    pose_rng = component_rng(seed, "realism_poses")
+    rng = component_rng(seed, "fls") if rng is None else rng
+    pose_rng = component_rng(seed, "realism_poses") if pose_rng is None else pose_rng
     remap = None
     over = dict(fls_overrides or {})
     base_gain_db = float(over.pop("gain_db", 0.0))
     for sc in scenes:
-        cfg = FlsConfig(preset="aris3000", tilt_deg=sc.tilt_deg, rate_hz=1.0, gain_db=base_gain_db + sc.gain_offset_db,
+        cfg = FlsConfig(preset=preset, tilt_deg=sc.tilt_deg, rate_hz=1.0, gain_db=base_gain_db + sc.gain_offset_db,
                         range_window_m=(geom.range_min_m, min(geom.range_max_m, 5.0)), **over)
         sensor = FlsSensor(cfg, rng=rng)
         if remap is None:
@@ -202,6 +236,7 @@ def render_tank_frames(scenes: list[TankScene], geom: FanGeometry, *, seed: int,
         class_of = np.zeros(len(world.objects) + 1, dtype=np.uint8)
         for obj in world.objects:
             class_of[int(obj.id)] = CLASS_ID.get(str(obj.class_name), 0)
+        object_classes = {int(obj.id): str(obj.class_name) for obj in world.objects}
         for k in range(frames_per_scene):
             yaw = np.deg2rad(sc.yaw_deg + (pose_rng.uniform(-3.0, 3.0) if k else 0.0))
             pos = np.array([pose_rng.uniform(-0.05, 0.05) if k else 0.0, 0.0, tank.floor_depth_m - sc.height_m])
@@ -209,41 +244,4 @@ def render_tank_frames(scenes: list[TankScene], geom: FanGeometry, *, seed: int,
             image = remap.image(render.frame.polar)
             ids = remap.labels(render.truth.mask_polar, -1)
             mask = np.where(ids >= 0, class_of[np.clip(ids, 0, len(class_of) - 1)], 0).astype(np.uint8)
-            yield SimFrame(sc.index, image, mask)
-
-
-
-def background_grey(frames: list[SimFrame] | list[tuple[NDArray, NDArray]], geom: FanGeometry) -> float:
-    """Median grey of the unlabelled fan pixels in the middle third of the range window
-    (the level the display gain is matched on)."""
-    rad, az = fan_radius_px(geom)
-    near_px, far_px = geom.range_min_m / geom.m_per_px, geom.range_max_m / geom.m_per_px
-    mid = (rad > near_px + (far_px - near_px) / 3) & (rad < far_px - (far_px - near_px) / 3) & (
-        np.abs(az) < 0.5 * geom.fov_rad - 0.02)
-    vals = [img[mid & (mask == 0)] for img, mask in ((f.image, f.mask) if isinstance(f, SimFrame) else f
-                                                       for f in frames)]
-    return float(np.median(np.concatenate(vals)))
-
-
-def calibrate_gain_db(target_grey: float, scenes: list[TankScene], geom: FanGeometry, *, seed: int,
-                      fls_overrides: dict | None = None, iterations: int = 3, tank: TankGeometry = TANK) -> float:
-    """The display gain (dB) at which the simulated mid-range background median grey equals
-    ``target_grey``: the one level a user matches by eye on a real sonar's display. Solved by
-    the display law's inverse (dB display: 255 / dynamic range grey per dB; power-law display:
-    grey ~ 10^(gamma gain / 20)), a few rounds for saturation."""
-    from scenarios.config.fls import FlsConfig
-
-    over = dict(fls_overrides or {})
-    cfg = FlsConfig(preset="aris3000", **over)
-    gain = float(cfg.gain_db)
-    gamma = cfg.formation.display_gamma
-    for _ in range(iterations):
-        over["gain_db"] = gain
-        grey = background_grey(list(render_tank_frames(scenes, geom, seed=seed, fls_overrides=over, tank=tank)),
-                               geom)
-        grey = max(grey, 0.5)
-        if gamma is None:
-            gain += (target_grey - grey) * cfg.dynamic_range_db / 255.0
-        else:
-            gain += 20.0 / gamma * np.log10(target_grey / grey)
-    return float(gain)
+            yield SimFrame(sc.index, image, mask, ids.astype(np.int32), object_classes)

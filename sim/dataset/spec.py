@@ -1,0 +1,284 @@
+"""Dataset specs: the sonar, the scenes, the objects and the label formats of a labelled
+synthetic dataset, in one YAML file validated like a scenario (``auvsim dataset --spec``).
+
+A spec names its scenes' kind:
+
+===========  ===================================================================================
+``kind``     scenes
+===========  ===================================================================================
+``seabed``   the open-seabed forward-looking scenes of the survey ATR (mine-like targets, rocks,
+             debris on randomised seabeds; :class:`sim.dataset.randomization.Randomization`):
+             ``randomization`` names a preset (``train``, ``wide``, ``heldout``) and ``ranges``
+             changes any of its fields; frames on the sonar's own fan image
+``tank``     a water tank seen from above (:mod:`sim.dataset.tank_scenes`): a flat floor, one
+             to ``objects`` objects of the ``catalogue`` (class, debris shape, pitch, weight),
+             a wall across the far fan in ``wall_share`` of the scenes (class ``Wall``); frames
+             resampled onto ``image``'s fan pixel grid (a real sonar's exported frames)
+===========  ===================================================================================
+
+``sonar`` gives the preset and any further forward-looking sonar setting (gain, TVG, image
+formation: :class:`scenarios.config.fls.FlsConfig`'s keys, checked against it); ``labels`` when
+an object counts as ``iscrowd`` (too little of it seen); ``formats`` what is written besides
+the COCO file (``yolo`` label files, ``watertank`` box files and class masks: the layout of
+the Marine Debris set, [MarineDebrisFLS]). Shipped specs (``sim/dataset/specs/*.yaml``) are
+named by their file stem: ``fls_train``, ``fls_wide``, ``fls_heldout`` (the survey ATR's sets)
+and ``marine_debris_watertank`` (the ARIS 3000 tank frames of the Marine Debris set).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+import yaml
+from pydantic import Field, ValidationError, model_validator
+
+from autonomy.sonar_geometry import FanGeometry
+from scenarios.config.base import StrictModel
+from scenarios.config.fls import FlsConfig, FlsPresetName
+from scenarios.config.world import DEBRIS_TARGET_SHAPES
+from scenarios.fls_presets import resolve_geometry
+from sim.dataset.errors import DatasetError
+from sim.dataset.randomization import RANDOMIZATION_PRESETS, Randomization
+
+SPECS_DIR = Path(__file__).resolve().parent / "specs"
+Range = tuple[float, float]
+FORMATS = ("coco", "yolo", "watertank")
+#: The fields a spec's ``sonar`` sets itself (not through ``settings``).
+SONAR_OWN_KEYS = ("preset", "elevation_rays", "azimuth_columns")
+
+
+def _ordered(name: str, r: tuple) -> None:
+    if r[0] > r[1]:
+        raise ValueError(f"{name}: lower bound {r[0]} above upper bound {r[1]}")
+
+
+class SonarSpec(StrictModel):
+    """The forward-looking sonar every frame is rendered with."""
+
+    preset: FlsPresetName = "m900_130"
+    elevation_rays: int | None = Field(None, ge=1, le=256, description="None: the sonar config's default")
+    azimuth_columns: int | None = Field(None, ge=8, le=4096, description="None: the preset's beams")
+    settings: dict[str, Any] = Field(default_factory=dict, description="further FlsConfig keys")
+
+    def fls_fields(self) -> dict[str, Any]:
+        """The :class:`FlsConfig` fields the spec sets (besides the scenes' tilt and window)."""
+        own = {k: getattr(self, k) for k in ("elevation_rays", "azimuth_columns") if getattr(self, k) is not None}
+        return {"preset": self.preset, **own, **self.settings}
+
+    @model_validator(mode="after")
+    def _settings_are_fls_keys(self) -> "SonarSpec":
+        own = sorted(set(self.settings) & set(SONAR_OWN_KEYS) | set(self.settings) & {"tilt_deg", "range_window_m"})
+        if own:
+            raise ValueError(f"settings: {', '.join(own)} set by the spec itself (sonar.{own[0]} or the scenes), "
+                             "not under settings")
+        try:
+            cfg = FlsConfig(**self.fls_fields())
+        except ValidationError as exc:
+            err = exc.errors(include_url=False)[0]
+            loc = ".".join(str(p) for p in err["loc"])
+            msg = err["msg"].replace("Extra inputs are not permitted", "not a forward-looking sonar setting")
+            raise ValueError(f"settings.{loc}: {msg}") from None
+        try:
+            resolve_geometry(cfg)
+        except ValueError as exc:
+            raise ValueError(str(exc).replace("sensors.fls.", "sonar.")) from None
+        return self
+
+
+class LabelRules(StrictModel):
+    """An object below either bound is labelled ``iscrowd`` (present, not expected to be found)."""
+
+    min_visible_fraction: float = Field(0.3, ge=0.0, le=1.0)
+    min_area_px: int = Field(12, ge=0)
+
+
+class SeabedScenes(StrictModel):
+    """Open-seabed scenes: a randomisation preset, some of its ranges changed."""
+
+    kind: Literal["seabed"]
+    randomization: Literal["train", "wide", "heldout"] = "train"
+    ranges: dict[str, Any] = Field(default_factory=dict, description="Randomization fields replaced")
+
+    def build(self):
+        """The :class:`sim.dataset.randomization.Randomization` the scenes are drawn from.
+
+        Raises:
+            ValueError: a field of ``ranges`` that is not a randomisation range, or out of range.
+        """
+        base = RANDOMIZATION_PRESETS[self.randomization]
+        if not self.ranges:
+            return base
+        try:
+            return Randomization.model_validate({**base.model_dump(), **self.ranges})
+        except ValidationError as exc:
+            err = exc.errors(include_url=False)[0]
+            loc = ".".join(str(p) for p in err["loc"])
+            msg = err["msg"].replace("Extra inputs are not permitted", "not a randomisation range")
+            raise ValueError(f"ranges{'.' + loc if loc else ''}: {msg.removeprefix('Value error, ')}") from None
+
+    @model_validator(mode="after")
+    def _ranges_valid(self) -> "SeabedScenes":
+        self.build()
+        return self
+
+
+class CatalogueItem(StrictModel):
+    """One kind of object of a tank scene."""
+
+    class_name: str = Field(min_length=1)
+    shape: Literal[DEBRIS_TARGET_SHAPES + ("tyre",)]  # type: ignore[valid-type]
+    pitch_deg: float = Field(0.0, ge=-90.0, le=90.0, description="90: stood up on its base")
+    weight: float = Field(1.0, gt=0.0, description="share of the objects drawn")
+
+
+class TankScenes(StrictModel):
+    """A water tank seen from above (:class:`sim.dataset.tank_scenes.TankGeometry`)."""
+
+    kind: Literal["tank"]
+    floor_depth_m: float = Field(3.0, gt=0.0, le=50.0)
+    height_m: Range = (0.25, 0.42)
+    tilt_deg: Range = (12.0, 20.0)
+    wall_share: float = Field(0.5, ge=0.0, le=1.0)
+    wall_range_m: Range = (2.2, 3.2)
+    objects: tuple[int, int] = (1, 3)
+    object_range_m: Range = (1.0, 2.6)
+    floor_reflectivity: float = Field(0.3, gt=0.0, le=1.0)
+    wall_reflectivity: float = Field(0.6, gt=0.0, le=1.0)
+    gain_jitter_db: float = Field(3.0, ge=0.0, le=20.0)
+    frames_per_scene: int = Field(1, ge=1, le=100)
+    catalogue: list[CatalogueItem] = Field(min_length=1)
+
+    @model_validator(mode="after")
+    def _check(self) -> "TankScenes":
+        for name in ("height_m", "tilt_deg", "wall_range_m", "objects", "object_range_m"):
+            _ordered(name, getattr(self, name))
+        if self.objects[0] < 0:
+            raise ValueError(f"objects: at least 0 objects, got {self.objects[0]}")
+        names = [c.class_name for c in self.catalogue]
+        if len(set(names)) < len(names) and len({(c.class_name, c.shape, c.pitch_deg) for c in self.catalogue}) < len(names):
+            raise ValueError("catalogue: the same class, shape and pitch listed twice")
+        if "Wall" in names:
+            raise ValueError("catalogue: Wall is the tank's own wall (wall_share), not an object to list")
+        if not 0.0 < self.height_m[0] < self.floor_depth_m:
+            raise ValueError(f"height_m: the sonar must be above the floor and below the surface "
+                             f"(0 < height < floor_depth_m {self.floor_depth_m}), got {self.height_m}")
+        return self
+
+    def class_names(self) -> tuple[str, ...]:
+        """Labelled classes: the catalogue's, in order of first listing, then ``Wall`` when
+        scenes may have one."""
+        names = tuple(dict.fromkeys(c.class_name for c in self.catalogue))
+        return names + (("Wall",) if self.wall_share > 0.0 else ())
+
+
+class FanGrid(StrictModel):
+    """The fan pixel grid tank frames are written on (a real sonar's exported frames): image
+    size, the apex (the sonar; it may lie below the image), the field of view, the range
+    window and the metres per pixel (isotropic)."""
+
+    width_px: int = Field(ge=16, le=8192)
+    height_px: int = Field(ge=16, le=8192)
+    apex_x_px: float
+    apex_y_px: float
+    fov_deg: float = Field(gt=1.0, lt=180.0)
+    near_m: float = Field(gt=0.0)
+    far_m: float = Field(gt=0.0)
+    m_per_px: float = Field(gt=0.0)
+
+    @model_validator(mode="after")
+    def _check(self) -> "FanGrid":
+        if not self.far_m > self.near_m:
+            raise ValueError(f"far_m: must exceed near_m ({self.near_m}), got {self.far_m}")
+        top = self.apex_y_px - self.far_m / self.m_per_px
+        if top < -1.0:
+            raise ValueError(f"far_m: the far arc ({self.far_m / self.m_per_px:.1f} px from the apex) lies above "
+                             f"the image (its top at row {top:.1f}); check far_m, m_per_px and apex_y_px")
+        return self
+
+    def geometry(self):
+        """The grid as a :class:`autonomy.sonar_geometry.FanGeometry`."""
+        return FanGeometry(self.width_px, self.height_px, self.near_m, self.far_m, math.radians(self.fov_deg),
+                           self.m_per_px, self.apex_x_px, self.apex_y_px)
+
+
+class DatasetSpec(StrictModel):
+    """A labelled synthetic dataset (module docstring)."""
+
+    name: str = Field(min_length=1)
+    description: str = ""
+    sensor: Literal["fls"] = "fls"
+    scene: Annotated[SeabedScenes | TankScenes, Field(discriminator="kind")]
+    sonar: SonarSpec = SonarSpec()
+    image: FanGrid | None = None
+    labels: LabelRules = LabelRules()
+    formats: tuple[Literal["coco", "yolo", "watertank"], ...] = ("coco", "yolo")
+
+    @model_validator(mode="after")
+    def _check(self) -> "DatasetSpec":
+        if "coco" not in self.formats:
+            raise ValueError("formats: coco is always written (it is the dataset's index); list it")
+        if len(set(self.formats)) < len(self.formats):
+            raise ValueError(f"formats: listed twice in {list(self.formats)}")
+        if self.scene.kind == "tank" and self.image is None:
+            raise ValueError("image: a tank spec needs the fan pixel grid its frames are written on")
+        if self.scene.kind == "seabed" and self.image is not None:
+            raise ValueError("image: seabed frames are written on the sonar's own fan image; leave image out")
+        if self.scene.kind == "seabed" and set(self.formats) != {"coco", "yolo"}:
+            raise ValueError(f"formats: seabed datasets write coco and yolo (watertank box files are for tank "
+                             f"scenes), got {list(self.formats)}")
+        if self.scene.kind == "seabed" and self.sonar.settings:
+            raise ValueError("sonar.settings: seabed scenes randomise gain, noise and speckle themselves "
+                             "(scene.ranges); leave settings out")
+        return self
+
+
+def shipped_specs() -> tuple[str, ...]:
+    """Names of the shipped specs (file stems in ``sim/dataset/specs/``)."""
+    return tuple(sorted(p.stem for p in SPECS_DIR.glob("*.yaml")))
+
+
+def load_spec(name_or_path: str | Path, arg: str = "--spec") -> DatasetSpec:
+    """A spec by shipped name or YAML path.
+
+    Raises:
+        DatasetError: no such spec, unreadable YAML, or an invalid spec: one line naming the
+            file, the dotted key and what is allowed.
+    """
+    text = str(name_or_path)
+    path = Path(text).expanduser()
+    if not path.is_file():
+        shipped = SPECS_DIR / f"{text}.yaml"
+        if "/" in text or text.endswith((".yaml", ".yml")) or not shipped.is_file():
+            raise DatasetError(f"{arg} {text}: no such file, and no shipped spec of that name (shipped: "
+                               f"{', '.join(shipped_specs())})")
+        path = shipped
+    try:
+        data = yaml.safe_load(path.read_text())
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
+        raise DatasetError(f"{arg} {path}: not a readable YAML file ({str(exc).splitlines()[0]})") from None
+    if not isinstance(data, dict):
+        raise DatasetError(f"{arg} {path}: a spec is a YAML mapping (name, scene, sonar, ...), got "
+                           f"{type(data).__name__}")
+    try:
+        return DatasetSpec.model_validate(data)
+    except ValidationError as exc:
+        err = exc.errors(include_url=False)[0]
+        loc = ".".join(str(p) for p in err["loc"] if not (isinstance(p, str) and p in ("seabed", "tank")))
+        msg = err["msg"].removeprefix("Value error, ")
+        key = re.match(r"([a-z_][a-z_0-9.]*): ", msg) if err["type"] == "value_error" else None
+        if key:  # a check of a section names the key it is about: one dotted path
+            loc, msg = ".".join(filter(None, (loc, key.group(1)))), msg[key.end():]
+        if err["type"] == "extra_forbidden":
+            msg = "unknown key"
+        elif err["type"] == "literal_error":
+            msg = msg.replace("Input should be", "allowed values:")
+        given = err.get("input")
+        shown = "" if err["type"] in ("extra_forbidden", "missing") or isinstance(given, (dict, list)) \
+            else f" (got {given!r})"
+        more = len(exc.errors()) - 1
+        raise DatasetError(f"{arg} {path}: {loc + ': ' if loc else ''}{msg}{shown}"
+                           + (f" (and {more} more)" if more > 0 else "")) from None
+

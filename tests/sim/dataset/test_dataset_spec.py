@@ -1,0 +1,132 @@
+"""Dataset specs: the shipped ones load and the survey ones are the randomisation presets; a bad
+spec is refused in one line naming the file and key; a tank spec renders labelled frames on its
+fan grid, the same for the same seed, in the watertank layout that reads back as written."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sim.dataset.errors import DatasetError
+from sim.dataset.generate import RenderSettings, _manifest, generation_args
+from sim.dataset.labelled_folder import load_labelled_folder
+from sim.dataset.randomization import RANDOMIZATION_PRESETS
+from sim.dataset.spec import load_spec, shipped_specs
+from tests.support import assert_clean_error, run_cli
+
+TANK_SPEC = """
+name: tiny_tank
+scene:
+  kind: tank
+  objects: [2, 3]
+  wall_share: 0.5
+  catalogue:
+    - {class_name: Bottle, shape: bottle, weight: 2}
+    - {class_name: Tire, shape: tyre}
+sonar:
+  preset: aris3000
+  elevation_rays: 16
+  settings: {gain_db: 12.0}
+image: {width_px: 160, height_px: 240, apex_x_px: 79.7, apex_y_px: 301.3, fov_deg: 30.0, near_m: 0.7,
+        far_m: 2.9, m_per_px: 0.0100}
+formats: [coco, watertank]
+"""
+
+
+def test_shipped_specs_load_and_the_survey_ones_are_the_presets():
+    assert set(shipped_specs()) >= {"fls_train", "fls_wide", "fls_heldout", "marine_debris_watertank"}
+    for name in ("train", "wide", "heldout"):
+        args = generation_args(load_spec(f"fls_{name}"))
+        assert args["randomization"] == RANDOMIZATION_PRESETS[name]
+        assert args["settings"] == RenderSettings()
+        # the same manifest, so the same dataset, as `auvsim dataset --randomization NAME`
+        assert _manifest(10, 3, args["randomization"], args["settings"]) == \
+            _manifest(10, 3, RANDOMIZATION_PRESETS[name], RenderSettings())
+    tank = load_spec("marine_debris_watertank")
+    assert tank.scene.class_names()[-1] == "Wall" and len(tank.scene.class_names()) == 11
+    g = tank.image.geometry()
+    assert (g.width_px, g.height_px) == (320, 480) and g.range_max_m == pytest.approx(2.913)
+
+
+@pytest.mark.parametrize("edit, culprits", [
+    (lambda t: t.replace("name: tiny_tank", "name: tiny_tank\ncolour: red"), ["colour", "unknown key"]),
+    (lambda t: t.replace("shape: tyre", "shape: tire"), ["scene.catalogue.1.shape", "tyre"]),
+    (lambda t: t.replace("elevation_rays: 16", "azimuth_columns: 361"), ["sonar", "n_beams (128)"]),
+    (lambda t: t.replace("gain_db: 12.0", "gain: 12.0"), ["sonar.settings.gain", "not a forward-looking sonar"]),
+    (lambda t: t.replace("[coco, watertank]", "[watertank]"), ["formats", "coco is always written"]),
+    (lambda t: t.replace("objects: [2, 3]", "objects: [3, 2]"), ["objects", "lower bound"]),
+    (lambda t: t.replace("kind: tank", "kind: lake"), ["scene", "seabed", "tank"]),
+    (lambda t: t.replace("far_m: 2.9", "far_m: 4.0"), ["far_m", "above the image"]),
+    (lambda t: "- just a list\n", ["a YAML mapping"]),
+])
+def test_a_bad_spec_is_refused_in_one_line_naming_the_key(tmp_path, edit, culprits):
+    path = tmp_path / "spec.yaml"
+    path.write_text(edit(TANK_SPEC))
+    with pytest.raises(DatasetError) as exc:
+        load_spec(path)
+    msg = str(exc.value)
+    assert "\n" not in msg and str(path) in msg
+    for c in culprits:
+        assert c in msg, msg
+
+
+def test_a_seabed_spec_changes_ranges_of_its_preset_and_refuses_unknown_ones(tmp_path):
+    path = tmp_path / "s.yaml"
+    path.write_text("name: deep\nscene: {kind: seabed, randomization: wide, ranges: {altitude_m: [4.0, 8.0]}}\n"
+                    "sonar: {preset: m900_130, elevation_rays: 16, azimuth_columns: 361}\n")
+    rz = generation_args(load_spec(path))["randomization"]
+    assert rz.altitude_m == (4.0, 8.0) and rz.noise_scale == RANDOMIZATION_PRESETS["wide"].noise_scale
+    path.write_text("name: deep\nscene: {kind: seabed, ranges: {altitude: [4.0, 8.0]}}\n")
+    with pytest.raises(DatasetError, match="ranges.altitude: not a randomisation range"):
+        load_spec(path)
+
+
+def test_a_tank_spec_renders_labelled_frames_the_same_for_the_same_seed(tmp_path):
+    from sim.dataset.generate import generate_dataset
+
+    spec_path = tmp_path / "tank.yaml"
+    spec_path.write_text(TANK_SPEC)
+    args = generation_args(load_spec(spec_path))
+    a = generate_dataset(tmp_path / "a", 4, seed=5, workers=1, progress=False, **args).parent
+    coco = json.loads((a / "annotations.json").read_text())
+    assert [c["name"] for c in coco["categories"]] == ["Bottle", "Tire", "Wall"]
+    assert len(coco["images"]) == 4 and {im["width"] for im in coco["images"]} == {160}
+    assert {a_["category_id"] for a_ in coco["annotations"]} >= {3}  # a wall in some scenes
+    assert not (a / "labels").exists()  # no yolo in its formats
+    for ann in coco["annotations"]:  # an object on the floor within the window, box inside the image
+        x, y, w, h = ann["bbox"]
+        assert 0 <= x and x + w <= 160 and 0 <= y and y + h <= 240
+        assert 0.6 <= ann["attributes"]["range_m"] <= 3.0
+    # the same seed, the same bytes; a scene rendered again (resume) is the same too
+    b = generate_dataset(tmp_path / "b", 4, seed=5, workers=1, progress=False, **args).parent
+    for rel in ["annotations.json"] + [im["file_name"] for im in coco["images"]]:
+        assert (a / rel).read_bytes() == (b / rel).read_bytes(), rel
+    (b / "parts" / "scene_00001.json").unlink()
+    generate_dataset(b, 4, seed=5, workers=1, progress=False, **args)
+    assert (a / "annotations.json").read_bytes() == (b / "annotations.json").read_bytes()
+    # the watertank layout (boxes and class masks) reads back as the COCO labels say
+    wt = tmp_path / "wt"
+    for sub in ("images", "boxes", "masks"):
+        shutil.copytree(a / sub, wt / sub)
+    back = load_labelled_folder(wt)
+    names = {c["id"]: c["name"] for c in coco["categories"]}
+    want = sorted((im, names[c], tuple(b_)) for im, c, b_, crowd in
+                  ((x["image_id"], x["category_id"], x["bbox"], x["iscrowd"]) for x in coco["annotations"]) if not crowd)
+    got = sorted((x["image_id"], {c["id"]: c["name"] for c in back.coco["categories"]}[x["category_id"]],
+                  tuple(x["bbox"])) for x in back.coco["annotations"])
+    assert got == want
+    mask = np.array(__import__("cv2").imread(str(wt / "masks" / "000001.png"), 0))
+    assert set(np.unique(mask)) <= {0, 1, 2, 3} and (mask == 3).any()
+
+
+def test_cli_spec_refusals(tmp_path, capsys):
+    code, err = run_cli(["dataset", "--spec", "no_such_spec", "--n", "2", "--out", str(tmp_path / "o")], capsys)
+    assert_clean_error(code, err, "--spec no_such_spec", "marine_debris_watertank")
+    code, err = run_cli(["dataset", "--spec", "fls_train", "--sensor", "sss", "--n", "2", "--out",
+                         str(tmp_path / "o")], capsys)
+    assert_clean_error(code, err, "--spec fls_train", "--sensor")
+    assert not (tmp_path / "o").exists()
