@@ -1,4 +1,5 @@
-"""Estimation roles shared by the world model, trackers and mappers.
+"""Estimation roles shared by the world model, trackers and mappers (their interfaces:
+:mod:`autonomy.estimation.roles`; the state they pass: :class:`GaussianState`).
 
 Transition models, measurement models, predictor, updater, gater, data associator,
 same-scan clusterer, initiator, deleter and out-of-sequence re-processing, each a small swappable part checked alone against an oracle (the
@@ -18,6 +19,9 @@ __getattr__, __dir__, __all__ = lazy_loader.attach(__name__, submod_attrs={
     "measurement": ["PositionFix", "RangeAzimuth", "RangeBearingElevation"],
     "predictor": ["KalmanPredictor"],
     "reprocessing": ["ReprocessingHistory"],
+    "roles": ["Deleter", "Gater", "Initiator", "MeasurementModel", "Predictor", "Reprocessor", "TransitionModel",
+              "Updater"],
+    "state": ["GaussianState"],
     "transition": ["ConstantPosition", "ConstantVelocity"],
     "updater": ["ExtendedKalmanUpdater", "KalmanUpdater", "kalman_update"],
 })

@@ -13,10 +13,9 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from autonomy.estimation.transition import ConstantPosition, ConstantVelocity
+from autonomy.estimation.roles import TransitionModel
 
 FloatArray = NDArray[np.float64]
-TransitionModel = ConstantPosition | ConstantVelocity
 
 
 class KalmanPredictor:

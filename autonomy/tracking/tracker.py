@@ -42,6 +42,7 @@ from numpy.typing import ArrayLike, NDArray
 from autonomy.estimation.gater import MahalanobisGater
 from autonomy.estimation.measurement import RangeBearingElevation
 from autonomy.estimation.reprocessing import ReprocessingHistory
+from autonomy.estimation.state import GaussianState
 from autonomy.estimation.updater import ExtendedKalmanUpdater
 from autonomy.frames import rot_from_euler
 from autonomy.messages import UsblMsg
@@ -147,8 +148,8 @@ class TargetTracker:
     def reset(self) -> None:
         """Forget everything (no estimate until the first accepted measurement)."""
         self._poses: list[_Pose] = []
-        self._state: tuple[float, FloatArray, FloatArray] | None = None  # after the newest event
-        self._history: ReprocessingHistory[_Event, tuple[float, FloatArray, FloatArray] | None] = \
+        self._state: GaussianState | None = None  # after the newest event
+        self._history: ReprocessingHistory[_Event, GaussianState | None] = \
             ReprocessingHistory(self._apply_event, lambda: self._state, self._set_state, self._clock)
         self._seq = 0
         self._last_sonar_t = -math.inf  # time of the previous sonar detection (its error's correlation)
@@ -279,15 +280,14 @@ class TargetTracker:
         if last is None:
             return None
         t = self.now_s if t_s is None else float(t_s)
-        t0, x, P = last
-        x, P = self._predict(x, P, max(t - t0, 0.0))
+        x, P = self._predict(last.mean, last.covar, max(t - last.t_s, 0.0))
         return self._as_course_state(x, P) if x.size == CV_STATES else (x, P)
 
     @property
     def course_known(self) -> bool:
         """Whether the filter runs the paper's course model (False: still initiating)."""
         last = self._last_state()
-        return last is not None and last[1].size == N_STATES
+        return last is not None and last.ndim == N_STATES
 
     def roi(self, t_s: float | None = None) -> PolarRoi | None:
         """Polar ROI in the sonar frame at ``t_s`` (default: now), or None before the first
@@ -340,30 +340,28 @@ class TargetTracker:
             self._refuse(t_s, f"no vehicle pose at the {what} measurement time")
         return pose
 
-    def _last_state(self) -> tuple[float, FloatArray, FloatArray] | None:
+    def _last_state(self) -> GaussianState | None:
         return self._state
 
     def _insert(self, ev: _Event) -> None:
         """Apply ``ev`` at its time: re-processing the later events ([BarShalom2001-OOSM])."""
         self._history.insert(ev, ev.t_s)
 
-    def _set_state(self, state: tuple[float, FloatArray, FloatArray] | None) -> None:
+    def _set_state(self, state: GaussianState | None) -> None:
         self._state = state
 
     def _clock(self) -> float:
-        return -math.inf if self._state is None else self._state[0]
+        return -math.inf if self._state is None else self._state.t_s
 
     def _apply_event(self, ev: _Event) -> None:
         self._state = self._apply(self._state, ev)
 
-    def _apply(self, state: tuple[float, FloatArray, FloatArray] | None, ev: _Event
-               ) -> tuple[float, FloatArray, FloatArray] | None:
+    def _apply(self, state: GaussianState | None, ev: _Event) -> GaussianState:
         """Posterior after ``ev`` from ``state`` (None: not initialised; the event initialises)."""
         if state is None:
             ev.accepted = True
-            return ev.t_s, *self._initial(ev)
-        t0, x, P = state
-        x, P = self._predict(x, P, ev.t_s - t0)
+            return GaussianState(*self._initial(ev), ev.t_s)
+        x, P = self._predict(state.mean, state.covar, ev.t_s - state.t_s)
         m = ev.model.ndim_meas
         z, R = ev.z[:m], ev.R[:m, :m]
         H = ev.model.jacobian(x)
@@ -373,12 +371,12 @@ class TargetTracker:
         if not ev.accepted:
             if ev.kind == USBL and self._usbl_rejections_before(ev) + 1 >= self.cfg.usbl_rejections_to_restart:
                 ev.accepted = True  # the track is lost: restart from this fix
-                return ev.t_s, *self._initial(ev)
-            return ev.t_s, x, P
+                return GaussianState(*self._initial(ev), ev.t_s)
+            return GaussianState(x, P, ev.t_s)
         x, P = ExtendedKalmanUpdater(ev.model).update(x, P, z, R)
         if x.size == CV_STATES and self._course_defined(x, P):
             x, P = self._as_course_state(x, P)
-        return ev.t_s, x, P
+        return GaussianState(x, P, ev.t_s)
 
     def _usbl_rejections_before(self, ev: _Event) -> int:
         """USBL fixes rejected in a row just before ``ev`` in the history (sonar events,

@@ -73,6 +73,7 @@ class SensorScheduler:
         self.eps_s = eps_s
         self._channels: dict[str, _Channel] = {}
         self._next_s = dict.fromkeys(PHASES, math.inf)  # earliest next firing of any channel, per phase
+        self._by_phase: dict[str, list[_Channel]] = {p: [] for p in PHASES}  # in table order
         # (deliver_s, seq, name, message): ordered by time, then push order (seq is unique)
         self._queue: list[tuple[float, int, str, Any]] = []
         self._seq = 0
@@ -120,11 +121,11 @@ class SensorScheduler:
         self._channels[name] = _Channel(name, order, float(rate_hz), latency, float(first_fire_s) + float(offset_s),
                                         quantum_s=None if quantum_s is None else float(quantum_s),
                                         phase=phase, offset_s=float(offset_s))
+        self._by_phase = {p: [ch for ch in self._channels.values() if ch.phase == p] for p in PHASES}
         self._update_next(phase)
 
     def _update_next(self, phase: str) -> None:
-        self._next_s[phase] = min((ch.next_fire_s for ch in self._channels.values() if ch.phase == phase),
-                                  default=math.inf)
+        self._next_s[phase] = min((ch.next_fire_s for ch in self._by_phase[phase]), default=math.inf)
 
     def reset(self, t_s: float = 0.0) -> None:
         """Empty the queue; every channel fires next (its firing 0) at ``t_s``."""
@@ -150,15 +151,16 @@ class SensorScheduler:
         if self._next_s[phase] > limit:  # most physics steps: nothing due
             return []
         out = []
-        for ch in self._channels.values():
-            if ch.phase != phase:
-                continue
+        nxt = math.inf
+        for ch in self._by_phase[phase]:
             t_fire = ch.next_fire_s
             while t_fire <= limit:
                 out.append((t_fire, ch.order, ch.name))
                 ch.n_fired += 1
                 t_fire = ch.next_fire_s
-        self._update_next(phase)
+            if t_fire < nxt:
+                nxt = t_fire
+        self._next_s[phase] = nxt
         out.sort()
         return [(t, name) for t, _, name in out]
 

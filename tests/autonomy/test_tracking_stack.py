@@ -90,8 +90,8 @@ def test_initiation_matches_stone_soup_kalman_filter():
     for t, z in fixes:
         assert tr.on_usbl(UsblMsg(t, *z, transponder="diver"))
     assert not tr.course_known
-    x_ours = tr._last_state()[1]  # (6,) CV state at the last fix
-    P_ours = tr._last_state()[2]
+    x_ours = tr._last_state().mean  # (6,) CV state at the last fix
+    P_ours = tr._last_state().covar
 
     # Stone Soup: state [n, vn, e, ve, d, vd]; measurement (elevation up > 0, bearing, range)
     order = [0, 3, 1, 4, 2, 5]
@@ -104,7 +104,7 @@ def test_initiation_matches_stone_soup_kalman_filter():
     first = TargetTracker(cfg)
     first.record_pose(0.0, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
     first.on_usbl(UsblMsg(0.0, *fixes[0][1], transponder="diver"))
-    _, x0, P0 = first._last_state()
+    x0, P0 = first._last_state().mean, first._last_state().covar
     state = GaussianState(x0[order].reshape(-1, 1), P0[np.ix_(order, order)], timestamp=t0)
     predictor, updater = ExtendedKalmanPredictor(trans), ExtendedKalmanUpdater(meas)
     for t, z in fixes[1:]:
