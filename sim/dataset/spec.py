@@ -132,6 +132,14 @@ class CatalogueItem(StrictModel):
     shape: Literal[DEBRIS_TARGET_SHAPES + ("tyre",)]  # type: ignore[valid-type]
     pitch_deg: float = Field(0.0, ge=-90.0, le=90.0, description="90: stood up on its base")
     weight: float = Field(1.0, gt=0.0, description="share of the objects drawn")
+    size_scale: Range = Field((0.85, 1.15), description="factor on the shape's default size, drawn per object")
+
+    @model_validator(mode="after")
+    def _scale(self) -> "CatalogueItem":
+        _ordered("size_scale", self.size_scale)
+        if not (0.05 <= self.size_scale[0] and self.size_scale[1] <= 20.0):
+            raise ValueError(f"size_scale: allowed within [0.05, 20], got {list(self.size_scale)}")
+        return self
 
 
 class TankScenes(StrictModel):

@@ -72,7 +72,8 @@ def render_tank_scene(seed: int, index: int, settings: TankSettings, frame_ids: 
                         wall_share=sc.wall_share, wall_range_m=sc.wall_range_m, objects=sc.objects,
                         object_range_m=sc.object_range_m, floor_reflectivity=sc.floor_reflectivity,
                         wall_reflectivity=sc.wall_reflectivity, gain_jitter_db=sc.gain_jitter_db)
-    catalogue = tuple(CatalogueEntry(c.class_name, c.shape, c.pitch_deg, c.weight) for c in sc.catalogue)
+    catalogue = tuple(CatalogueEntry(c.class_name, c.shape, c.pitch_deg, c.weight, tuple(c.size_scale))
+                      for c in sc.catalogue)
     scene = draw_scene(index, component_rng(seed, f"dataset/tank/scene/{index}"), tank, catalogue)
     geom = spec.image.geometry()
     over = {k: v for k, v in spec.sonar.fls_fields().items() if k != "preset"}

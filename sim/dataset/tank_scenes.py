@@ -121,12 +121,14 @@ class CatalogueEntry:
         shape: a debris shape (:data:`sim.scene.debris_meshes.DEBRIS_SHAPES`) or ``tyre``.
         pitch_deg: its pitch on the floor (90: stood up on its base).
         weight: its share of the objects drawn (relative to the others').
+        size_scale: (low, high) factor on its shape's default size, drawn uniformly per object.
     """
 
     class_name: str
     shape: str
     pitch_deg: float = 0.0
     weight: float = 1.0
+    size_scale: tuple[float, float] = (0.85, 1.15)
 
 
 #: The real set's objects: its classes, their shapes and their mix ([MarineDebrisFLS]).
@@ -137,7 +139,7 @@ MARINE_DEBRIS_CATALOGUE: tuple[CatalogueEntry, ...] = tuple(
 def draw_scene(index: int, rng: np.random.Generator, tank: TankGeometry = TANK,
                catalogue: tuple[CatalogueEntry, ...] = MARINE_DEBRIS_CATALOGUE) -> TankScene:
     """One scene drawn from ``rng``: the sonar's height and tilt, one to ``tank.objects``
-    objects of ``catalogue`` (by weight; size scaled by 0.85-1.15, any yaw, within +-11 deg of
+    objects of ``catalogue`` (by weight; size scaled by the entry's ``size_scale``, any yaw, within +-11 deg of
     the boresight at ``tank.object_range_m``) and, in ``tank.wall_share`` of the scenes, a wall
     (class ``Wall``) across the far fan."""
     from scenarios.config.world import TargetConfig
@@ -157,7 +159,7 @@ def draw_scene(index: int, rng: np.random.Generator, tank: TankGeometry = TANK,
         north, east = rng_m * np.cos(np.deg2rad(az)), rng_m * np.sin(np.deg2rad(az))
         yaw = float(rng.uniform(-180.0, 180.0))
         shape, pitch = entry.shape, entry.pitch_deg
-        scale = float(rng.uniform(0.85, 1.15))
+        scale = float(rng.uniform(*entry.size_scale))
         if shape == "tyre":
             radius = 0.14 * scale
             targets.append(TargetConfig(name=f"obj{j}", shape="tyre", pos_ned=(north, east, floor),

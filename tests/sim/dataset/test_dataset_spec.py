@@ -62,6 +62,7 @@ def test_shipped_specs_load_and_the_survey_ones_are_the_presets():
     (lambda t: t.replace("kind: tank", "kind: lake"), ["scene", "seabed", "tank"]),
     (lambda t: t.replace("far_m: 2.9", "far_m: 4.0"), ["far_m", "above the image"]),
     (lambda t: "- just a list\n", ["a YAML mapping"]),
+    (lambda t: t.replace("shape: tyre}", "shape: tyre, size_scale: [0.01, 2]}"), ["catalogue.1.size_scale", "0.05"]),
 ])
 def test_a_bad_spec_is_refused_in_one_line_naming_the_key(tmp_path, edit, culprits):
     path = tmp_path / "spec.yaml"
