@@ -1,5 +1,7 @@
-"""A page of labelled frames with their boxes drawn, from any labelled folder: a dataset of
-``auvsim dataset`` (a spec's or the survey presets') or real frames in the watertank layout.
+"""Draw a page of labelled frames with their boxes, from a dataset or real labelled frames.
+
+Any labelled folder: a dataset of ``auvsim dataset`` (a spec's or the survey presets') or real
+frames in the watertank layout.
 
 Usage: ``python scripts/dataset_preview.py --data DIR --out PAGE.png [--frames 8] [--columns 4] [--scale 1]``.
 Bad input gets one line and exit status 2.

@@ -282,11 +282,13 @@ def main(argv: list[str] | None = None) -> int:
                 print(f"function-level import: {m}:{line} -> {target}")
     bad = []
     if args.audit:
+        print("function-level imports: MODULE:LINE -> IMPORTED: the costly packages a module-level import would "
+              "add to MODULE's start-up (or why it is kept)")
         for m, line, target, deferred in audit(edges, local, third):
             print(f"{m}:{line} -> {target}: " + (", ".join(sorted(deferred)) if deferred else "defers nothing"))
             if not deferred:
                 bad.append((m, line, target))
-        print(f"{len(bad)} function-level imports defer no costly package")
+        print(f"{len(bad)} function-level imports without a reason (each should defer a costly package or be kept)")
     print(f"{len(mod_cycles)} module cycles, {len(pkg_cycles)} package cycles "
           f"({len(edges)} modules, {sum(len(set(v)) for v in local.values())} function-level imports)")
     return 1 if mod_cycles or pkg_cycles or bad else 0

@@ -40,9 +40,9 @@ class ReprocessingHistory(Generic[E, S]):
             events change in place must be copied).
         restore: ``restore(state)`` makes a saved state the live one (copying it if the
             estimator changes it in place).
-        clock: the estimator's time, s, after the events applied so far (-inf before any):
-            an event's time in the history is the clock just after it is applied, and a
-            checkpoint's time the clock when it is taken.
+        clock: a callable returning the estimator's time, s, after the events applied so far
+            (-inf before any; not nan): an event's time in the history is the clock just after
+            it is applied, and a checkpoint's time the clock when it is taken.
         checkpoint_every_s: None: a checkpoint before every event (cheap states, e.g.
             immutable tuples). A time, s: a checkpoint before an event once the clock has
             moved at least this far since the last one (the replay cost of a late event: up
@@ -91,6 +91,10 @@ class ReprocessingHistory(Generic[E, S]):
         """Apply ``event`` at time ``t_s`` among the events kept: after every event whose
         time is at most ``t_s``, the later ones replayed after it. The newest (``t_s`` at or
         after the clock) is simply applied. Returns what ``apply`` returned for ``event``.
+
+        ``t_s`` only places the event; ``apply`` is not given it, so the event carries its own
+        time and applying it must bring the clock to ``t_s`` (as a measurement at ``t_s``
+        does: the filter predicts to it first), else the history's order is not the clock's.
 
         Raises:
             ValueError: ``t_s`` older than :attr:`oldest` (pruned history) or not finite.

@@ -18,7 +18,8 @@ def _cmd_dataset(args: argparse.Namespace) -> int:
         raise CliError(f"--heldout and --randomization {args.randomization} contradict each other; give one "
                        "(--heldout is --randomization heldout)")
     if args.spec is not None:
-        given = [opt for opt, v in (("--sensor", args.sensor), ("--randomization", args.randomization),
+        given = [opt for opt, v in (("--sensor sss", None if args.sensor in (None, "fls") else args.sensor),
+                                    ("--randomization", args.randomization),
                                     ("--heldout", args.heldout or None), ("--tile-length", args.tile_length),
                                     ("--line-length", args.line_length)) if v is not None]
         if given:

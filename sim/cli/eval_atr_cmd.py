@@ -93,7 +93,7 @@ def _cmd_eval(args: argparse.Namespace) -> int:
     print("  range band       gt   recall   det  precision")
     for b in res["by_range_band"]:
         lo, hi = b["range_m"]
-        print(f"  {lo:5.0f}-{'inf' if hi is None else f'{hi:.0f}':>4s} m  {b['ground_truth']:5d}  {_fmt(b['recall']):>7s}"
+        print(f"  {lo:5g}-{'inf' if hi is None else f'{hi:g}':>4s} m  {b['ground_truth']:5d}  {_fmt(b['recall']):>7s}"
               f"  {b['detections']:4d}  {_fmt(b['precision']):>9s}")
     return 0
 

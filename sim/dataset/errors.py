@@ -35,6 +35,9 @@ def require_dataset(path: str | Path, arg: str = "--data") -> Path:
     ann = p / ANNOTATIONS_FILE
     if not ann.is_file() and (p / "images").is_dir() and (p / "boxes").is_dir():
         return p.resolve()  # the watertank layout (sim.dataset.labelled_folder)
+    if not ann.is_file() and (p / "images").is_dir():
+        raise DatasetError(f"{arg} {p}: has images/ but neither boxes/ (the watertank layout: boxes/<stem>.xml per "
+                           f"image) nor {ANNOTATIONS_FILE} (a dataset written by `auvsim dataset`)")
     if not ann.is_file():
         raise DatasetError(f"{arg} {p}: no {ANNOTATIONS_FILE} here (not a dataset folder written by `auvsim "
                            "dataset`, nor a watertank-layout folder with images/ and boxes/; or its generation "

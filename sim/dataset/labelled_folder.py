@@ -8,14 +8,15 @@ layout          what the folder holds
 ``coco``        ``annotations.json`` (COCO, written by ``auvsim dataset``) and the images it
                 names; each image record carries its ``fan_geometry``
 ``watertank``   ``images/*.png``, ``boxes/<stem>.xml`` (Pascal-VOC-like ``object`` entries
-                whose ``bndbox`` holds ``x y w h`` in pixels, COCO order) and optionally
-                ``masks/*.png`` (class id per pixel): the layout of the Marine Debris
+                whose ``bndbox`` holds ``x y w h`` in pixels, COCO order), optionally
+                ``masks/*.png`` (class id per pixel) and ``classes.txt``: the layout of the Marine Debris
                 forward-looking sonar set ([MarineDebrisFLS]) and of real recordings labelled
                 the same way
 ==============  ============================================================================
 
-A watertank folder becomes a COCO document in memory: one category per class of
-:data:`WATERTANK_CLASSES` (the set's ids), one image record per PNG (natural name order,
+A watertank folder becomes a COCO document in memory: one category per class, those of its
+``classes.txt`` (one name a line, ids from 1: what ``auvsim dataset`` writes) or, without one,
+:data:`WATERTANK_CLASSES` (the Marine Debris set's ids); one image record per PNG (natural name order,
 ids from 1) with a ``fan_geometry`` fitted to the frames' own fan outline (frames are
 grouped by outline, :func:`sim.dataset.real_frames.fan_groups`, and each group fitted; the
 metric scale assumes the window starts at ``near_m``, the ARIS 3000's nearest window by
@@ -46,7 +47,7 @@ WATERTANK_CLASSES: dict[int, str] = MARINE_DEBRIS_CLASSES
 SCORED_APART = ("Wall",)
 #: Window start assumed for a watertank folder's metric scale, m (the ARIS 3000's nearest).
 WATERTANK_NEAR_M = 0.7
-BOXES_DIR, MASKS_DIR = "boxes", "masks"
+BOXES_DIR, MASKS_DIR, CLASSES_FILE = "boxes", "masks", "classes.txt"
 #: A pixel is inside the fan when lit in more than this share of a group's frames (low: frames
 #: whose shadows or walls darken part of the fan still outline it together).
 FAN_LIT_SHARE = 0.1
@@ -157,9 +158,10 @@ def _watertank(root: Path, arg: str, near_m: float) -> LabelledFolder:
         images.append(img)
     stack = np.stack(images)
     geoms = _fan_geometries(stack, near_m, root, arg)
-    by_name = {name: cid for cid, name in WATERTANK_CLASSES.items()}
+    classes = _folder_classes(root, arg)
+    by_name = {name: cid for cid, name in classes.items()}
     coco: dict = {"images": [], "annotations": [],
-                  "categories": [{"id": cid, "name": name} for cid, name in WATERTANK_CLASSES.items()]}
+                  "categories": [{"id": cid, "name": name} for cid, name in classes.items()]}
     h, w = stack.shape[1:]
     for i, (p, g) in enumerate(zip(paths, geoms), start=1):
         coco["images"].append({
@@ -174,8 +176,10 @@ def _watertank(root: Path, arg: str, near_m: float) -> LabelledFolder:
             raise DatasetError(f"{arg} {exc}") from None
         for name, (x, y, bw, bh) in ((b.class_name.strip(), b.xywh) for b in boxes):
             if name not in by_name:
-                raise DatasetError(f"{arg} {box_file}: class {name!r} is not one of the watertank classes "
-                                   f"({', '.join(WATERTANK_CLASSES.values())})")
+                listed = (f"the classes of its {CLASSES_FILE}" if (root / CLASSES_FILE).is_file() else
+                          f"the watertank classes (a folder of other classes lists them in {CLASSES_FILE})")
+                raise DatasetError(f"{arg} {box_file}: class {name!r} is not one of {listed}: "
+                                   f"{', '.join(classes.values())}")
             if not (bw > 0 and bh > 0 and x >= 0 and y >= 0 and x + bw <= w + 1 and y + bh <= h + 1):
                 raise DatasetError(f"{arg} {box_file}: box {x:g} {y:g} {bw:g} {bh:g} (x y w h) of {name} is "
                                    f"empty or outside the {w} x {h} px image")
@@ -184,5 +188,20 @@ def _watertank(root: Path, arg: str, near_m: float) -> LabelledFolder:
             coco["annotations"].append({
                 "id": len(coco["annotations"]) + 1, "image_id": i, "category_id": by_name[name],
                 "bbox": [x, y, bw, bh], "area": bw * bh, "iscrowd": 0, "attributes": {"range_m": range_m}})
-    targets = tuple(n for n in WATERTANK_CLASSES.values() if n not in SCORED_APART)
+    targets = tuple(n for n in classes.values() if n not in SCORED_APART)
     return LabelledFolder(root, "watertank", coco, targets)
+
+
+def _folder_classes(root: Path, arg: str) -> dict[int, str]:
+    """Class id -> name of a watertank-layout folder: its ``classes.txt`` (one name a line, ids
+    from 1, as ``auvsim dataset`` writes it) when it has one, else :data:`WATERTANK_CLASSES`."""
+    path = root / CLASSES_FILE
+    if not path.is_file():
+        return dict(WATERTANK_CLASSES)
+    try:
+        names = [line.strip() for line in path.read_text().splitlines() if line.strip()]
+    except (OSError, UnicodeDecodeError) as exc:
+        raise DatasetError(f"{arg} {path}: not a readable text file ({exc})") from None
+    if not names or len(set(names)) < len(names):
+        raise DatasetError(f"{arg} {path}: must list each class name once, one a line (ids from 1)")
+    return {k + 1: n for k, n in enumerate(names)}

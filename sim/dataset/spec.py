@@ -27,6 +27,7 @@ and ``marine_debris_watertank`` (the ARIS 3000 tank frames of the Marine Debris 
 
 from __future__ import annotations
 
+import difflib
 import math
 import re
 from pathlib import Path
@@ -232,6 +233,16 @@ class DatasetSpec(StrictModel):
             raise ValueError(f"formats: listed twice in {list(self.formats)}")
         if self.scene.kind == "tank" and self.image is None:
             raise ValueError("image: a tank spec needs the fan pixel grid its frames are written on")
+        if self.scene.kind == "tank":
+            sc, im = self.scene, self.image
+            far_ground = math.sqrt(max(im.far_m**2 - sc.height_m[0] ** 2, 0.0))
+            if sc.object_range_m[1] > far_ground:
+                raise ValueError(f"scene.object_range_m: objects up to {sc.object_range_m[1]} m ground range lie "
+                                 f"beyond the window (far_m {im.far_m} m: {far_ground:.2f} m on the floor from "
+                                 f"the lowest sonar); frames would miss them")
+            if sc.height_m[1] >= im.far_m:
+                raise ValueError(f"scene.height_m: a sonar {sc.height_m[1]} m above the floor sees no floor within "
+                                 f"the window (far_m {im.far_m} m)")
         if self.scene.kind == "seabed" and self.image is not None:
             raise ValueError("image: seabed frames are written on the sonar's own fan image; leave image out")
         if self.scene.kind == "seabed" and set(self.formats) != {"coco", "yolo"}:
@@ -257,16 +268,24 @@ def load_spec(name_or_path: str | Path, arg: str = "--spec") -> DatasetSpec:
     """
     text = str(name_or_path)
     path = Path(text).expanduser()
+    if path.is_dir():
+        raise DatasetError(f"{arg} {text}: is a folder; name a spec file (.yaml) or a shipped spec "
+                           f"({', '.join(shipped_specs())})")
     if not path.is_file():
         shipped = SPECS_DIR / f"{text}.yaml"
         if "/" in text or text.endswith((".yaml", ".yml")) or not shipped.is_file():
+            close = difflib.get_close_matches(Path(text).stem, shipped_specs(), n=1)
+            hint = f"; did you mean {close[0]}?" if close else ""
             raise DatasetError(f"{arg} {text}: no such file, and no shipped spec of that name (shipped: "
-                               f"{', '.join(shipped_specs())})")
+                               f"{', '.join(shipped_specs())}){hint}")
         path = shipped
     try:
         data = yaml.safe_load(path.read_text())
     except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
-        raise DatasetError(f"{arg} {path}: not a readable YAML file ({str(exc).splitlines()[0]})") from None
+        mark = getattr(exc, "problem_mark", None)
+        where = f", line {mark.line + 1}" if mark is not None else ""
+        what = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        raise DatasetError(f"{arg} {path}: not a readable YAML file ({what}{where})") from None
     if not isinstance(data, dict):
         raise DatasetError(f"{arg} {path}: a spec is a YAML mapping (name, scene, sonar, ...), got "
                            f"{type(data).__name__}")
@@ -276,6 +295,7 @@ def load_spec(name_or_path: str | Path, arg: str = "--spec") -> DatasetSpec:
         err = exc.errors(include_url=False)[0]
         loc = ".".join(str(p) for p in err["loc"] if not (isinstance(p, str) and p in ("seabed", "tank")))
         msg = err["msg"].removeprefix("Value error, ")
+        given = err.get("input")
         key = re.match(r"([a-z_][a-z_0-9.]*): ", msg) if err["type"] == "value_error" else None
         if key:  # a check of a section names the key it is about: one dotted path
             loc, msg = ".".join(filter(None, (loc, key.group(1)))), msg[key.end():]
@@ -283,7 +303,12 @@ def load_spec(name_or_path: str | Path, arg: str = "--spec") -> DatasetSpec:
             msg = "unknown key"
         elif err["type"] == "literal_error":
             msg = msg.replace("Input should be", "allowed values:")
-        given = err.get("input")
+        elif err["type"] in ("tuple_type", "too_short", "too_long") and isinstance(given, (int, float, list)):
+            msg = "a [low, high] pair of numbers"
+        elif err["type"] == "union_tag_invalid":
+            msg = f"allowed values: {err.get('ctx', {}).get('expected_tags', 'seabed, tank')}"
+            shown_tag = err.get("ctx", {}).get("tag")
+            given = shown_tag if shown_tag is not None else given
         shown = "" if err["type"] in ("extra_forbidden", "missing") or isinstance(given, (dict, list)) \
             else f" (got {given!r})"
         more = len(exc.errors()) - 1

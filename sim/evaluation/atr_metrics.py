@@ -53,7 +53,7 @@ def _pr(tp: int, fp: int, n_gt: int) -> tuple[float | None, float | None]:
 
 def evaluate_detector(detector, data_dir: str | Path, score_threshold: float,
                       target_classes: Sequence[str] | None = None, min_score: float = 0.05,
-                      range_bands_m: Sequence[float] = DEFAULT_RANGE_BANDS_M,
+                      range_bands_m: Sequence[float] | None = None,
                       max_images: int | None = None, coco_ap: bool = True) -> dict:
     """Evaluate ``detector`` (``.detect(frame, score_threshold=...)``) on a labelled folder of
     either layout (:mod:`sim.dataset.labelled_folder`: a dataset of ``auvsim dataset``, or
@@ -93,7 +93,8 @@ def evaluate_detector(detector, data_dir: str | Path, score_threshold: float,
     det_classes = getattr(detector, "class_names", None)
     if det_classes is not None and not set(det_classes) & set(target_classes):
         raise DatasetError(f"--data {data_dir}: the detector's classes ({', '.join(det_classes)}) are none of the "
-                           f"data's ({', '.join(target_classes)}); give a model trained on these classes (--model)")
+                           f"data's ({', '.join(target_classes)}); give a CNN trained on these classes "
+                           "(--detector cnn --model FILE.onnx)")
     target_cats = [name_to_cat[c] for c in target_classes]
     apart_cats = [name_to_cat[c] for c in SCORED_APART if c in name_to_cat and c not in target_classes]
     img_ids = sorted(coco_gt.getImgIds())[:max_images]
@@ -103,7 +104,7 @@ def evaluate_detector(detector, data_dir: str | Path, score_threshold: float,
     if not gt_ids:
         raise DatasetError(f"--data {data_dir}: the {len(img_ids)} frames evaluated hold no labelled "
                            f"{'/'.join(target_classes)} object, so recall and AP are undefined; use a larger set")
-    bands = list(range_bands_m)
+    bands = list(range_bands_m if range_bands_m is not None else range_bands_for(folder.coco["images"]))
     n_bands = len(bands) - 1
     tp = fp = n_gt = 0
     band_tp_gt = np.zeros(n_bands, int)
@@ -174,6 +175,16 @@ def evaluate_detector(detector, data_dir: str | Path, score_threshold: float,
             "ap50": ap50, "ap50_95": ap, "map50": ap50, "map50_95": ap, "ap50_by_class": by_class,
             "ap50_scored_apart": apart, "layout": folder.layout, "by_range_band": by_band,
             "frames_per_s": n_img / infer_s if infer_s > 0 else float("nan")}
+
+
+def range_bands_for(images: Sequence[dict]) -> tuple[float, ...]:
+    """Range band edges for a set's frames, m: :data:`DEFAULT_RANGE_BANDS_M` (10 m bands) for
+    windows reaching beyond 10 m, else four equal bands of the farthest window (a tank's)."""
+    far = max((float(im["fan_geometry"]["range_max_m"]) for im in images if "fan_geometry" in im), default=math.inf)
+    if far > 10.0:
+        return DEFAULT_RANGE_BANDS_M
+    step = math.ceil(far / 4.0 * 10.0)  # in 0.1 m
+    return (0.0, step / 10.0, 2 * step / 10.0, 3 * step / 10.0, math.inf)
 
 
 def _coco_ap(coco_gt, coco_dets: list[dict], img_ids: list[int], cat_ids: list[int]

@@ -25,8 +25,8 @@ scene:
   objects: [2, 3]
   wall_share: 0.5
   catalogue:
-    - {class_name: Bottle, shape: bottle, weight: 2}
-    - {class_name: Tire, shape: tyre}
+    - {class_name: bottle, shape: bottle, weight: 2}
+    - {class_name: tyre, shape: tyre}
 sonar:
   preset: aris3000
   elevation_rays: 16
@@ -61,6 +61,11 @@ def test_shipped_specs_load_and_the_survey_ones_are_the_presets():
     (lambda t: t.replace("objects: [2, 3]", "objects: [3, 2]"), ["objects", "lower bound"]),
     (lambda t: t.replace("kind: tank", "kind: lake"), ["scene", "seabed", "tank"]),
     (lambda t: t.replace("far_m: 2.9", "far_m: 4.0"), ["far_m", "above the image"]),
+    (lambda t: t.replace("objects: [2, 3]", "objects: [2, 3]\n  object_range_m: [1.0, 3.5]"),
+     ["scene.object_range_m", "beyond the window"]),
+    (lambda t: t.replace("objects: [2, 3]", "objects: [2, 3]\n  height_m: [0.2, 3.0]"), ["scene.height_m", "no floor"]),
+    (lambda t: t.replace("objects: [2, 3]", "objects: [2, 3]\n  tilt_deg: 15"), ["scene.tilt_deg", "[low, high] pair"]),
+    (lambda t: t.replace("name: tiny_tank", "name: [tiny_tank"), ["not a readable YAML file", "line"]),
     (lambda t: "- just a list\n", ["a YAML mapping"]),
     (lambda t: t.replace("shape: tyre}", "shape: tyre, size_scale: [0.01, 2]}"), ["catalogue.1.size_scale", "0.05"]),
 ])
@@ -94,7 +99,7 @@ def test_a_tank_spec_renders_labelled_frames_the_same_for_the_same_seed(tmp_path
     args = generation_args(load_spec(spec_path))
     a = generate_dataset(tmp_path / "a", 4, seed=5, workers=1, progress=False, **args).parent
     coco = json.loads((a / "annotations.json").read_text())
-    assert [c["name"] for c in coco["categories"]] == ["Bottle", "Tire", "Wall"]
+    assert [c["name"] for c in coco["categories"]] == ["bottle", "tyre", "Wall"]  # classes of one's own
     assert len(coco["images"]) == 4 and {im["width"] for im in coco["images"]} == {160}
     assert {a_["category_id"] for a_ in coco["annotations"]} >= {3}  # a wall in some scenes
     assert not (a / "labels").exists()  # no yolo in its formats
@@ -109,10 +114,13 @@ def test_a_tank_spec_renders_labelled_frames_the_same_for_the_same_seed(tmp_path
     (b / "parts" / "scene_00001.json").unlink()
     generate_dataset(b, 4, seed=5, workers=1, progress=False, **args)
     assert (a / "annotations.json").read_bytes() == (b / "annotations.json").read_bytes()
-    # the watertank layout (boxes and class masks) reads back as the COCO labels say
+    # the watertank layout (boxes, class masks, class names) reads back as the COCO labels say
     wt = tmp_path / "wt"
     for sub in ("images", "boxes", "masks"):
         shutil.copytree(a / sub, wt / sub)
+    with pytest.raises(DatasetError, match="classes.txt"):  # without its class list: the Marine Debris classes
+        load_labelled_folder(wt)
+    shutil.copy(a / "classes.txt", wt / "classes.txt")
     back = load_labelled_folder(wt)
     names = {c["id"]: c["name"] for c in coco["categories"]}
     want = sorted((im, names[c], tuple(b_)) for im, c, b_, crowd in
@@ -127,6 +135,10 @@ def test_a_tank_spec_renders_labelled_frames_the_same_for_the_same_seed(tmp_path
 def test_cli_spec_refusals(tmp_path, capsys):
     code, err = run_cli(["dataset", "--spec", "no_such_spec", "--n", "2", "--out", str(tmp_path / "o")], capsys)
     assert_clean_error(code, err, "--spec no_such_spec", "marine_debris_watertank")
+    code, err = run_cli(["dataset", "--spec", "fls_train.yaml", "--n", "2", "--out", str(tmp_path / "o")], capsys)
+    assert_clean_error(code, err, "did you mean fls_train?")
+    code, err = run_cli(["dataset", "--spec", str(tmp_path), "--n", "2", "--out", str(tmp_path / "o")], capsys)
+    assert_clean_error(code, err, "is a folder")
     code, err = run_cli(["dataset", "--spec", "fls_train", "--sensor", "sss", "--n", "2", "--out",
                          str(tmp_path / "o")], capsys)
     assert_clean_error(code, err, "--spec fls_train", "--sensor")

@@ -83,6 +83,9 @@ def test_per_class_ap_from_pycocotools_on_known_detections(tmp_path):
     assert perfect["map50"] == pytest.approx(1.0) and perfect["map50_95"] == pytest.approx(1.0)
     assert perfect["ap50_scored_apart"] == {"Wall": pytest.approx(1.0)}
     assert perfect["precision"] == 1.0 and perfect["recall"] == 1.0 and perfect["ground_truth"] == 7  # no wall
+    # range bands of the tank's window (2.9 m): four of 0.8 m, every object in one of them
+    assert [b["range_m"] for b in perfect["by_range_band"]] == [[0.0, 0.8], [0.8, 1.6], [1.6, 2.4], [2.4, None]]
+    assert sum(b["ground_truth"] for b in perfect["by_range_band"]) == 7
     # one class never detected: its AP is 0 and the mean is over the four classes with truth
     no_can = evaluate_detector(_Oracle(f, drop={"Can"}), f.root, 0.5)
     assert no_can["ap50_by_class"]["Can"] == 0.0
@@ -130,7 +133,7 @@ def test_eval_atr_refuses_what_it_cannot_score_in_one_line(tmp_path, capsys):
     assert_clean_error(code, err, "894 x 477")
     (tmp_path / "half" / "images").mkdir(parents=True)
     code, err = run_cli(["eval-atr", "--data", str(tmp_path / "half")], capsys)
-    assert_clean_error(code, err, "--data", "images/ and boxes/")
+    assert_clean_error(code, err, "--data", "has images/ but neither boxes/")
 
 
 def test_training_reads_the_watertank_layout(tmp_path):
