@@ -6,6 +6,8 @@ before any run (so a study's results are never lost at its end)."""
 from __future__ import annotations
 
 
+from pathlib import Path
+
 import pytest
 from tests.support import SCRIPTS, load_script, script_refusal
 
@@ -134,3 +136,23 @@ def test_dataset_preview_refuses_and_draws(argv, culprits, capsys, tmp_path):
     page = cv2.imread(str(tmp_path / "ok.png"))
     assert page.shape == (480, 640, 3)
     assert (page[200:215, 119:151] == (80, 220, 80)).all(axis=-1).any()  # the first class's box drawn
+
+
+def test_split_labelled_folder_splits_by_links_and_refuses_bad_input(capsys, tmp_path):
+    from sim.dataset.labelled_folder import load_labelled_folder
+    from tests.support import write_watertank_folder
+
+    frames = [[("Bottle", (120, 200 + 10 * i, 30, 14))] for i in range(6)]
+    tank = write_watertank_folder(tmp_path / "tank", frames)
+    mod = load_script("split_labelled_folder")
+    out = str(tmp_path / "s")
+    script_refusal(mod, ["--data", str(tank), "--train", "7", "--out", out], capsys, "--train 7", "between 1 and 5")
+    script_refusal(mod, ["--data", str(tank), "--train", "2", "--out", str(tank)], capsys, "--out", "exists")
+    script_refusal(mod, ["--data", str(tmp_path), "--train", "2", "--out", out], capsys, "not a watertank-layout")
+    assert mod.main(["--data", str(tank), "--train", "2", "--seed", "3", "--out", str(tmp_path / "s")]) == 0
+    train, rest = load_labelled_folder(tmp_path / "s" / "train"), load_labelled_folder(tmp_path / "s" / "rest")
+    assert len(train.coco["images"]) == 2 and len(rest.coco["images"]) == 4
+    names = lambda f: {Path(im["file_name"]).name for im in f.coco["images"]}  # noqa: E731
+    assert not names(train) & names(rest) and len(names(train) | names(rest)) == 6
+    assert all(p.is_symlink() for p in (tmp_path / "s" / "train" / "images").iterdir())  # nothing copied
+    assert len(train.coco["annotations"]) == 2
