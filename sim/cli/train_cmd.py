@@ -53,6 +53,14 @@ def _cmd_train(args: argparse.Namespace) -> int:
         raise CliError("--val-data: name at least one dataset folder")
     val = [require_dataset(d, "--val-data") for d in val_dirs] if val_dirs is not None else None
     out = _check_model_out(args.out, args.overwrite)
+    if args.init_from is not None:
+        if args.resume:
+            raise CliError("--init-from starts a new run from another run's network; --resume continues a run: "
+                           "give one")
+        init = Path(args.init_from).expanduser()
+        if not init.is_file():
+            raise CliError(f"--init-from {init}: no such checkpoint file (a train-atr --checkpoint of the "
+                           "pretraining run)")
     if args.resume and args.checkpoint is None:
         raise CliError("--resume: name the checkpoint to continue with --checkpoint FILE")
     if args.stop_after_minutes is not None and args.checkpoint is None:
@@ -80,7 +88,8 @@ def _cmd_train(args: argparse.Namespace) -> int:
     try:
         summary = train_atr(data if len(data) > 1 else data[0], out, params, val_data=val,
                             checkpoint=args.checkpoint, resume=args.resume,
-                            checkpoint_minutes=args.checkpoint_minutes, stop_after_minutes=args.stop_after_minutes)
+                            checkpoint_minutes=args.checkpoint_minutes, stop_after_minutes=args.stop_after_minutes,
+                            init_from=args.init_from)
     except CheckpointError as exc:
         raise CliError(str(exc)) from None
     if not summary["finished"]:
@@ -127,6 +136,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="continue the run saved in --checkpoint (same data and parameters; an existing --out "
                         "needs --overwrite)")
     p.add_argument("--checkpoint-minutes", type=positive_float, default=5.0, metavar="MIN")
+    p.add_argument("--init-from", default=None, metavar="RUN.ckpt",
+                   help="start from the network of another run's checkpoint (pretraining, e.g. on synthetic "
+                        "frames); same --arch, --width, --light-heads and classes; a new optimiser and schedule")
     p.add_argument("--stop-after-minutes", type=positive_float, default=None, metavar="MIN",
                    help="end this session after MIN minutes (checkpoint saved, model exported as it stands); "
                         "the run goes on with --resume")

@@ -220,11 +220,42 @@ def _load_checkpoint(torch, path: Path, params: TrainParams, data_dirs: list[Pat
     return state
 
 
+def _init_weights(torch, model, path: Path, params: TrainParams, class_names) -> None:
+    """Start ``model`` from the network of another run's checkpoint (pretraining: e.g. on
+    synthetic frames, then fine-tuned on real ones); its optimiser and schedule are not taken.
+
+    Raises:
+        CheckpointError: not a readable checkpoint, another architecture, width or heads, or
+            other classes (names where the checkpoint records them, else their number).
+    """
+    try:
+        state = torch.load(path, map_location="cpu", weights_only=False)
+    except Exception as exc:  # torch raises several exception types for bad files
+        raise CheckpointError(f"--init-from {path}: cannot be read as a checkpoint ({type(exc).__name__})") from None
+    if not isinstance(state, dict) or state.get("format") != CHECKPOINT_FORMAT:
+        raise CheckpointError(f"--init-from {path}: not a train-atr checkpoint")
+    saved = state["params"]
+    diff = [f"{k} {saved.get(k)!r} (this run: {getattr(params, k)!r})" for k in ("arch", "width", "light_heads")
+            if saved.get(k) != getattr(params, k)]
+    if diff:
+        raise CheckpointError(f"--init-from {path}: its network differs: {'; '.join(diff)}")
+    names = state.get("class_names")
+    if names is not None and list(names) != list(class_names):
+        raise CheckpointError(f"--init-from {path}: its classes are {', '.join(names)}, this run's "
+                              f"{', '.join(class_names)}; train on data of the same classes (--classes)")
+    try:
+        model.load_state_dict(state["model"])
+    except RuntimeError:
+        raise CheckpointError(f"--init-from {path}: its network does not fit this run's (another number of "
+                              f"classes than {len(class_names)}?)") from None
+
+
 def train_atr(data_dir: str | Path | list, out_path: str | Path, params: TrainParams = TrainParams(),
               log=_log, val_data: str | Path | list | None = None, checkpoint: str | Path | None = None,
-              resume: bool = False, checkpoint_minutes: float = 5.0, stop_after_minutes: float | None = None) -> dict:
-    """Train on ``data_dir`` (an ``auvsim dataset`` output, or a list of them, concatenated)
-    and export ONNX to ``out_path``.
+              resume: bool = False, checkpoint_minutes: float = 5.0, stop_after_minutes: float | None = None,
+              init_from: str | Path | None = None) -> dict:
+    """Train on ``data_dir`` (a labelled folder of either layout, :mod:`sim.dataset.labelled_folder`,
+    or a list of them, concatenated) and export ONNX to ``out_path``.
 
     Stops after ``params.epochs`` epochs or ``params.max_minutes`` of training (summed over
     resumed sessions), whichever comes first; the learning-rate schedule runs over the same.
@@ -232,7 +263,9 @@ def train_atr(data_dir: str | Path | list, out_path: str | Path, params: TrainPa
     position in the epoch) is saved there every ``checkpoint_minutes`` and when the run stops;
     ``resume`` continues from it (same parameters and data; a resumed run takes the same steps
     as an unbroken one). ``stop_after_minutes`` ends this session early (checkpoint saved,
-    model exported as it stands) without ending the run.
+    model exported as it stands) without ending the run. ``init_from`` starts the network
+    from another run's checkpoint (pretraining; same architecture, width, heads and classes),
+    with a new optimiser and schedule.
     Then runs the model at the default operating threshold (``AtrConfig.score_threshold``) on
     up to :data:`CHECK_FRAMES` frames holding labelled objects of ``val_data`` (folders
     held out of training; None: of the training data), :func:`detection_check`.
@@ -247,7 +280,8 @@ def train_atr(data_dir: str | Path | list, out_path: str | Path, params: TrainPa
             training).
         FileNotFoundError: a folder has no annotations file, or ``resume`` without a
             checkpoint file.
-        CheckpointError: ``resume`` from a checkpoint of another run.
+        CheckpointError: ``resume`` from a checkpoint of another run; ``init_from`` a
+            checkpoint whose network does not fit.
         ValueError: an unknown ``arch`` or ``input_transform``.
     """
     torch = require_torch()
@@ -312,6 +346,9 @@ def train_atr(data_dir: str | Path | list, out_path: str | Path, params: TrainPa
     epoch, step, s_start, elapsed0 = 1, 0, 0, 0.0
     order = None
     sums = np.zeros(3)
+    if init_from is not None:
+        _init_weights(torch, model, Path(init_from), params, arrays.class_names)
+        log(f"train-atr: network initialised from {init_from}")
     if resume:
         state = _load_checkpoint(torch, ckpt_path, params, data_dirs, n_img)
         model.load_state_dict(state["model"])
@@ -334,6 +371,7 @@ def train_atr(data_dir: str | Path | list, out_path: str | Path, params: TrainPa
     def save(epoch_now: int, s_next: int) -> None:
         _save_checkpoint(torch, ckpt_path, {
             "format": CHECKPOINT_FORMAT, "params": asdict(params), "data_dirs": [str(d) for d in data_dirs],
+            "class_names": list(arrays.class_names),
             "n_images": n_img, "model": model.state_dict(), "optimizer": opt.state_dict(),
             "numpy_rng": rng.bit_generator.state, "torch_rng": torch.get_rng_state(), "epoch": epoch_now,
             "step": step, "step_in_epoch": s_next, "elapsed_s": elapsed(),

@@ -93,3 +93,36 @@ def test_checkpoint_misuse_gets_one_line_and_keeps_what_was_written(data, tmp_pa
             "checkpoint_folder": "is a folder",
             "other_parameters": "lr 0.003 -> 0.01"}[case] in err
     assert (ckpt.read_bytes() if ckpt.exists() else None) == before
+
+
+def test_init_from_starts_a_run_from_another_runs_network_and_refuses_a_misfit(data, tmp_path, capsys):
+    import torch
+
+    from sim.training.train import CHECKPOINT_FORMAT
+
+    pre = tmp_path / "pre.ckpt"
+    assert main(["train-atr", "--data", str(data), "--out", str(tmp_path / "pre.onnx"), "--checkpoint", str(pre),
+                 *TINY]) == 0
+    state = torch.load(pre, map_location="cpu", weights_only=False)
+    assert state["format"] == CHECKPOINT_FORMAT and state["class_names"] == ["opi", "rock", "debris"]
+    # fine-tuning with steps of no size (a learning rate of 1e-30) keeps the pretrained weights
+    # (the batch-norm statistics move with the new data, as they should)
+    tuned = tmp_path / "tuned.ckpt"
+    assert main(["train-atr", "--data", str(data), "--out", str(tmp_path / "tuned.onnx"), "--init-from", str(pre),
+                 "--checkpoint", str(tuned), *TINY, "--lr", "1e-30"]) == 0
+    a, b = state["model"], torch.load(tuned, map_location="cpu", weights_only=False)["model"]
+    learnt = [k for k in a if "running_" not in k and "num_batches" not in k]
+    assert len(learnt) > 10 and all(torch.allclose(a[k], b[k], atol=1e-7) for k in learnt)
+    fresh = tmp_path / "fresh.ckpt"  # the same run without --init-from starts elsewhere
+    assert main(["train-atr", "--data", str(data), "--out", str(tmp_path / "fresh.onnx"), "--checkpoint", str(fresh),
+                 *TINY, "--lr", "1e-30", "--seed", "5"]) == 0
+    c = torch.load(fresh, map_location="cpu", weights_only=False)["model"]
+    assert not all(torch.allclose(a[k], c[k], atol=1e-7) for k in learnt)
+    for argv, named in ((["--width", "6"], "its network differs: width 4 (this run: 6)"),
+                        (["--resume", "--checkpoint", str(pre)], "give one"),
+                        (["--init-from", str(tmp_path / "nope.ckpt")], "no such checkpoint file")):
+        capsys.readouterr()
+        extra = [] if "--init-from" in argv else ["--init-from", str(pre)]
+        code = main(["train-atr", "--data", str(data), "--out", str(tmp_path / "x.onnx"), *TINY, *argv, *extra])
+        err = capsys.readouterr().err
+        assert code == 2 and named in err and len(err.strip().splitlines()) == 1, err
