@@ -161,6 +161,8 @@ def evaluate_detector(detector, data_dir: str | Path, score_threshold: float,
         ap = ap50 = 0.0
         by_class = {c: (0.0 if coco_gt.getAnnIds(imgIds=img_ids, catIds=[name_to_cat[c]]) else None)
                     for c in target_classes}
+        apart = {coco_gt.loadCats(c)[0]["name"]: (0.0 if coco_gt.getAnnIds(imgIds=img_ids, catIds=[c]) else None)
+                 for c in apart_cats}
     precision, recall = _pr(tp, fp, n_gt)
     by_band = []
     for b in range(n_bands):

@@ -6,6 +6,7 @@ before any run (so a study's results are never lost at its end)."""
 from __future__ import annotations
 
 
+import json
 from pathlib import Path
 
 import pytest
@@ -156,3 +157,25 @@ def test_split_labelled_folder_splits_by_links_and_refuses_bad_input(capsys, tmp
     assert not names(train) & names(rest) and len(names(train) | names(rest)) == 6
     assert all(p.is_symlink() for p in (tmp_path / "s" / "train" / "images").iterdir())  # nothing copied
     assert len(train.coco["annotations"]) == 2
+
+
+def test_sim_to_real_runs_every_step_on_a_few_frames_and_refuses_bad_input(capsys, tmp_path):
+    pytest.importorskip("torch", reason="training needs the `train` extra")
+    from tests.support import write_watertank_folder
+
+    frames = [[("Bottle", (120, 200, 30, 14)), ("Tire", (150, 300, 40, 40))] for _ in range(6)]
+    real = write_watertank_folder(tmp_path / "real", frames)
+    mod = load_script("sim_to_real")
+    script_refusal(mod, ["--real", str(real), "--out", str(tmp_path / "o"), "--few", "5", "--most", "3"], capsys,
+                   "--few 5", "below --most 3")
+    script_refusal(mod, ["--real", str(tmp_path), "--out", str(tmp_path / "o")], capsys, "--real")
+    assert mod.main(["--real", str(real), "--out", str(tmp_path / "s2r"), "--smoke", "--quiet"]) == 0
+    res = json.loads((tmp_path / "s2r" / "sim_to_real.json").read_text())
+    assert [r["model"] for r in res["rows"]] == ["synthetic", "synthetic", "real_few", "synthetic+real_few",
+                                                 "synthetic", "real_most", "synthetic+real_most"]
+    assert res["rows"][0]["score"]["frames"] == 6 and res["rows"][2]["score"]["frames"] == 4  # its split's rest
+    assert res["training"]["synthetic+real_few"]["init_from"].endswith("synthetic.ckpt")
+    assert (tmp_path / "s2r" / "real_frames_synthetic_only.png").is_file()
+    first = (tmp_path / "s2r" / "sim_to_real.json").read_text()
+    assert mod.main(["--real", str(real), "--out", str(tmp_path / "s2r"), "--smoke", "--quiet"]) == 0  # resumes: done
+    assert json.loads(first)["training"] == json.loads((tmp_path / "s2r" / "sim_to_real.json").read_text())["training"]

@@ -1,0 +1,223 @@
+"""The sim-to-real study: a detector trained on synthetic frames only, on a few or most real
+frames, and pretrained on synthetic then fine-tuned on real, each scored on real frames it
+never saw (pycocotools AP50 per class, mean AP50, AP50:95).
+
+Steps, each skipped when its output is already there (rerun the same command to resume; a
+stopped training resumes from its checkpoint):
+
+1. ``OUT/synthetic``: ``--synthetic-frames`` frames of the dataset spec ``--spec`` (default
+   ``marine_debris_watertank``), and ``OUT/synthetic_val`` (a tenth as many, another seed);
+2. ``OUT/split60``, ``OUT/split480``: the real folder split into ``--few`` and ``--most``
+   training frames and the rest (links, ``sim.dataset.split``);
+3. trainings (``auvsim train-atr``, stride-8 native-resolution CenterNet, one thread):
+   ``synthetic``, ``real_few``, ``real_most``, ``synthetic+real_few``, ``synthetic+real_most``
+   (the last two start from ``synthetic``'s network, ``--init-from``);
+4. scores: every model on the real frames outside its training part (the synthetic-only one
+   on all of them and on each split's rest, so it is compared on the same frames);
+5. ``OUT/sim_to_real.json``, ``OUT/sim_to_real.md`` (the table, training CPU time) and
+   ``OUT/real_frames_synthetic_only.png`` (real frames with the synthetic-only detector's
+   boxes and the true ones).
+
+Usage::
+
+    python scripts/sim_to_real.py --real ../shared/data/marine-debris-watertank-dev --out runs/s2r \\
+        [--synthetic-frames 8000] [--epochs 30] [--finetune-epochs 20] [--workers 2]
+
+The real folder is an argument and is never copied. ``--smoke`` runs every step on a few
+frames and one epoch (minutes; a check of the plumbing, not of accuracy).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import resource
+import sys
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from sim.cli import main as auvsim
+from sim.dataset.errors import DatasetError
+from sim.dataset.generate import generate_dataset, generation_args
+from sim.dataset.labelled_folder import load_labelled_folder
+from sim.dataset.spec import load_spec
+from sim.dataset.split import split_folder
+
+MODELS = ("synthetic", "real_few", "real_most", "synthetic+real_few", "synthetic+real_most")
+
+
+def _cpu_s() -> float:
+    r = resource.getrusage(resource.RUSAGE_CHILDREN), resource.getrusage(resource.RUSAGE_SELF)
+    return sum(x.ru_utime + x.ru_stime for x in r)
+
+
+def _train(name: str, data: list[Path], val: Path, out: Path, args, init: Path | None, epochs: int) -> dict:
+    """Train (or resume, or skip when done) one model; its record: ONNX, checkpoint, CPU s."""
+    onnx, ckpt, done = out / f"{name}.onnx", out / f"{name}.ckpt", out / f"{name}.done.json"
+    if done.is_file():
+        return json.loads(done.read_text())
+    argv = ["train-atr", "--data", ",".join(str(d) for d in data), "--val-data", str(val), "--out", str(onnx),
+            "--overwrite", "--arch", "s8", "--input", "native", "--crop", args.crop, "--width", str(args.width),
+            "--light-heads", "--epochs", str(epochs), "--batch-size", str(args.batch_size), "--lr", str(args.lr),
+            "--max-minutes", "100000", "--threads", "1", "--seed", str(args.seed), "--checkpoint", str(ckpt),
+            "--checkpoint-minutes", "5"]
+    if ckpt.is_file():
+        argv.append("--resume")
+    elif init is not None:
+        argv += ["--init-from", str(init)]
+    t0 = _cpu_s()
+    code = auvsim(argv)
+    if code != 0:
+        raise SystemExit(f"sim_to_real: training {name} failed (exit {code})")
+    rec = {"onnx": str(onnx), "checkpoint": str(ckpt), "cpu_s": _cpu_s() - t0, "epochs": epochs,
+           "data": [str(d) for d in data], "init_from": None if init is None else str(init)}
+    done.write_text(json.dumps(rec, indent=1))
+    return rec
+
+
+def _score(model: Path, data: Path) -> dict:
+    from autonomy.atr.cnn_detector import CnnDetector
+    from sim.evaluation.atr_metrics import evaluate_detector
+
+    det = CnnDetector(model, score_threshold=0.3)
+    r = evaluate_detector(det, data, 0.3)
+    return {k: r[k] for k in ("frames", "map50", "map50_95", "ap50_by_class", "ap50_scored_apart", "precision",
+                              "recall", "ground_truth")}
+
+
+def _page(model: Path, real: Path, out: Path, n: int = 8) -> None:
+    """Real frames with the model's boxes (green) and the true ones (thin white)."""
+    from autonomy.atr.cnn_detector import CnnDetector
+    from sim.evaluation.atr_metrics import frame_from_record
+
+    folder = load_labelled_folder(real)
+    det = CnnDetector(model, score_threshold=0.3)
+    tiles = []
+    step = max(1, len(folder.coco["images"]) // n)
+    for rec in folder.coco["images"][::step][:n]:
+        img = folder.image(rec)
+        page = cv2.cvtColor(img, cv2.COLOR_GRAY2BGR)
+        for a in folder.coco["annotations"]:
+            if a["image_id"] == rec["id"]:
+                x, y, w, h = (int(round(v)) for v in a["bbox"])
+                cv2.rectangle(page, (x, y), (x + w - 1, y + h - 1), (255, 255, 255), 1)
+        for d in det.detect(frame_from_record(rec, img)):
+            x0, y0, x1, y1 = (int(round(v)) for v in d.box_xyxy_px)
+            cv2.rectangle(page, (x0, y0), (x1, y1), (80, 220, 80), 1)
+            cv2.putText(page, f"{d.class_name} {d.score:.2f}", (x0, max(y0 - 3, 9)), cv2.FONT_HERSHEY_SIMPLEX, 0.33,
+                        (80, 220, 80), 1, cv2.LINE_AA)
+        tiles.append(page)
+    cols = 4
+    h, w = tiles[0].shape[:2]
+    grid = np.zeros((-(-len(tiles) // cols) * h, min(cols, len(tiles)) * w, 3), np.uint8)
+    for k, t in enumerate(tiles):
+        grid[(k // cols) * h:(k // cols + 1) * h, (k % cols) * w:(k % cols + 1) * w] = t
+    cv2.imwrite(str(out), grid, [cv2.IMWRITE_PNG_COMPRESSION, 9])
+
+
+def _table(results: dict, train: dict) -> str:
+    lines = ["| model | scored on | frames | mean AP50 | AP50:95 | " + " | ".join(
+        results["classes"]) + " | Wall (apart) | training CPU h |",
+             "|---|---|---|---|---|" + "---|" * len(results["classes"]) + "---|---|"]
+    for row in results["rows"]:
+        s = row["score"]
+        per = " | ".join("-" if s["ap50_by_class"].get(c) is None else f"{s['ap50_by_class'][c]:.2f}"
+                         for c in results["classes"])
+        wall = s["ap50_scored_apart"].get("Wall")
+        m = row["model"]  # a fine-tuned model's time includes its pretraining's
+        cpu = train[m]["cpu_s"] + (train["synthetic"]["cpu_s"] if m.startswith("synthetic+") else 0.0)
+        lines.append(f"| {row['model']} | {row['on']} | {s['frames']} | {s['map50']:.3f} | {s['map50_95']:.3f} | "
+                     f"{per} | {'-' if wall is None else f'{wall:.2f}'} | {cpu / 3600:.2f} |")
+    return "\n".join(lines)
+
+
+def run(args) -> dict:
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    real = Path(args.real)
+    load_labelled_folder(real, "--real")  # refuses a folder that is not labelled real frames, before any work
+    spec = load_spec(args.spec)
+    syn, syn_val = out / "synthetic", out / "synthetic_val"
+    t = time.perf_counter()
+    for folder, n, seed in ((syn, args.synthetic_frames, args.seed), (syn_val, max(args.synthetic_frames // 10, 4),
+                                                                      args.seed + 1000)):
+        if not (folder / "annotations.json").is_file() or not json.loads(
+                (folder / "manifest.json").read_text()).get("complete"):
+            print(f"sim_to_real: synthetic frames -> {folder}", flush=True)
+            generate_dataset(folder, n, seed=seed, workers=args.workers, progress=not args.quiet,
+                             **generation_args(spec))
+    splits = {}
+    for name, n in (("few", args.few), ("most", args.most)):
+        d = out / f"split_{name}"
+        if not (d / "split.json").is_file():
+            split_folder(real, n, args.seed, d)
+        splits[name] = d
+    train: dict[str, dict] = {}
+    train["synthetic"] = _train("synthetic", [syn], syn_val, out, args, None, args.epochs)
+    for name in ("few", "most"):
+        tr, rest = splits[name] / "train", splits[name] / "rest"
+        train[f"real_{name}"] = _train(f"real_{name}", [tr], rest, out, args, None, args.finetune_epochs)
+        train[f"synthetic+real_{name}"] = _train(f"synthetic+real_{name}", [tr], rest, out, args,
+                                                 Path(train["synthetic"]["checkpoint"]), args.finetune_epochs)
+    rows = [{"model": "synthetic", "on": "all real frames", "score": _score(Path(train["synthetic"]["onnx"]), real)}]
+    for name in ("few", "most"):
+        rest = splits[name] / "rest"
+        for m in ("synthetic", f"real_{name}", f"synthetic+real_{name}"):
+            rows.append({"model": m, "on": f"the {name} split's rest", "score": _score(Path(train[m]["onnx"]), rest)})
+    folder = load_labelled_folder(real)
+    classes = list(folder.target_classes)
+    results = {"real": str(real.resolve()), "spec": spec.name, "synthetic_frames": args.synthetic_frames,
+               "few": args.few, "most": args.most, "seed": args.seed, "classes": classes, "rows": rows,
+               "training": train, "wall_s": time.perf_counter() - t}
+    (out / "sim_to_real.json").write_text(json.dumps(results, indent=1))
+    (out / "sim_to_real.md").write_text(_table(results, train) + "\n")
+    _page(Path(train["synthetic"]["onnx"]), real, out / "real_frames_synthetic_only.png")
+    return results
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--real", required=True, help="real labelled frames (watertank layout)")
+    ap.add_argument("--out", required=True, help="study folder (rerun the same command to resume)")
+    ap.add_argument("--spec", default="marine_debris_watertank", help="dataset spec of the synthetic frames")
+    ap.add_argument("--synthetic-frames", type=int, default=8000)
+    ap.add_argument("--few", type=int, default=60, help="real training frames, few (10 %% of 600)")
+    ap.add_argument("--most", type=int, default=480, help="real training frames, most (80 %% of 600)")
+    ap.add_argument("--epochs", type=int, default=30, help="epochs on the synthetic frames")
+    ap.add_argument("--finetune-epochs", type=int, default=20, help="epochs on real frames (alone or fine-tuning)")
+    ap.add_argument("--width", type=int, default=24)
+    ap.add_argument("--batch-size", type=int, default=16)
+    ap.add_argument("--lr", type=float, default=0.004)
+    ap.add_argument("--crop", default="224x224", help="training crop HxW (multiples of 16) or none")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--workers", type=int, default=1, help="dataset worker processes")
+    ap.add_argument("--smoke", action="store_true", help="every step on a few frames, one epoch (a plumbing check)")
+    ap.add_argument("--quiet", action="store_true")
+    args = ap.parse_args(argv)
+    if args.smoke:
+        args.synthetic_frames, args.epochs, args.finetune_epochs, args.width, args.batch_size = 8, 1, 1, 4, 4
+        args.few, args.most = min(args.few, 2), min(args.most, 4)
+    bad = next((f"--{k.replace('_', '-')} {v}: must be >= 1" for k, v in vars(args).items()
+                if k in ("synthetic_frames", "few", "most", "epochs", "finetune_epochs", "width", "batch_size",
+                         "workers") and v < 1), None)
+    if bad is None and not args.few < args.most:
+        bad = f"--few {args.few}: must be below --most {args.most}"
+    if bad:
+        print(f"sim_to_real: {bad}", file=sys.stderr)
+        return 2
+    try:
+        res = run(args)
+    except (DatasetError, ValueError) as exc:
+        print(f"sim_to_real: {exc}", file=sys.stderr)
+        return 2
+    print((Path(args.out) / "sim_to_real.md").read_text(), end="")
+    print(f"sim_to_real: wrote {args.out}/sim_to_real.json, sim_to_real.md, real_frames_synthetic_only.png "
+          f"({res['wall_s'] / 60:.1f} min)")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
