@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import json
 import math
-import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -39,7 +38,8 @@ import numpy as np
 from autonomy.sonar_geometry import FanGeometry
 from sim.dataset.coco_io import ANNOTATIONS_FILE, IMAGES_DIR
 from sim.dataset.errors import DatasetError, require_dataset
-from sim.dataset.real_frames import MARINE_DEBRIS_CLASSES, RealDataError, fan_groups, fit_fan_outline, read_box_file
+from sim.dataset.real_frames import (MARINE_DEBRIS_CLASSES, RealDataError, fan_groups, fit_fan_outline, natural_key,
+                                     read_box_file, read_frame)
 
 #: Class ids of the watertank layout ([MarineDebrisFLS]): COCO category ids.
 WATERTANK_CLASSES: dict[int, str] = MARINE_DEBRIS_CLASSES
@@ -120,10 +120,6 @@ def load_labelled_folder(path: str | Path, arg: str = "--data", *, near_m: float
     return _watertank(root, arg, near_m)
 
 
-def _natural_key(path: Path) -> tuple:
-    return tuple((0, int(t)) if t.isdigit() else (1, t) for t in re.split(r"(\d+)", path.stem) if t)
-
-
 def _fan_geometries(stack: np.ndarray, near_m: float, root: Path, arg: str) -> list[FanGeometry]:
     """Each frame's fan geometry: frames grouped by outline (two recordings exported with other
     windows), each group fitted; when a group's frames do not outline a fan on their own (dark
@@ -144,18 +140,15 @@ def _fan_geometries(stack: np.ndarray, near_m: float, root: Path, arg: str) -> l
 
 
 def _watertank(root: Path, arg: str, near_m: float) -> LabelledFolder:
-    paths = sorted((root / IMAGES_DIR).glob("*.png"), key=_natural_key)
+    paths = sorted((root / IMAGES_DIR).glob("*.png"), key=natural_key)
     if not paths:
         raise DatasetError(f"{arg} {root}: no PNG images in {IMAGES_DIR}/")
-    images = []
-    for p in paths:
-        img = cv2.imread(str(p), cv2.IMREAD_GRAYSCALE)
-        if img is None:
-            raise DatasetError(f"{arg} {p}: not a readable image")
-        if images and img.shape != images[0].shape:
-            raise DatasetError(f"{arg} {p}: {img.shape[1]} x {img.shape[0]} px, the first image is "
-                               f"{images[0].shape[1]} x {images[0].shape[0]}; all frames must have one size")
-        images.append(img)
+    images: list[np.ndarray] = []
+    try:
+        for p in paths:
+            images.append(read_frame(p, images[0] if images else None))
+    except RealDataError as exc:
+        raise DatasetError(f"{arg} {exc}") from None
     stack = np.stack(images)
     geoms = _fan_geometries(stack, near_m, root, arg)
     classes = _folder_classes(root, arg)

@@ -68,8 +68,24 @@ class RealFrames:
     boxes: tuple[tuple[RealBox, ...], ...]
 
 
-def _natural_key(path: Path) -> tuple:
+def natural_key(path: Path) -> tuple:
+    """Sort key of a frame file: its name with runs of digits compared as numbers (frame-2 before frame-10)."""
     return tuple(int(t) if t.isdigit() else t for t in re.split(r"(\d+)", path.stem))
+
+
+def read_frame(path: Path, first: NDArray[np.uint8] | None = None) -> NDArray[np.uint8]:
+    """One grey frame; ``first``: the set's first frame, whose size it must have.
+
+    Raises:
+        RealDataError: not a readable image, or another size than ``first``.
+    """
+    img = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
+    if img is None:
+        raise RealDataError(f"{path}: not a readable image")
+    if first is not None and img.shape != first.shape:
+        raise RealDataError(f"{path}: {img.shape[1]} x {img.shape[0]} px, the first image is "
+                            f"{first.shape[1]} x {first.shape[0]}; all frames must have one size")
+    return img
 
 
 def load_real_frames(folder: str | Path, *, limit: int | None = None) -> RealFrames:
@@ -87,7 +103,7 @@ def load_real_frames(folder: str | Path, *, limit: int | None = None) -> RealFra
     if not root.is_dir():
         raise RealDataError(f"--real {root}: no such folder (give the folder that holds images/*.png)")
     img_dir = root / "images" if (root / "images").is_dir() else root
-    paths = sorted(img_dir.glob("*.png"), key=_natural_key)
+    paths = sorted(img_dir.glob("*.png"), key=natural_key)
     if not paths:
         raise RealDataError(f"--real {root}: no PNG images in {img_dir}")
     if limit is not None:
@@ -96,12 +112,7 @@ def load_real_frames(folder: str | Path, *, limit: int | None = None) -> RealFra
     has_masks, has_boxes = mask_dir.is_dir(), box_dir.is_dir()
     images, masks, boxes = [], [], []
     for p in paths:
-        img = cv2.imread(str(p), cv2.IMREAD_GRAYSCALE)
-        if img is None:
-            raise RealDataError(f"{p}: not a readable image")
-        if images and img.shape != images[0].shape:
-            raise RealDataError(f"{p}: {img.shape[1]} x {img.shape[0]} px, the first image is "
-                                f"{images[0].shape[1]} x {images[0].shape[0]}; all frames must have one size")
+        img = read_frame(p, images[0] if images else None)
         images.append(img)
         if has_masks:
             mp = mask_dir / p.name

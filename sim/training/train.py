@@ -198,14 +198,24 @@ def _save_checkpoint(torch, path: Path, state: dict) -> None:
     tmp.replace(path)
 
 
-def _load_checkpoint(torch, path: Path, params: TrainParams, data_dirs: list[Path], n_img: int) -> dict:
-    """Read a checkpoint and check it belongs to this run (parameters and data)."""
+def _read_checkpoint(torch, path: Path, flag: str) -> dict:
+    """A train-atr checkpoint file's state.
+
+    Raises:
+        CheckpointError: unreadable, or not a train-atr checkpoint (named by ``flag``).
+    """
     try:
         state = torch.load(path, map_location="cpu", weights_only=False)
     except Exception as exc:  # torch raises several exception types for bad files
-        raise CheckpointError(f"--checkpoint {path}: cannot be read as a checkpoint ({type(exc).__name__})") from None
+        raise CheckpointError(f"{flag} {path}: cannot be read as a checkpoint ({type(exc).__name__})") from None
     if not isinstance(state, dict) or state.get("format") != CHECKPOINT_FORMAT:
-        raise CheckpointError(f"--checkpoint {path}: not a train-atr checkpoint")
+        raise CheckpointError(f"{flag} {path}: not a train-atr checkpoint")
+    return state
+
+
+def _load_checkpoint(torch, path: Path, params: TrainParams, data_dirs: list[Path], n_img: int) -> dict:
+    """Read a checkpoint and check it belongs to this run (parameters and data)."""
+    state = _read_checkpoint(torch, path, "--checkpoint")
     saved = state["params"]
     now = asdict(params)
     diff = [f"{k} {saved.get(k)!r} -> {now[k]!r}" for k in now
@@ -228,12 +238,7 @@ def _init_weights(torch, model, path: Path, params: TrainParams, class_names) ->
         CheckpointError: not a readable checkpoint, another architecture, width or heads, or
             other classes (names where the checkpoint records them, else their number).
     """
-    try:
-        state = torch.load(path, map_location="cpu", weights_only=False)
-    except Exception as exc:  # torch raises several exception types for bad files
-        raise CheckpointError(f"--init-from {path}: cannot be read as a checkpoint ({type(exc).__name__})") from None
-    if not isinstance(state, dict) or state.get("format") != CHECKPOINT_FORMAT:
-        raise CheckpointError(f"--init-from {path}: not a train-atr checkpoint")
+    state = _read_checkpoint(torch, path, "--init-from")
     saved = state["params"]
     diff = [f"{k} {saved.get(k)!r} (this run: {getattr(params, k)!r})" for k in ("arch", "width", "light_heads")
             if saved.get(k) != getattr(params, k)]
