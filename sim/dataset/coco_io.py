@@ -22,6 +22,14 @@ IMAGES_DIR = "images"
 LABELS_DIR = "labels"
 
 
+def fan_geometry_record(g) -> dict:
+    """The ``fan_geometry`` of an image record: a :class:`autonomy.sonar_geometry.FanGeometry`'s
+    fields (px, m, rad), what :func:`sim.evaluation.atr_metrics.frame_from_record` rebuilds."""
+    return {"width_px": g.width_px, "height_px": g.height_px, "range_min_m": g.range_min_m,
+            "range_max_m": g.range_max_m, "fov_rad": g.fov_rad, "m_per_px": g.m_per_px,
+            "apex_x_px": g.apex_x_px, "apex_y_px": g.apex_y_px}
+
+
 def xyxy_to_coco_bbox(boxes_xyxy: NDArray) -> NDArray[np.float64]:
     """Continuous xyxy (pixel centres at integers) (N, 4) -> COCO [x, y, w, h] (N, 4)."""
     b = np.asarray(boxes_xyxy, dtype=np.float64).reshape(-1, 4)

@@ -32,7 +32,8 @@ from pathlib import Path
 import numpy as np
 
 from scenarios.config.fls import FlsConfig
-from sim.dataset.coco_io import (ANNOTATIONS_FILE, IMAGES_DIR, LABELS_DIR, write_atomic, write_coco, write_png_atomic,
+from sim.dataset.coco_io import (ANNOTATIONS_FILE, IMAGES_DIR, LABELS_DIR, fan_geometry_record, write_atomic, write_coco,
+                                 write_png_atomic,
                                  yolo_lines)
 from sim.dataset.errors import DatasetError
 from sim.dataset.sss_generate import SssRandomization, SssSettings
@@ -96,9 +97,7 @@ def render_scene(spec: SceneSpec, seed: int, settings: RenderSettings, frame_ids
         images.append({
             "id": frame_id, "file_name": name, "width": int(rec.fan.shape[1]), "height": int(rec.fan.shape[0]),
             "scene": spec.index, "t_s": rec.t_s,
-            "fan_geometry": {"width_px": g.width_px, "height_px": g.height_px, "range_min_m": g.range_min_m,
-                             "range_max_m": g.range_max_m, "fov_rad": g.fov_rad, "m_per_px": g.m_per_px,
-                             "apex_x_px": g.apex_x_px, "apex_y_px": g.apex_y_px},
+            "fan_geometry": fan_geometry_record(g),
             "sonar": {"pos_ned": list(rec.pos_ned), "rpy_rad": list(rec.rpy_rad), "tilt_rad": spec.tilt_rad,
                       "altitude_m": rec.altitude_m, "seabed": spec.seabed.kind, "gain_db": spec.gain_db,
                       "noise_scale": spec.noise_scale, "speckle": spec.speckle},

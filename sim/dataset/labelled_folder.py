@@ -36,7 +36,7 @@ import cv2
 import numpy as np
 
 from autonomy.sonar_geometry import FanGeometry
-from sim.dataset.coco_io import ANNOTATIONS_FILE, IMAGES_DIR
+from sim.dataset.coco_io import ANNOTATIONS_FILE, IMAGES_DIR, fan_geometry_record
 from sim.dataset.errors import DatasetError, require_dataset
 from sim.dataset.real_frames import (MARINE_DEBRIS_CLASSES, RealDataError, fan_groups, fit_fan_outline, natural_key,
                                      read_box_file, read_frame)
@@ -159,9 +159,7 @@ def _watertank(root: Path, arg: str, near_m: float) -> LabelledFolder:
     for i, (p, g) in enumerate(zip(paths, geoms), start=1):
         coco["images"].append({
             "id": i, "file_name": f"{IMAGES_DIR}/{p.name}", "width": int(w), "height": int(h),
-            "fan_geometry": {"width_px": g.width_px, "height_px": g.height_px, "range_min_m": g.range_min_m,
-                             "range_max_m": g.range_max_m, "fov_rad": g.fov_rad, "m_per_px": g.m_per_px,
-                             "apex_x_px": g.apex_x_px, "apex_y_px": g.apex_y_px}})
+            "fan_geometry": fan_geometry_record(g)})
         box_file = root / BOXES_DIR / f"{p.stem}.xml"
         try:
             boxes = read_box_file(box_file)

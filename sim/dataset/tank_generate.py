@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from sim.dataset.coco_io import IMAGES_DIR, mask_annotation, write_atomic, write_png_atomic
+from sim.dataset.coco_io import IMAGES_DIR, fan_geometry_record, mask_annotation, write_atomic, write_png_atomic
 from sim.dataset.spec import DatasetSpec
 from sim.rng import component_rng
 
@@ -90,9 +90,7 @@ def render_tank_scene(seed: int, index: int, settings: TankSettings, frame_ids: 
         images.append({
             "id": frame_id, "file_name": name, "width": geom.width_px, "height": geom.height_px, "scene": index,
             "t_s": 0.0,
-            "fan_geometry": {"width_px": geom.width_px, "height_px": geom.height_px, "range_min_m": geom.range_min_m,
-                             "range_max_m": geom.range_max_m, "fov_rad": geom.fov_rad, "m_per_px": geom.m_per_px,
-                             "apex_x_px": geom.apex_x_px, "apex_y_px": geom.apex_y_px},
+            "fan_geometry": fan_geometry_record(geom),
             "sonar": {"preset": spec.sonar.preset, "height_m": scene.height_m, "tilt_deg": scene.tilt_deg,
                       "yaw_deg": scene.yaw_deg, "gain_offset_db": scene.gain_offset_db},
         })

@@ -151,12 +151,11 @@ def evaluate_detector(detector, data_dir: str | Path, score_threshold: float,
     by_class: dict[str, float | None] = {c: (float("nan") if not coco_ap else None) for c in target_classes}
     apart: dict[str, float | None] = {}
     if coco_dets and coco_ap:
-        ap, ap50, per_cat = _coco_ap(coco_gt, coco_dets, img_ids, target_cats + apart_cats)
+        ap, per_cat = _coco_ap(coco_gt, coco_dets, img_ids, target_cats + apart_cats, len(target_cats))
         by_class = {c: per_cat[name_to_cat[c]] for c in target_classes}
         apart = {coco_gt.loadCats(c)[0]["name"]: per_cat[c] for c in apart_cats}
         present = [v for v in by_class.values() if v is not None]
         ap50 = float(np.mean(present)) if present else 0.0  # the targets' mean (not the wall's)
-        ap = _coco_ap(coco_gt, coco_dets, img_ids, target_cats)[0] if apart_cats else ap
     elif n_gt and coco_ap:
         ap = ap50 = 0.0
         by_class = {c: (0.0 if coco_gt.getAnnIds(imgIds=img_ids, catIds=[name_to_cat[c]]) else None)
@@ -189,10 +188,11 @@ def range_bands_for(images: Sequence[dict]) -> tuple[float, ...]:
     return (0.0, step / 10.0, 2 * step / 10.0, 3 * step / 10.0, math.inf)
 
 
-def _coco_ap(coco_gt, coco_dets: list[dict], img_ids: list[int], cat_ids: list[int]
-             ) -> tuple[float, float, dict[int, float | None]]:
-    """COCOeval on ``cat_ids``: (AP50:95, AP50 over the categories, AP50 per category id; None
-    for a category without ground truth in ``img_ids``)."""
+def _coco_ap(coco_gt, coco_dets: list[dict], img_ids: list[int], cat_ids: list[int], n_mean: int
+             ) -> tuple[float, dict[int, float | None]]:
+    """One COCOeval on ``cat_ids``: (AP50:95 over the first ``n_mean`` of them, as COCOeval's
+    summary forms it over those categories; AP50 per category id, None for a category without
+    ground truth in ``img_ids``)."""
     from pycocotools.cocoeval import COCOeval
 
     with contextlib.redirect_stdout(io.StringIO()):
@@ -202,13 +202,14 @@ def _coco_ap(coco_gt, coco_dets: list[dict], img_ids: list[int], cat_ids: list[i
         ev.params.catIds = cat_ids
         ev.evaluate()
         ev.accumulate()
-        ev.summarize()
     prec = ev.eval["precision"]  # (IoU thresholds, recall points, categories, areas, max dets)
     per_cat = {}
     for k, cat in enumerate(ev.params.catIds):
         p = prec[0, :, k, 0, -1]
         per_cat[cat] = float(p[p > -1].mean()) if (p > -1).any() else None
-    return float(ev.stats[0]), float(ev.stats[1]), per_cat
+    kept = prec[:, :, :n_mean, 0, -1]  # all areas, the most detections: COCOeval's stats[0]
+    ap = float(kept[kept > -1].mean()) if (kept > -1).any() else -1.0
+    return ap, per_cat
 
 
 class _MemoDetector:
