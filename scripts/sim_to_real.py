@@ -21,7 +21,7 @@ stopped training resumes from its checkpoint):
 Usage::
 
     python scripts/sim_to_real.py --real ../shared/data/marine-debris-watertank-dev --out runs/s2r \\
-        [--synthetic-frames 8000] [--epochs 30] [--finetune-epochs 20] [--workers 2]
+        [--synthetic-frames 8000] [--epochs 30] [--finetune-steps 600] [--splits 3] [--workers 2]
 
 The real folder is an argument and is never copied. ``--smoke`` runs every step on a few
 frames and one epoch (minutes; a check of the plumbing, not of accuracy).
@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import re
 import resource
 import sys
 import time
@@ -58,7 +59,13 @@ def _train(name: str, data: list[Path], val: Path, out: Path, args, init: Path |
     """Train (or resume, or skip when done) one model; its record: ONNX, checkpoint, CPU s."""
     onnx, ckpt, done = out / f"{name}.onnx", out / f"{name}.ckpt", out / f"{name}.done.json"
     if done.is_file():
-        return json.loads(done.read_text())
+        rec = json.loads(done.read_text())
+        if rec.get("epochs") == epochs and rec.get("init_from") == (None if init is None else str(init)):
+            return rec
+        print(f"sim_to_real: {name} was trained with other settings ({rec.get('epochs')} epochs); training again",
+              flush=True)
+        for f in (onnx, ckpt, done):
+            f.unlink(missing_ok=True)
     argv = ["train-atr", "--data", ",".join(str(d) for d in data), "--val-data", str(val), "--out", str(onnx),
             "--overwrite", "--arch", "s8", "--input", "native", "--crop", args.crop, "--width", str(args.width),
             "--light-heads", "--epochs", str(epochs), "--batch-size", str(args.batch_size), "--lr", str(args.lr),
@@ -119,9 +126,11 @@ def _page(model: Path, real: Path, out: Path, n: int = 8) -> None:
 
 
 def _table(results: dict, train: dict) -> str:
-    lines = ["| model | scored on | frames | mean AP50 | AP50:95 | " + " | ".join(
+    """Markdown: one row per model and scoring set (and split), then, with several splits, the
+    mean and standard deviation of mean AP50 over the splits."""
+    lines = ["| model | scored on | split | frames | mean AP50 | AP50:95 | " + " | ".join(
         results["classes"]) + " | Wall (apart) | training CPU h |",
-             "|---|---|---|---|---|" + "---|" * len(results["classes"]) + "---|---|"]
+             "|---|---|---|---|---|---|" + "---|" * len(results["classes"]) + "---|---|"]
     for row in results["rows"]:
         s = row["score"]
         per = " | ".join("-" if s["ap50_by_class"].get(c) is None else f"{s['ap50_by_class'][c]:.2f}"
@@ -129,8 +138,22 @@ def _table(results: dict, train: dict) -> str:
         wall = s["ap50_scored_apart"].get("Wall")
         m = row["model"]  # a fine-tuned model's time includes its pretraining's
         cpu = train[m]["cpu_s"] + (train["synthetic"]["cpu_s"] if m.startswith("synthetic+") else 0.0)
-        lines.append(f"| {row['model']} | {row['on']} | {s['frames']} | {s['map50']:.3f} | {s['map50_95']:.3f} | "
-                     f"{per} | {'-' if wall is None else f'{wall:.2f}'} | {cpu / 3600:.2f} |")
+        split = "-" if row.get("split") is None else str(row["split"])
+        lines.append(f"| {row['model']} | {row['on']} | {split} | {s['frames']} | {s['map50']:.3f} | "
+                     f"{s['map50_95']:.3f} | {per} | {'-' if wall is None else f'{wall:.2f}'} | {cpu / 3600:.2f} |")
+    if results.get("splits", 1) > 1:
+        lines += ["", f"Mean over {results['splits']} splits (mean AP50, mean +- sd):", "",
+                  "| model | scored on | mean AP50 | AP50:95 |", "|---|---|---|---|"]
+        groups: dict[tuple[str, str], list[dict]] = {}
+        for row in results["rows"]:
+            if row.get("split") is not None:
+                base = re.sub(r"_s\d+$", "", row["model"])
+                groups.setdefault((base, row["on"]), []).append(row["score"])
+        for (m, on), scores in groups.items():
+            a = np.array([s["map50"] for s in scores])
+            b = np.array([s["map50_95"] for s in scores])
+            lines.append(f"| {m} | {on} | {a.mean():.3f} +- {a.std(ddof=1) if len(a) > 1 else 0:.3f} | "
+                         f"{b.mean():.3f} |")
     return "\n".join(lines)
 
 
@@ -149,28 +172,30 @@ def run(args) -> dict:
             print(f"sim_to_real: synthetic frames -> {folder}", flush=True)
             generate_dataset(folder, n, seed=seed, workers=args.workers, progress=not args.quiet,
                              **generation_args(spec))
-    splits = {}
-    for name, n in (("few", args.few), ("most", args.most)):
-        d = out / f"split_{name}"
-        if not (d / "split.json").is_file():
-            split_folder(real, n, args.seed, d)
-        splits[name] = d
     train: dict[str, dict] = {}
     train["synthetic"] = _train("synthetic", [syn], syn_val, out, args, None, args.epochs)
-    for name in ("few", "most"):
-        tr, rest = splits[name] / "train", splits[name] / "rest"
-        train[f"real_{name}"] = _train(f"real_{name}", [tr], rest, out, args, None, args.finetune_epochs)
-        train[f"synthetic+real_{name}"] = _train(f"synthetic+real_{name}", [tr], rest, out, args,
-                                                 Path(train["synthetic"]["checkpoint"]), args.finetune_epochs)
-    rows = [{"model": "synthetic", "on": "all real frames", "score": _score(Path(train["synthetic"]["onnx"]), real)}]
-    for name in ("few", "most"):
-        rest = splits[name] / "rest"
-        for m in ("synthetic", f"real_{name}", f"synthetic+real_{name}"):
-            rows.append({"model": m, "on": f"the {name} split's rest", "score": _score(Path(train[m]["onnx"]), rest)})
+    rows = [{"model": "synthetic", "on": "all real frames", "split": None,
+             "score": _score(Path(train["synthetic"]["onnx"]), real)}]
+    for k in range(args.splits):
+        tag = "" if k == 0 else f"_s{k}"
+        for name, n in (("few", args.few), ("most", args.most)):
+            d = out / f"split_{name}{tag}"
+            if not (d / "split.json").is_file():
+                split_folder(real, n, args.seed + k, d)
+            tr, rest = d / "train", d / "rest"
+            # every real-frame run gets the same optimiser steps, whatever its frame count
+            epochs = max(1, -(-args.finetune_steps // -(-n // args.batch_size)))  # train.py: ceil(n / batch) a step
+            train[f"real_{name}{tag}"] = _train(f"real_{name}{tag}", [tr], rest, out, args, None, epochs)
+            train[f"synthetic+real_{name}{tag}"] = _train(f"synthetic+real_{name}{tag}", [tr], rest, out, args,
+                                                          Path(train["synthetic"]["checkpoint"]), epochs)
+            for m in ("synthetic", f"real_{name}{tag}", f"synthetic+real_{name}{tag}"):
+                rows.append({"model": m, "on": f"the {name} split's rest", "split": k,
+                             "score": _score(Path(train[m]["onnx"]), rest)})
     folder = load_labelled_folder(real)
     classes = list(folder.target_classes)
     results = {"real": str(real.resolve()), "spec": spec.name, "synthetic_frames": args.synthetic_frames,
-               "few": args.few, "most": args.most, "seed": args.seed, "classes": classes, "rows": rows,
+               "few": args.few, "most": args.most, "seed": args.seed, "splits": args.splits,
+               "finetune_steps": args.finetune_steps, "classes": classes, "rows": rows,
                "training": train, "wall_s": time.perf_counter() - t}
     (out / "sim_to_real.json").write_text(json.dumps(results, indent=1))
     (out / "sim_to_real.md").write_text(_table(results, train) + "\n")
@@ -187,7 +212,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--few", type=int, default=60, help="real training frames, few (10 %% of 600)")
     ap.add_argument("--most", type=int, default=480, help="real training frames, most (80 %% of 600)")
     ap.add_argument("--epochs", type=int, default=30, help="epochs on the synthetic frames")
-    ap.add_argument("--finetune-epochs", type=int, default=20, help="epochs on real frames (alone or fine-tuning)")
+    ap.add_argument("--finetune-steps", type=int, default=600,
+                    help="optimiser steps of every real-frame run, alone or fine-tuning (epochs follow from the "
+                         "frame count, so --few and --most runs train equally long)")
+    ap.add_argument("--splits", type=int, default=1,
+                    help="random splits of the real frames (seeds --seed, --seed+1, ...); the table gives each "
+                         "and their mean")
     ap.add_argument("--width", type=int, default=24)
     ap.add_argument("--batch-size", type=int, default=16)
     ap.add_argument("--lr", type=float, default=0.004)
@@ -198,10 +228,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--quiet", action="store_true")
     args = ap.parse_args(argv)
     if args.smoke:
-        args.synthetic_frames, args.epochs, args.finetune_epochs, args.width, args.batch_size = 8, 1, 1, 4, 4
+        args.synthetic_frames, args.epochs, args.finetune_steps, args.width, args.batch_size = 8, 1, 1, 4, 4
         args.few, args.most = min(args.few, 2), min(args.most, 4)
     bad = next((f"--{k.replace('_', '-')} {v}: must be >= 1" for k, v in vars(args).items()
-                if k in ("synthetic_frames", "few", "most", "epochs", "finetune_epochs", "width", "batch_size",
+                if k in ("synthetic_frames", "few", "most", "epochs", "finetune_steps", "splits", "width", "batch_size",
                          "workers") and v < 1), None)
     if bad is None and not args.few < args.most:
         bad = f"--few {args.few}: must be below --most {args.most}"
