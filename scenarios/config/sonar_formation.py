@@ -35,6 +35,17 @@ class SonarFormationConfig(StrictModel):
         object_tail_m: e-folding length along range of the echo tail that follows each object's
             echo (multipath between object and floor, a shell's ringing), m; None: no tail.
         object_tail_ratio: energy of that tail over the object's direct echo.
+        object_specular_share: share of an object's backscatter in a specular lobe,
+            ``cos^object_specular_exponent(incidence)``, beside the diffuse ``cos^m`` of the
+            sonar's ``scattering_exponent`` (0: diffuse only). Smooth plastic and metal return
+            mostly where the surface faces the sonar: a cylinder shows a bright line, not a fill.
+        object_specular_exponent: the lobe's exponent (larger: narrower).
+        object_back_wall_ratio: energy of the echo from an object's far wall over its near
+            wall's (sound passes through a thin shell, a bottle or a can, and returns from the
+            far side as well); 0: the near surface only. The far wall is where each ray leaves
+            the object's mesh.
+        object_back_wall_repeats: echoes of sound ringing between the walls: the k-th comes one
+            more wall-to-wall crossing later, with ``object_back_wall_ratio ** k`` of the energy.
         side_lobe_floor_db: two-way level (dB re the main lobe) the azimuth pattern keeps outside
             its main lobe, out to the sonar's ``side_lobe_extent_beamwidths`` (None: the ideal
             aperture's falling side lobes). Bright echoes then streak along the arc.
@@ -55,6 +66,10 @@ class SonarFormationConfig(StrictModel):
     object_tail_m: float | None = Field(None, gt=0.0, le=10.0)
     object_tail_ratio: float = Field(0.0, ge=0.0, le=10.0)
     elevation_span_beamwidths: float = Field(1.0, ge=1.0, le=4.0)
+    object_specular_share: float = Field(0.0, ge=0.0, le=1.0)
+    object_specular_exponent: float = Field(20.0, ge=1.0, le=1000.0)
+    object_back_wall_ratio: float = Field(0.0, ge=0.0, le=1.0)
+    object_back_wall_repeats: int = Field(1, ge=1, le=6)
 
     @property
     def is_default(self) -> bool:

@@ -81,7 +81,10 @@ class SssConfig(SensorConfig):
         fls_only = {"beam_correlated_speckle": f.beam_correlated_speckle,
                     "elevation_span_beamwidths": f.elevation_span_beamwidths != 1.0,
                     "object_tail_m": f.object_tail_m is not None, "object_tail_ratio": f.object_tail_ratio != 0.0,
-                    "object_rice_k": f.object_rice_k != 0.0, "side_lobe_floor_db": f.side_lobe_floor_db is not None}
+                    "object_rice_k": f.object_rice_k != 0.0, "side_lobe_floor_db": f.side_lobe_floor_db is not None,
+                    "object_back_wall_ratio": f.object_back_wall_ratio != 0.0,
+                    "object_specular_share": f.object_specular_share != 0.0,
+                    "object_back_wall_repeats": f.object_back_wall_repeats != 1}
         set_here = [k for k, v in fls_only.items() if v]
         if set_here:
             raise ValueError(f"formation.{set_here[0]}: a forward-looking sonar field (so are "

@@ -19,7 +19,7 @@ texture reads the clutter mask, the mask; the image and the noise stream are the
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
@@ -35,8 +35,8 @@ from sim.sensors.raycast import RayCaster
 from sim.sensors.sonar.beam_pattern import azimuth_kernel
 from sim.sensors.sonar.display import FanRemap
 from sim.sensors.sonar.echo_chain import EchoChain
-from sim.sensors.sonar.echo_lines import echo_segments, ray_strength, spread_segments
-from sim.sensors.sonar.image_formation import formation_model, object_tail
+from sim.sensors.sonar.echo_lines import EchoSegments, echo_segments, ray_strength, spread_segments
+from sim.sensors.sonar.image_formation import formation_model, object_tail, specular_objects
 from sim.sensors.sonar.ground_truth import (
     SceneObjectLike,
     SonarGroundTruth,
@@ -47,11 +47,12 @@ from sim.sensors.sonar.ground_truth import (
 )
 from sim.sensors.registry import register_sensor
 from sim.sensors.sonar.object_rays import add_object_rays
-from sim.sensors.sonar.ray_fan import RayFan, RayTable
+from sim.sensors.sonar.ray_fan import RayFan, RayTable, Segments
 from sim.dynamics.truth import VehicleTruth
 
 FloatArray = NDArray[np.float64]
 OBJECT_RAYS_ACROSS = 8  # rays across an object (each way) where the base rays are sparser
+BACK_WALL_MAX_M = 2.0  # far walls deeper than this behind the near wall are not echoed
 OBJECT_RAYS_SPAN_LIMIT = 3.0  # objects spanning this many base ray spacings or more keep the base rays
 
 
@@ -220,11 +221,16 @@ class FlsSensor(Sensor[FlsRender]):
                                                 cfg.edge_refine_iters, pairs)
         strength = ray_strength(rays, cfg.scattering_exponent, g.vertical_beamwidth_rad,
                                 self.rays.elevation_step_rad)
-        echoes = echo_segments(rays, segments, strength, self.rays.range_slope(rays, R_ns), g.window_near_m,
-                               g.range_resolution_m)
+        form = self.echo.formation
+        if form is not None and form.specular_share > 0.0:
+            strength = specular_objects(strength, rays, cfg.scattering_exponent, form.specular_share,
+                                        form.specular_exponent)
+        slope = self.rays.range_slope(rays, R_ns)
+        echoes = echo_segments(rays, segments, strength, slope, g.window_near_m, g.range_resolution_m)
+        if form is not None and form.back_wall_ratio > 0.0:
+            echoes = self._with_back_walls(echoes, rays, segments, strength, slope, origin, caster)
         n_cols = self.rays.n_cols
         lines = echoes.lines(n_cols, self.n_bins, dtype=np.float32)
-        form = self.echo.formation
         if form is not None and form.has_tail and np.any(echoes.obj >= 0):
             on = echoes.obj >= 0
             obj_lines = spread_segments(n_cols, self.n_bins, echoes.line[on], echoes.u0[on], echoes.u1[on],
@@ -243,6 +249,47 @@ class FlsSensor(Sensor[FlsRender]):
         record = SonarGroundTruth(t_s=float(t_s), mask_polar=mask if truth else None, objects=objs,
                                   pos_ned=origin.copy(), R_ns=R_ns, fan_remap=self._remap)
         return FlsEcho(t_s=float(t_s), mean_intensity=mean, truth=record, clutter=clutter)
+
+    def _with_back_walls(self, echoes: EchoSegments, rays: RayTable, segments: Segments, strength: FloatArray,
+                         slope: FloatArray, origin: FloatArray, caster: RayCaster) -> EchoSegments:
+        """``echoes`` and the back-wall echoes of the object hits
+        (:mod:`sim.sensors.sonar.image_formation`): each ray on an object is followed through
+        it to where it leaves it (``caster.exit_distances``); the ``k``-th echo comes
+        ``k`` wall-to-wall crossings after the near wall's with ``back_wall_ratio ** k`` of its
+        strength. Intervals join rays that leave the same object only.
+
+        Raises:
+            ValueError: the caster cannot cast from points (the analytic test caster).
+        """
+        form = self.echo.formation
+        exits = getattr(caster, "exit_distances", None)
+        if exits is None:
+            raise ValueError("formation.object_back_wall_ratio needs a caster that finds where rays leave objects "
+                             f"(MujocoRayCaster); {type(caster).__name__} does not")
+        hit = np.flatnonzero((rays.obj >= 0) & np.isfinite(rays.dist))
+        if hit.size == 0:
+            return echoes
+        pts = origin[None, :] + rays.dirs[hit] * rays.dist[hit][:, None]
+        d = exits(pts, rays.dirs[hit], rays.obj[hit])
+        ok = np.isfinite(d) & (d > 1e-6) & (d <= BACK_WALL_MAX_M)
+        if not np.any(ok):
+            return echoes
+        hit, cross = hit[ok], d[ok]
+        inside = np.zeros(len(rays.dist), dtype=bool)
+        inside[hit] = True
+        a, b = segments.a, segments.b
+        seg = Segments(a, b, segments.connected & inside[a] & inside[b] & (rays.obj[a] == rays.obj[b]))
+        parts = [echoes]
+        g = self.geometry
+        for k in range(1, form.back_wall_repeats + 1):
+            dist = rays.dist.copy()
+            dist[hit] += k * cross
+            s = np.zeros_like(strength)
+            s[hit] = strength[hit] * form.back_wall_ratio ** k
+            parts.append(echo_segments(replace(rays, dist=dist), seg, s, slope, g.window_near_m,
+                                       g.range_resolution_m))
+        return EchoSegments(*(np.concatenate([getattr(p, f) for p in parts])
+                              for f in ("line", "u0", "u1", "energy", "obj")))
 
     def _frame(self, echo: FlsEcho, *, noise: bool) -> FlsRender:
         """The frame of ``echo``: speckle and receiver noise (``noise``: drawn from the sensor's

@@ -149,6 +149,43 @@ class MujocoRayCaster:
         d[d > max_range_m] = np.inf
         return d
 
+    def exit_distances(self, points_ned: FloatArray, dirs_ned: FloatArray, object_ids: NDArray[np.int64]
+                       ) -> FloatArray:
+        """Distance (N,) from each ``points_ned`` (N, 3, NED m, on or inside object
+        ``object_ids[i]``) along its unit ``dirs_ned`` to where the ray leaves that object, its
+        far wall (``inf`` where the ray does not meet it).
+
+        Cast backwards from beyond the object's bounding sphere against the object alone (its
+        geoms in a group of their own, as :meth:`cast_isolated`), which works for meshes and
+        primitives alike. One ``mj_ray`` per ray: meant for the rays on objects, not a fan.
+        Used by the back-wall echoes of :mod:`sim.sensors.sonar.image_formation`.
+        """
+        pts = np.ascontiguousarray(points_ned, dtype=float).reshape(-1, 3)
+        dirs = np.ascontiguousarray(dirs_ned, dtype=float).reshape(-1, 3)
+        ids = np.asarray(object_ids, dtype=np.int64).reshape(-1)
+        out = np.full(pts.shape[0], np.inf)
+        geomid = np.zeros(1, dtype=np.int32)
+        saved = self.model.geom_group.copy()
+        try:
+            for k in np.unique(ids):
+                geoms = self._object_geoms.get(int(k))
+                if geoms is None:
+                    continue
+                centre, radius = self.object_bounding_sphere(int(k))
+                self.model.geom_group[:] = 0
+                self.model.geom_group[geoms] = 5
+                for i in np.flatnonzero(ids == k):
+                    # beyond the sphere along the ray, looking back
+                    span = 2.0 * radius + float(np.linalg.norm(pts[i] - centre))
+                    back = pts[i] + span * dirs[i]
+                    x = self._mj.mj_ray(self.model, self.data, back, -dirs[i], self._isolated_group, 1, -1, geomid)
+                    if 0.0 <= x <= span and geomid[0] >= 0:
+                        out[i] = span - x
+        finally:
+            self.model.geom_group[:] = saved
+        return out
+
+
     def object_bounding_sphere(self, object_id: int) -> tuple[FloatArray, float]:
         """Sphere about the object's geom centres enclosing their bounding spheres.
 

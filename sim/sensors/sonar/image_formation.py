@@ -27,6 +27,19 @@ What each models, and its source (keys of ``docs/references.md``):
   beam's object echo is followed by an exponentially decaying tail along range, of length
   ``object_tail_m`` and total energy ``object_tail_ratio`` times the direct echo; it fills
   the object's acoustic shadow and stretches the object along range, as in real frames.
+* **Specular objects** ([Urick1983] ch. 9; [Blondel2009] on specular returns from man-made objects). Smooth
+  plastic and metal scatter mostly where the surface faces the sonar: an object's strength is
+  ``(1 - s) cos^m + s cos^n`` of the incidence, ``m`` the sonar's diffuse exponent, ``n``
+  ``object_specular_exponent`` and ``s`` ``object_specular_share``, so a lying cylinder
+  returns a bright line along its ridge rather than a filled outline.
+* **Back-wall echoes** ([Williams2010], [Urick1983] ch. 9 on echoes from shells). A thin
+  shell of plastic or metal filled with water passes most of the sound, so a bottle or a can
+  returns from its far wall as well as its near one, and sound ringing between the walls
+  returns again one crossing later. Each ray that hits an object is followed through the
+  mesh to where it leaves it; its echo is repeated there (and ``k`` crossings later) with
+  ``object_back_wall_ratio ** k`` of the energy, so a lying bottle shows two or three
+  parallel streaks along range, as real frames do. Labelled with the object (part of its
+  image).
 * **Power-law display** (an adjustable gamma on the amplitude, as sonar viewers offer
   beside the log display; the exponent a set calls for is estimated from its grey
   histogram, ``docs/studies/realism.md``). Grey
@@ -82,6 +95,9 @@ class FormationModel:
         object_rice_k: Rice factor of object echoes (coherent over diffuse power; 0: Rayleigh).
         tail_decay: per-bin decay factor of the object echo tail (0: no tail).
         tail_ratio: the tail's energy over the direct object echo.
+        specular_share, specular_exponent: an object's specular lobe (share, cos exponent).
+        back_wall_ratio: energy of each back-wall echo over the previous one (0: none).
+        back_wall_repeats: back-wall echoes after the near wall's.
     """
 
     range_kernel: NDArray[np.float32]
@@ -95,6 +111,10 @@ class FormationModel:
     tail_decay: float = 0.0
     tail_ratio: float = 0.0
     object_rice_k: float = 0.0
+    back_wall_ratio: float = 0.0
+    back_wall_repeats: int = 1
+    specular_share: float = 0.0
+    specular_exponent: float = 20.0
 
     @property
     def has_tail(self) -> bool:
@@ -188,6 +208,23 @@ def _gauss(sigma: float) -> NDArray[np.float32]:
     return (k / k.sum()).astype(np.float32)
 
 
+def specular_objects(strength: NDArray[np.float64], rays, diffuse_exponent: float, share: float,
+                     exponent: float) -> NDArray[np.float64]:
+    """``strength`` (N,) of :func:`sim.sensors.sonar.echo_lines.ray_strength` with the rays on
+    objects (``rays.obj >= 0``) re-weighted from ``cos^m`` to ``(1 - share) cos^m + share
+    cos^exponent`` of their incidence (``m = diffuse_exponent``); a new array."""
+    out = np.array(strength, dtype=np.float64, copy=True)
+    on = np.flatnonzero(rays.obj >= 0)
+    if on.size == 0:
+        return out
+    cos = np.abs(np.einsum("ij,ij->i", rays.dirs[on], rays.normal[on]))
+    diffuse = cos ** diffuse_exponent
+    with np.errstate(divide="ignore", invalid="ignore"):
+        factor = np.where(diffuse > 0.0, ((1.0 - share) * diffuse + share * cos ** exponent) / diffuse, 0.0)
+    out[on] *= factor
+    return out
+
+
 def object_tail(object_lines: NDArray[np.float32], decay: float, ratio: float) -> NDArray[np.float32]:
     """The echo tails of (n_lines, n_bins) object echo energy: each bin's energy followed, in
     the later bins of its line, by ``ratio (1 - decay) decay^(k - 1)`` of it at ``k`` bins
@@ -240,4 +277,6 @@ def formation_model(cfg, bin_centres_m: NDArray[np.float64], range_resolution_m:
         reverberation=reverb.astype(np.float32), display_gamma=cfg.display_gamma,
         display_soft_limit=bool(cfg.display_soft_limit),
         tail_decay=float(np.exp(-range_resolution_m / cfg.object_tail_m)) if cfg.object_tail_m else 0.0,
-        tail_ratio=float(cfg.object_tail_ratio), object_rice_k=float(cfg.object_rice_k))
+        tail_ratio=float(cfg.object_tail_ratio), object_rice_k=float(cfg.object_rice_k),
+        back_wall_ratio=float(cfg.object_back_wall_ratio), back_wall_repeats=int(cfg.object_back_wall_repeats),
+        specular_share=float(cfg.object_specular_share), specular_exponent=float(cfg.object_specular_exponent))

@@ -42,7 +42,8 @@ def test_pulse_longer_than_a_bin_correlates_side_scan_speckle():
 
 def test_fls_only_fields_are_refused_for_a_side_scan():
     for bad in ({"beam_correlated_speckle": True}, {"elevation_span_beamwidths": 2.0}, {"object_tail_m": 0.1},
-                {"object_tail_ratio": 0.3}, {"object_rice_k": 3.0}, {"side_lobe_floor_db": -30.0}):
+                {"object_tail_ratio": 0.3}, {"object_rice_k": 3.0}, {"side_lobe_floor_db": -30.0},
+                {"object_back_wall_ratio": 0.3}, {"object_back_wall_repeats": 2}, {"object_specular_share": 0.5}):
         (key,) = bad
         with pytest.raises(ValidationError, match=f"formation.{key}: a forward-looking sonar field"):
             SssConfig(formation=SonarFormationConfig(**bad))

@@ -177,3 +177,92 @@ def test_range_psf_spreads_an_echo_over_the_pulse_behind_it():
     assert row.sum() == pytest.approx(1.0, rel=1e-5)
     k = pulse_kernel(3.5).astype(float) ** 2
     assert np.allclose(row[50:54], k / k.sum(), rtol=1e-5)
+
+
+def _box_world(depth_m: float):
+    """A box ``depth_m`` deep along north, its near face 1.9 m north of the origin, its base at
+    2 m depth and its centre at 1.85 m (targets rest on their position), alone above a floor at
+    20 m (out of the window), in a compiled MuJoCo scene."""
+    from scenarios.config.world import SeabedConfig, TargetConfig, WorldConfig
+    from scenarios.schema import Scenario
+    from sim.scene.world import build_world
+    from sim.sensors.raycast import MujocoRayCaster
+
+    box = TargetConfig(name="box", shape="box", pos_ned=(1.9 + 0.5 * depth_m, 0.0, 2.0), rpy_deg=(0.0, 0.0, 0.0),
+                       size_m=(depth_m, 0.3, 0.3), reflectivity=0.9, class_name="Box", is_target=True)
+    sc = Scenario(name="box", seed=0, world=WorldConfig(seabed=SeabedConfig(kind="plane", depth_m=20.0,
+                                                                             reflectivity=0.3, extent_m=40.0),
+                                                         targets=(box,)))
+    w = build_world(sc, with_vehicle=False)
+    return w, MujocoRayCaster(w.model, w.data, w.geom_object_id, w.geom_reflectivity, exclude_body_id=-1)
+
+
+def test_exit_distances_find_the_far_wall_of_the_object_alone():
+    world, caster = _box_world(0.25)
+    dirs = np.array([[1.0, 0.0, 0.0], [1.0, 0.05, 0.0], [0.0, 1.0, 0.0]])
+    dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
+    start = np.array([1.9, 0.0, 1.85])  # on the near face
+    box_id = int(world.objects[0].id)
+    d = caster.exit_distances(np.repeat(start[None], 3, axis=0), dirs, np.full(3, box_id))
+    assert d[0] == pytest.approx(0.25, abs=1e-6)  # the far wall along north
+    assert d[1] == pytest.approx(0.25 / dirs[1, 0], abs=1e-6)
+    assert d[2] == pytest.approx(0.15, abs=1e-6)  # the side wall, 0.15 m east
+    up = caster.exit_distances(np.array([[0.0, 0.0, 1.85]]), np.array([[0.0, 0.0, -1.0]]), np.array([box_id]))
+    assert np.isinf(up[0])  # a ray that never meets the box
+    # the geoms' groups are restored: a plain cast still sees the box
+    assert caster.cast(np.array([0.0, 0.0, 1.85]), dirs, 5.0).object_id[0] == box_id
+
+
+@pytest.mark.parametrize("depth_m", [0.12, 0.3])
+def test_back_wall_echo_lies_one_crossing_behind_the_near_wall_with_its_share_of_energy(depth_m):
+    """A box face-on: its far wall's echo appears ``depth_m`` behind the near wall's (the
+    rays through the middle of the face), with ``ratio`` of its energy (before the range gain,
+    within what the edge rays' shorter crossings move), and the object's label covers it."""
+    world, caster = _box_world(depth_m)
+    ratio = 0.4
+
+    def sensor(form):
+        cfg = FlsConfig(preset="aris3000", tilt_deg=0.0, range_window_m=(0.7, 3.0), rate_hz=1.0,
+                        noise_floor_db=-200.0, formation=form)
+        return FlsSensor(cfg, rng=np.random.default_rng(0))
+
+    # pulse_length_m set (one bin) only so the formation model is on in both
+    plain, walled = (sensor(SonarFormationConfig(pulse_length_m=0.003, object_back_wall_ratio=r))
+                     for r in (0.0, ratio))
+    pos, rot = np.array([0.0, 0.0, 1.85]), np.eye(3)
+    a = plain.echo_at(0.0, pos, rot, caster, world.objects, truth=True)
+    b = walled.echo_at(0.0, pos, rot, caster, world.objects, truth=True)
+    g = walled.geometry
+    gain = walled.echo._bin_gain32.astype(float)
+    centre = g.n_beams // 2
+    near = a.mean_intensity[centre].astype(float) / gain
+    added = (b.mean_intensity[centre].astype(float) - a.mean_intensity[centre].astype(float)) / gain
+    bins = g.bin_centres_m()
+    assert bins[np.argmax(near)] == pytest.approx(1.9, abs=2 * g.range_resolution_m)
+    assert bins[np.argmax(added)] == pytest.approx(1.9 + depth_m, abs=2 * g.range_resolution_m)
+    # nothing before the near wall; rays entering near an edge leave through the top or bottom
+    # face, so some far-wall echoes lie between the two walls
+    assert np.all(added[bins < 1.9 - 2 * g.range_resolution_m] <= 1e-9 * near.max())
+    assert np.all(added[bins > 1.9 + depth_m + 2 * g.range_resolution_m] <= 1e-9 * near.max())
+    # energy per bin carries r0 r1 of its interval (echo_lines): undo it for the ratio
+    assert added.sum() * (1.9 / (1.9 + depth_m)) ** 2 == pytest.approx(ratio * near.sum(), rel=0.08)
+    k_far = int(np.argmin(np.abs(bins - (1.9 + depth_m))))
+    box_id = int(world.objects[0].id)
+    assert b.truth.mask_polar[centre, k_far] == box_id and a.truth.mask_polar[centre, k_far] != box_id
+
+
+def test_specular_share_reweights_object_rays_only():
+    from types import SimpleNamespace
+
+    from sim.sensors.sonar.image_formation import specular_objects
+
+    cos = np.array([1.0, 0.5, 0.5, 0.0])
+    dirs = np.tile([1.0, 0.0, 0.0], (4, 1))
+    normal = np.stack([cos, np.sqrt(1.0 - cos ** 2), np.zeros(4)], axis=1)
+    rays = SimpleNamespace(dirs=dirs, normal=normal, obj=np.array([3, 3, -1, 3]))
+    s = np.array([1.0, 0.5 ** 2, 0.5 ** 2, 0.0])  # cos^2 (Lambert) strengths
+    out = specular_objects(s, rays, 2.0, 0.8, 10.0)
+    assert out[0] == pytest.approx(1.0)  # normal incidence: the lobe's peak equals the diffuse one
+    assert out[1] == pytest.approx(0.2 * 0.5 ** 2 + 0.8 * 0.5 ** 10)
+    assert out[2] == s[2]  # the floor keeps its diffuse law
+    assert out[3] == 0.0
