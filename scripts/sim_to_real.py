@@ -14,9 +14,10 @@ stopped training resumes from its checkpoint):
    (the last two start from ``synthetic``'s network, ``--init-from``);
 4. scores: every model on the real frames outside its training part (the synthetic-only one
    on all of them and on each split's rest, so it is compared on the same frames);
-5. ``OUT/sim_to_real.json``, ``OUT/sim_to_real.md`` (the table, training CPU time) and
-   ``OUT/real_frames_synthetic_only.png`` (real frames with the synthetic-only detector's
-   boxes and the true ones).
+5. ``OUT/sim_to_real.json``, ``OUT/sim_to_real.md`` (the table, training CPU time, and what
+   the synthetic-only detector called each real object), ``OUT/sim_to_real_pr.png`` (the
+   precision-recall curves) and ``OUT/real_frames_synthetic_only.png`` (real frames with the
+   synthetic-only detector's boxes and the true ones).
 
 Usage::
 
@@ -90,9 +91,90 @@ def _score(model: Path, data: Path) -> dict:
     from sim.evaluation.atr_metrics import evaluate_detector
 
     det = CnnDetector(model, score_threshold=0.3)
-    r = evaluate_detector(det, data, 0.3)
-    return {k: r[k] for k in ("frames", "map50", "map50_95", "ap50_by_class", "ap50_scored_apart", "precision",
-                              "recall", "ground_truth")}
+    r = evaluate_detector(det, data, 0.3, pr_curves=True)
+    return {k: r.get(k) for k in ("frames", "map50", "map50_95", "ap50_by_class", "ap50_scored_apart", "precision",
+                                  "recall", "ground_truth", "pr50_by_class")}
+
+
+def _confusion(model: Path, data: Path, iou_min: float = 0.5, score_min: float = 0.3) -> dict:
+    """What the detector called each labelled object of ``data``: per true class, the counts
+    of the class of the highest-scoring detection overlapping it (IoU >= ``iou_min``, any
+    class, score >= ``score_min``), or ``missed``; and the detections overlapping no object
+    (``false``) by detected class. Separates "found but named wrong" from "not found"."""
+    from autonomy.atr.cnn_detector import CnnDetector
+    from sim.evaluation.atr_metrics import frame_from_record
+
+    folder = load_labelled_folder(data)
+    det = CnnDetector(model, score_threshold=score_min)
+    cats = {c["id"]: c["name"] for c in folder.coco["categories"]}
+    by_image: dict[int, list[dict]] = {}
+    for a in folder.coco["annotations"]:
+        by_image.setdefault(a["image_id"], []).append(a)
+    table: dict[str, dict[str, int]] = {}
+    false: dict[str, int] = {}
+    for rec in folder.coco["images"]:
+        dets = det.detect(frame_from_record(rec, folder.image(rec)))
+        boxes = np.array([d.box_xyxy_px for d in dets], dtype=float).reshape(-1, 4)
+        gts = by_image.get(rec["id"], [])
+        g = np.array([[a["bbox"][0], a["bbox"][1], a["bbox"][0] + a["bbox"][2], a["bbox"][1] + a["bbox"][3]]
+                      for a in gts], dtype=float).reshape(-1, 4)
+        iou = _iou(boxes, g)
+        for j, a in enumerate(gts):
+            row = table.setdefault(cats[a["category_id"]], {})
+            hits = np.flatnonzero(iou[:, j] >= iou_min) if len(dets) else np.array([], int)
+            name = "missed" if hits.size == 0 else dets[int(hits[np.argmax([dets[i].score for i in hits])])].class_name
+            row[name] = row.get(name, 0) + 1
+        for i, d in enumerate(dets):
+            if not len(gts) or iou[i].max() < iou_min:
+                false[d.class_name] = false.get(d.class_name, 0) + 1
+    return {"iou_min": iou_min, "score_min": score_min, "by_true_class": table, "false_by_detected_class": false}
+
+
+def _iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(len(a), len(b)) IoU of xyxy boxes."""
+    if not len(a) or not len(b):
+        return np.zeros((len(a), len(b)))
+    lo = np.maximum(a[:, None, :2], b[None, :, :2])
+    hi = np.minimum(a[:, None, 2:], b[None, :, 2:])
+    inter = np.prod(np.clip(hi - lo, 0.0, None), axis=2)
+    area_a = np.prod(a[:, 2:] - a[:, :2], axis=1)
+    area_b = np.prod(b[:, 2:] - b[:, :2], axis=1)
+    return inter / (area_a[:, None] + area_b[None, :] - inter)
+
+
+def _pr_png(results: dict, out: Path) -> None:
+    """Each model's precision-recall curve at IoU 0.5 (COCOeval's, the mean over the classes
+    with objects of its per-class curves; past a class's largest recall its precision is 0),
+    on the frames it was scored on, split 0: one panel per scoring set."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    sets = []
+    for row in results["rows"]:
+        if row.get("split") in (None, 0) and row["score"].get("pr50_by_class"):
+            sets.append(row)
+    panels = sorted({r["on"] for r in sets}, key=lambda x: (x != "all real frames", x))
+    fig = Figure(figsize=(4.2 * max(len(panels), 1), 3.8))
+    FigureCanvasAgg(fig)
+    if not panels:  # no model detected anything: say so rather than draw empty axes
+        fig.text(0.5, 0.5, "no model made a detection on the real frames", ha="center", va="center")
+    recall = np.linspace(0.0, 1.0, 101)
+    for k, on in enumerate(panels):
+        ax = fig.add_subplot(1, len(panels), k + 1)
+        for row in (r for r in sets if r["on"] == on):
+            curves = [np.clip(np.array(c, dtype=float), 0.0, None) for c in row["score"]["pr50_by_class"].values()
+                      if c is not None]
+            if curves:
+                ax.plot(recall, np.mean(curves, axis=0), label=f"{row['model']} ({row['score']['map50']:.2f})")
+        ax.set_xlabel("recall (IoU 0.5)")
+        ax.set_ylabel("precision, mean over classes")
+        ax.set_xlim(0, 1)
+        ax.set_ylim(0, 1.02)
+        ax.set_title(f"scored on {on}", fontsize=9)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, title="model (mean AP50)", title_fontsize=7)
+    fig.tight_layout()
+    fig.savefig(str(out), dpi=110)
 
 
 def _page(model: Path, real: Path, out: Path, n: int = 8) -> None:
@@ -157,6 +239,25 @@ def _table(results: dict, train: dict) -> str:
     return "\n".join(lines)
 
 
+def _confusion_table(conf: dict, classes: list[str]) -> str:
+    """Markdown: rows true classes, columns what the synthetic-only detector called them."""
+    cols = classes + ["Wall", "missed"]
+    lines = [f"Synthetic-only detector on all real frames: what each labelled object was called (the "
+             f"highest-scoring detection with IoU >= {conf['iou_min']}, score >= {conf['score_min']}):", "",
+             "| true \\ called | " + " | ".join(cols) + " | found and named right |",
+             "|---|" + "---|" * (len(cols) + 1)]
+    for c in classes + ["Wall"]:
+        row = conf["by_true_class"].get(c, {})
+        n = sum(row.values())
+        right = row.get(c, 0) / n if n else float("nan")
+        lines.append(f"| {c} | " + " | ".join(str(row.get(k, 0)) for k in cols) + f" | {right:.2f} |")
+    fa = conf["false_by_detected_class"]
+    lines.append("")
+    lines.append("Detections on no labelled object: " + (", ".join(f"{k} {v}" for k, v in sorted(fa.items()))
+                                                         or "none") + ".")
+    return "\n".join(lines)
+
+
 def run(args) -> dict:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -199,6 +300,11 @@ def run(args) -> dict:
                "training": train, "wall_s": time.perf_counter() - t}
     (out / "sim_to_real.json").write_text(json.dumps(results, indent=1))
     (out / "sim_to_real.md").write_text(_table(results, train) + "\n")
+    results["confusion_synthetic_only"] = _confusion(Path(train["synthetic"]["onnx"]), real)
+    (out / "sim_to_real.json").write_text(json.dumps(results, indent=1))
+    with (out / "sim_to_real.md").open("a") as f:
+        f.write("\n" + _confusion_table(results["confusion_synthetic_only"], classes) + "\n")
+    _pr_png(results, out / "sim_to_real_pr.png")
     _page(Path(train["synthetic"]["onnx"]), real, out / "real_frames_synthetic_only.png")
     return results
 
@@ -244,7 +350,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"sim_to_real: {exc}", file=sys.stderr)
         return 2
     print((Path(args.out) / "sim_to_real.md").read_text(), end="")
-    print(f"sim_to_real: wrote {args.out}/sim_to_real.json, sim_to_real.md, real_frames_synthetic_only.png "
+    print(f"sim_to_real: wrote {args.out}/sim_to_real.json, sim_to_real.md, sim_to_real_pr.png, real_frames_synthetic_only.png "
           f"({res['wall_s'] / 60:.1f} min)")
     return 0
 

@@ -54,7 +54,7 @@ def _pr(tp: int, fp: int, n_gt: int) -> tuple[float | None, float | None]:
 def evaluate_detector(detector, data_dir: str | Path, score_threshold: float,
                       target_classes: Sequence[str] | None = None, min_score: float = 0.05,
                       range_bands_m: Sequence[float] | None = None,
-                      max_images: int | None = None, coco_ap: bool = True) -> dict:
+                      max_images: int | None = None, coco_ap: bool = True, pr_curves: bool = False) -> dict:
     """Evaluate ``detector`` (``.detect(frame, score_threshold=...)``) on a labelled folder of
     either layout (:mod:`sim.dataset.labelled_folder`: a dataset of ``auvsim dataset``, or
     the watertank layout of real frames).
@@ -66,6 +66,10 @@ def evaluate_detector(detector, data_dir: str | Path, score_threshold: float,
     ``ap50_scored_apart`` the wall's where the folder has one (``ap50``, ``ap50_95``: the
     same means, the names of the single-class report). The operating point (precision,
     recall, false alarms, range bands) uses ``score_threshold`` over the target classes.
+    ``pr_curves``: also ``pr50_by_class``, each class's COCOeval precision at IoU 0.5 at the
+    101 recall points 0, 0.01 .. 1 (0 past the largest recall reached; None for a class without
+    ground truth).
+
     Returns a JSON-serialisable dict (AP figures NaN if not ``coco_ap``); ``precision`` is
     None when the detector made no detection at ``score_threshold`` (undefined: no detection
     is neither right nor wrong), as a band's precision without detections.
@@ -151,7 +155,7 @@ def evaluate_detector(detector, data_dir: str | Path, score_threshold: float,
     by_class: dict[str, float | None] = {c: (float("nan") if not coco_ap else None) for c in target_classes}
     apart: dict[str, float | None] = {}
     if coco_dets and coco_ap:
-        ap, per_cat = _coco_ap(coco_gt, coco_dets, img_ids, target_cats + apart_cats, len(target_cats))
+        ap, per_cat, curves = _coco_ap(coco_gt, coco_dets, img_ids, target_cats + apart_cats, len(target_cats))
         by_class = {c: per_cat[name_to_cat[c]] for c in target_classes}
         apart = {coco_gt.loadCats(c)[0]["name"]: per_cat[c] for c in apart_cats}
         present = [v for v in by_class.values() if v is not None]
@@ -175,7 +179,9 @@ def evaluate_detector(detector, data_dir: str | Path, score_threshold: float,
             "precision": precision, "recall": recall, "false_alarms_per_frame": fp / n_img if n_img else 0.0,
             "ap50": ap50, "ap50_95": ap, "map50": ap50, "map50_95": ap, "ap50_by_class": by_class,
             "ap50_scored_apart": apart, "layout": folder.layout, "by_range_band": by_band,
-            "frames_per_s": n_img / infer_s if infer_s > 0 else float("nan")}
+            "frames_per_s": n_img / infer_s if infer_s > 0 else float("nan"),
+            **({"pr50_by_class": {coco_gt.loadCats(c)[0]["name"]: curves.get(c) for c in target_cats}}
+               if pr_curves and coco_dets and coco_ap else {})}
 
 
 def range_bands_for(images: Sequence[dict]) -> tuple[float, ...]:
@@ -189,10 +195,11 @@ def range_bands_for(images: Sequence[dict]) -> tuple[float, ...]:
 
 
 def _coco_ap(coco_gt, coco_dets: list[dict], img_ids: list[int], cat_ids: list[int], n_mean: int
-             ) -> tuple[float, dict[int, float | None]]:
+             ) -> tuple[float, dict[int, float | None], dict[int, list[float] | None]]:
     """One COCOeval on ``cat_ids``: (AP50:95 over the first ``n_mean`` of them, as COCOeval's
     summary forms it over those categories; AP50 per category id, None for a category without
-    ground truth in ``img_ids``)."""
+    ground truth in ``img_ids``; the precision at IoU 0.5 at COCOeval's 101 recall points
+    0, 0.01 .. 1 per category id, 0 beyond the largest recall reached, None as for AP50)."""
     from pycocotools.cocoeval import COCOeval
 
     with contextlib.redirect_stdout(io.StringIO()):
@@ -203,13 +210,14 @@ def _coco_ap(coco_gt, coco_dets: list[dict], img_ids: list[int], cat_ids: list[i
         ev.evaluate()
         ev.accumulate()
     prec = ev.eval["precision"]  # (IoU thresholds, recall points, categories, areas, max dets)
-    per_cat = {}
+    per_cat, curves = {}, {}
     for k, cat in enumerate(ev.params.catIds):
         p = prec[0, :, k, 0, -1]
         per_cat[cat] = float(p[p > -1].mean()) if (p > -1).any() else None
+        curves[cat] = [round(float(v), 4) for v in p] if (p > -1).any() else None
     kept = prec[:, :, :n_mean, 0, -1]  # all areas, the most detections: COCOeval's stats[0]
     ap = float(kept[kept > -1].mean()) if (kept > -1).any() else -1.0
-    return ap, per_cat
+    return ap, per_cat, curves
 
 
 class _MemoDetector:

@@ -176,6 +176,9 @@ def test_sim_to_real_runs_every_step_on_a_few_frames_and_refuses_bad_input(capsy
     assert res["rows"][0]["score"]["frames"] == 6 and res["rows"][2]["score"]["frames"] == 4  # its split's rest
     assert res["training"]["synthetic+real_few"]["init_from"].endswith("synthetic.ckpt")
     assert (tmp_path / "s2r" / "real_frames_synthetic_only.png").is_file()
+    assert (tmp_path / "s2r" / "sim_to_real_pr.png").is_file()
+    conf = res["confusion_synthetic_only"]["by_true_class"]  # every labelled object counted once
+    assert sum(conf["Bottle"].values()) == 6 and sum(conf["Tire"].values()) == 6
     # equal optimiser steps whatever the frame count: 2 frames and 4 frames are one batch of 4 each
     assert res["training"]["real_few"]["epochs"] == res["training"]["real_most"]["epochs"] == 1
     first = (tmp_path / "s2r" / "sim_to_real.json").read_text()

@@ -91,6 +91,12 @@ def test_per_class_ap_from_pycocotools_on_known_detections(tmp_path):
     assert no_can["ap50_by_class"]["Can"] == 0.0
     assert no_can["map50"] == pytest.approx(3 / 4)
     assert no_can["recall"] == pytest.approx(5 / 7)
+    # the PR curves at IoU 0.5: precision 1 at every recall point for a class found whole,
+    # 0 throughout for the class never detected; only when asked for
+    assert "pr50_by_class" not in no_can
+    curves = evaluate_detector(_Oracle(f, drop={"Can"}), f.root, 0.5, pr_curves=True)["pr50_by_class"]
+    assert curves["Tire"] == [1.0] * 101 and curves["Can"] == [0.0] * 101
+    assert set(curves) == set(no_can["ap50_by_class"])
     # the wall missed changes nothing of the objects' figures
     no_wall = evaluate_detector(_Oracle(f, drop={"Wall"}), f.root, 0.5)
     assert no_wall["map50"] == pytest.approx(1.0) and no_wall["ap50_scored_apart"]["Wall"] == 0.0
