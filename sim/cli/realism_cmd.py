@@ -17,7 +17,8 @@ def _cmd_realism(args: argparse.Namespace) -> int:
     from sim.dataset.real_frames import RealDataError
     from sim.realism.report import FORMATIONS, realism_report, report_lines, side_by_side_png
 
-    formations = tuple(FORMATIONS) if args.formation == "both" else (args.formation,)
+    formations = ("before", "after") if args.formation == "both" else (
+        tuple(FORMATIONS) if args.formation == "all" else (args.formation,))
     out = check_output_dir(args.out, kind="realism", overwrite=args.overwrite) if args.out else None
     if args.cnn:
         try:
@@ -89,8 +90,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=non_negative_int, default=0, help="root seed of scenes, noise and patches (default 0)")
     p.add_argument("--near-m", type=positive_float, default=0.7,
                    help="near range of the real window, m (sets the metric scale; default 0.7, the ARIS 3000's)")
-    p.add_argument("--formation", choices=["before", "after", "both"], default="both",
-                   help="image formation to simulate: before (the preset's), after (the tank estimate), both (default)")
+    p.add_argument("--formation", choices=["before", "after", "shells", "both", "all"], default="both",
+                   help="image formation to simulate: before (the preset's), after (the tank estimate), shells (the "
+                        "tank estimate with objects as thin shells: specular lobe and far-wall echoes), both (before "
+                        "and after; default), all")
     p.add_argument("--limit-real", type=positive_int, default=None, help="read at most this many real frames")
     p.add_argument("--cnn", action="store_true", help="add a small CNN as a second judge (needs torch)")
     p.add_argument("--out", default=None, help="folder for realism.json, realism.txt, side_by_side.png and simulated_only.png")

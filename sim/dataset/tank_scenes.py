@@ -100,6 +100,17 @@ TANK_FORMATION: dict = {
 }
 
 
+#: :data:`TANK_FORMATION` with objects as thin shells: a specular lobe on objects (0.6 of their
+#: backscatter in ``cos^20``) and the far wall's echo (0.5 of the near wall's, one crossing
+#: later), with the echo tail halved to 0.15 (the far wall now carries part of what the tail
+#: stood for). Real bottles and cans show two or three parallel streaks along range, not a
+#: filled outline (sim/sensors/sonar/image_formation.py; docs/studies/sim_to_real.md).
+TANK_FORMATION_SHELLS: dict = {
+    **TANK_FORMATION,
+    "formation": {**TANK_FORMATION["formation"], "object_tail_ratio": 0.15, "object_specular_share": 0.6,
+                  "object_specular_exponent": 20.0, "object_back_wall_ratio": 0.5, "object_back_wall_repeats": 1},
+}
+
 @dataclass(frozen=True)
 class TankScene:
     """One drawn scene: the sonar pose and the world's targets (``TargetConfig`` list)."""

@@ -8,7 +8,8 @@ renders them onto the real pixel grid, and measures both sets with the same code
 two-sample tests on background and object patches (:mod:`sim.realism.two_sample`). It can do
 so for several image-formation models in one run (:data:`FORMATIONS`: ``before``, the
 sonar's formation without the realism work, and ``after``, the formation estimated for the
-ARIS 3000 in the tank), so the two are compared on the same scenes, seed and real frames.
+ARIS 3000 in the tank, and ``shells``, that estimate with objects as thin shells), so they
+are compared on the same scenes, seed and real frames.
 """
 
 from __future__ import annotations
@@ -21,7 +22,8 @@ from numpy.typing import NDArray
 
 from sim.realism.image_measures import MEASURES, FrameSetMeasures
 from sim.dataset.real_frames import RealFrames, fan_groups, fit_fan_outline, load_real_frames
-from sim.dataset.tank_scenes import TANK, TANK_FORMATION, TankGeometry, draw_scenes, render_tank_frames
+from sim.dataset.tank_scenes import (TANK, TANK_FORMATION, TANK_FORMATION_SHELLS, TankGeometry, draw_scenes,
+                                     render_tank_frames)
 from sim.realism.gain_match import background_grey, calibrate_gain_db
 from sim.realism.two_sample import (TwoSampleResult, balanced_sets, cnn_judge, feature_judges,
                                     patch_features)
@@ -31,6 +33,7 @@ from sim.realism.two_sample import (TwoSampleResult, balanced_sets, cnn_judge, f
 FORMATIONS: dict[str, dict] = {
     "before": {},
     "after": TANK_FORMATION,
+    "shells": TANK_FORMATION_SHELLS,
 }
 #: Goals of the report: two-sample accuracies at most these (background, object patches);
 #: statistics within 20 % of the real value; the range profile's correlation at least 0.8.

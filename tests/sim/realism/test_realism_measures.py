@@ -187,3 +187,19 @@ def test_json_is_one_line_with_null_where_nothing_was_measured(tmp_path: Path, c
     assert data["real"]["measures"]["object_p99_bg"] is None
     assert any("no masks" in n for n in data["notes"])
     assert any("fewer than 50" in n for n in data["notes"])
+
+
+def test_the_shells_formation_renders_beside_the_tank_estimate(tmp_path: Path, capsys):
+    """``--formation all`` measures the three formations on the same scenes; the shells'
+    settings are the tank estimate's plus the far-wall echo and the specular lobe."""
+    import json
+
+    real = _write_fan_folder(tmp_path / "fans", n=6)
+    capsys.readouterr()
+    from sim.cli import main
+
+    assert main(["realism", "--real", str(real), "--frames", "2", "--formation", "all", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert list(data["simulated"]) == ["before", "after", "shells"]
+    shells = data["options"]["formation_settings"]["shells"]["formation"]
+    assert shells["object_back_wall_ratio"] == 0.5 and shells["object_specular_share"] == 0.6
