@@ -197,6 +197,16 @@ def merge_parts(out_dir: Path, manifest: dict) -> None:
     write_coco(out_dir / ANNOTATIONS_FILE, images, annotations, categories, info)
 
 
+def _extend(out_dir: Path, old_n: int, settings, randomization) -> None:
+    """Prepare ``out_dir`` to grow from ``old_n`` frames: scene ``k`` depends on the seed and
+    ``k`` alone, so the scenes already written stay; a last scene cut short by ``old_n`` is
+    rendered again whole (its part file removed; its frames come out the same)."""
+    fps = (settings.tiles_per_scene() if isinstance(settings, SssSettings) else
+           settings.frames_per_scene if isinstance(settings, TankSettings) else randomization.frames_per_scene)
+    if old_n % fps:
+        (out_dir / PARTS_DIR / f"scene_{old_n // fps:05d}.json").unlink(missing_ok=True)
+
+
 def generate_dataset(out_dir: str | Path, n_frames: int, seed: int = 0, workers: int | None = None,
                      ray_address: str | None = None, use_ray: bool = False,
                      randomization: Randomization | SssRandomization = TRAIN_RANDOMIZATION,
@@ -210,10 +220,13 @@ def generate_dataset(out_dir: str | Path, n_frames: int, seed: int = 0, workers:
     ranges are :func:`sim.dataset.sss_generate.sss_randomization` of ``randomization``, which
     may also be an ``SssRandomization``).
     ``workers``: local processes (default: all cores; 1 = in this process). ``use_ray``:
-    distribute scenes with Ray (``ray_address`` None starts a local instance).
+    distribute scenes with Ray (``ray_address`` None starts a local instance). A folder
+    holding the same dataset with fewer frames grows to ``n_frames`` (its frames kept: scene
+    ``k`` depends on the seed and ``k`` alone).
+
     Raises:
         DatasetError: ``n_frames`` < 1, side-scan settings out of range (a tile longer than
-            the line), ``out_dir`` holds a dataset made with other parameters, or (where workers
+            the line), ``out_dir`` holds a dataset made with other parameters or more frames, or (where workers
             are spawned: macOS, Windows) ``workers`` > 1 from a main script without the
             ``if __name__ == "__main__":`` guard (:mod:`sim.process.spawn_guard`).
         OutputDirError: ``out_dir`` is protected, a file, not creatable, or holds files
@@ -244,8 +257,13 @@ def generate_dataset(out_dir: str | Path, n_frames: int, seed: int = 0, workers:
         except (OSError, UnicodeDecodeError, ValueError) as exc:
             raise DatasetError(f"--out {out_dir}: its {MANIFEST_FILE} is damaged ({exc}); use a new --out folder") from None
         old.pop("complete", None)
-        if old != manifest:
-            diff = sorted(k for k in set(old) | set(manifest) if old.get(k) != manifest.get(k))
+        diff = sorted(k for k in set(old) | set(manifest) if old.get(k) != manifest.get(k))
+        if diff == ["n_frames"] and isinstance(old.get("n_frames"), int) and old["n_frames"] < n_frames:
+            _extend(out_dir, old["n_frames"], settings, randomization)
+        elif diff == ["n_frames"]:
+            raise DatasetError(f"--n {n_frames}: below the {old.get('n_frames')} frames {out_dir} already holds "
+                               "(a dataset grows, it is not cut); use a new --out folder")
+        elif diff:
             raise DatasetError(f"--out {out_dir}: holds a dataset made with other parameters "
                                f"(differs in {', '.join(diff)}); use a new --out folder")
     write_atomic(man_path, json.dumps({**manifest, "complete": False}, indent=1))

@@ -121,6 +121,17 @@ def test_other_parameters_in_same_directory_are_refused(dataset, tmp_path):
         _make(d, n=2, seed=99)
 
 
+def test_a_dataset_grows_to_a_larger_n_into_the_same_files_and_is_not_cut(dataset, tmp_path):
+    d = _make(tmp_path / "g", n=3)  # two frames a scene: the second scene cut at one frame
+    _make(d, n=4)
+    grown, whole = _files(d), _files(dataset)
+    for f in (grown, whole):
+        f.pop(".auvsim-output")  # the output marker lists what the folder held when it was written
+    assert grown == whole  # as if made with --n 4 at once
+    with pytest.raises(ValueError, match="--n 2: below the 4 frames"):
+        _make(d, n=2)
+
+
 def test_manifest_records_version_seed_and_parameters(dataset):
     man = json.loads((dataset / "manifest.json").read_text())
     assert man["complete"] is True and man["seed"] == 3 and man["generator_version"] == gen.GENERATOR_VERSION
