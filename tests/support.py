@@ -43,6 +43,10 @@ def _omega(t):
 
 
 SCRIPTS = Path(__file__).resolve().parents[1] / "scripts"
+#: The real ARIS 3000 frames (the Marine Debris water-tank development split) beside the
+#: checkout, or where ``AUVSIM_REAL_FLS_DIR`` says; tests that need them skip when absent.
+REAL_WATERTANK_DIR = Path(os.environ.get("AUVSIM_REAL_FLS_DIR", Path(__file__).resolve().parents[1].parent / "shared"
+                                         / "data" / "marine-debris-watertank-dev"))
 
 
 class PlaneCaster:

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import json
 import shutil
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -143,3 +142,33 @@ def test_cli_spec_refusals(tmp_path, capsys):
                          str(tmp_path / "o")], capsys)
     assert_clean_error(code, err, "--spec fls_train", "--sensor")
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.slow
+def test_the_watertank_spec_draws_the_real_objects_at_their_pixel_sizes(tmp_path):
+    """The shipped watertank spec's median labelled box area per class is within 25 % of the
+    real development split's, for the classes lying on the floor (upright bottles show their
+    height along range in the real frames, which the tank geometry does not give)."""
+    from tests.support import REAL_WATERTANK_DIR
+
+    if not REAL_WATERTANK_DIR.is_dir():
+        pytest.skip(f"the real development split is not at {REAL_WATERTANK_DIR} (a user's machine has none)")
+    from sim.dataset.generate import generate_dataset, generation_args
+    from sim.dataset.labelled_folder import load_labelled_folder
+
+    generate_dataset(tmp_path / "syn", 160, seed=5, workers=1, progress=False,
+                     **generation_args(load_spec("marine_debris_watertank")))
+
+    def median_area(folder) -> dict[str, float]:
+        f = load_labelled_folder(folder)
+        cats = {c["id"]: c["name"] for c in f.coco["categories"]}
+        areas: dict[str, list[float]] = {}
+        for a in f.coco["annotations"]:
+            areas.setdefault(cats[a["category_id"]], []).append(a["bbox"][2] * a["bbox"][3])
+        return {c: float(np.median(v)) for c, v in areas.items()}
+
+    real, syn = median_area(REAL_WATERTANK_DIR), median_area(tmp_path / "syn")
+    lying = [c for c in real if c not in ("Wall", "Standing-bottle", "Shampoo-bottle")]
+    assert len(lying) == 8
+    ratios = {c: syn[c] / real[c] for c in lying}
+    assert all(0.75 <= r <= 1.25 for r in ratios.values()), ratios

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import json
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,10 +13,15 @@ from autonomy.atr.detector import to_detections
 from sim.dataset.errors import DatasetError
 from sim.dataset.labelled_folder import load_labelled_folder
 from sim.evaluation.atr_metrics import evaluate_detector
-from tests.support import (WATERTANK_GEOM, assert_clean_error, run_cli, watertank_box_xml, write_fan_dataset,
-                           write_watertank_folder)
-
-REAL = Path(__file__).resolve().parents[3].parent / "shared" / "data" / "marine-debris-watertank-dev"
+from tests.support import REAL_WATERTANK_DIR as REAL
+from tests.support import (
+    WATERTANK_GEOM,
+    assert_clean_error,
+    run_cli,
+    watertank_box_xml,
+    write_fan_dataset,
+    write_watertank_folder,
+)
 
 FRAMES = [
     [("Bottle", (120, 200, 30, 14)), ("Tire", (170, 300, 40, 40))],

@@ -2,15 +2,11 @@
 next to the repository, or ``AUVSIM_REAL_FLS_DIR``): skipped, saying so, where they are absent
 (a user's machine has none). The frames are read from their folder, never copied."""
 
-import os
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-REAL_DIR = Path(os.environ.get("AUVSIM_REAL_FLS_DIR",
-                               Path(__file__).resolve().parents[3].parent / "shared" / "data"
-                               / "marine-debris-watertank-dev"))
+from tests.support import REAL_WATERTANK_DIR as REAL_DIR
 
 pytestmark = pytest.mark.skipif(not (REAL_DIR / "images").is_dir(),
                                 reason=f"real ARIS frames not found at {REAL_DIR} (set AUVSIM_REAL_FLS_DIR)")
