@@ -244,13 +244,14 @@ def _confusion_table(conf: dict, classes: list[str]) -> str:
     cols = classes + ["Wall", "missed"]
     lines = [f"Synthetic-only detector on all real frames: what each labelled object was called (the "
              f"highest-scoring detection with IoU >= {conf['iou_min']}, score >= {conf['score_min']}):", "",
-             "| true \\ called | " + " | ".join(cols) + " | found and named right |",
-             "|---|" + "---|" * (len(cols) + 1)]
+             "| true \\ called | " + " | ".join(cols) + " | found, any name | found and named right |",
+             "|---|" + "---|" * (len(cols) + 2)]
     for c in classes + ["Wall"]:
         row = conf["by_true_class"].get(c, {})
         n = sum(row.values())
         right = row.get(c, 0) / n if n else float("nan")
-        lines.append(f"| {c} | " + " | ".join(str(row.get(k, 0)) for k in cols) + f" | {right:.2f} |")
+        found = (n - row.get("missed", 0)) / n if n else float("nan")
+        lines.append(f"| {c} | " + " | ".join(str(row.get(k, 0)) for k in cols) + f" | {found:.2f} | {right:.2f} |")
     fa = conf["false_by_detected_class"]
     lines.append("")
     lines.append("Detections on no labelled object: " + (", ".join(f"{k} {v}" for k, v in sorted(fa.items()))
