@@ -261,10 +261,13 @@ def _confusion_table(conf: dict, classes: list[str]) -> str:
 
 def run(args) -> dict:
     out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
     real = Path(args.real)
-    load_labelled_folder(real, "--real")  # refuses a folder that is not labelled real frames, before any work
+    n_real = len(load_labelled_folder(real, "--real").coco["images"])  # refuses a folder that is not labelled frames
+    if not args.most < n_real:
+        raise ValueError(f"--most {args.most}: must be below the {n_real} frames of --real {real} (the rest are "
+                         "scored)")
     spec = load_spec(args.spec)
+    out.mkdir(parents=True, exist_ok=True)
     syn, syn_val = out / "synthetic", out / "synthetic_val"
     t = time.perf_counter()
     for folder, n, seed in ((syn, args.synthetic_frames, args.seed), (syn_val, max(args.synthetic_frames // 10, 4),
@@ -297,10 +300,12 @@ def run(args) -> dict:
     classes = list(folder.target_classes)
     results = {"real": str(real.resolve()), "spec": spec.name, "synthetic_frames": args.synthetic_frames,
                "few": args.few, "most": args.most, "seed": args.seed, "splits": args.splits,
-               "finetune_steps": args.finetune_steps, "classes": classes, "rows": rows,
+               "finetune_steps": args.finetune_steps, "smoke": bool(args.smoke), "classes": classes, "rows": rows,
                "training": train, "wall_s": time.perf_counter() - t}
     (out / "sim_to_real.json").write_text(json.dumps(results, indent=1))
-    (out / "sim_to_real.md").write_text(_table(results, train) + "\n")
+    smoke = ("**Smoke run** (`--smoke`: a check of the plumbing on a few frames and one epoch or step each; "
+             "not a measurement)\n\n") if args.smoke else ""
+    (out / "sim_to_real.md").write_text(smoke + _table(results, train) + "\n")
     results["confusion_synthetic_only"] = _confusion(Path(train["synthetic"]["onnx"]), real)
     (out / "sim_to_real.json").write_text(json.dumps(results, indent=1))
     with (out / "sim_to_real.md").open("a") as f:
@@ -311,40 +316,48 @@ def run(args) -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description="The sim-to-real study: a detector trained on synthetic frames only, "
+                                 "on a few or most real frames, and pretrained on synthetic then fine-tuned on real, "
+                                 "each scored on real frames it never saw (docs/studies/sim_to_real.md).")
     ap.add_argument("--real", required=True, help="real labelled frames (watertank layout)")
     ap.add_argument("--out", required=True, help="study folder (rerun the same command to resume)")
     ap.add_argument("--spec", default="marine_debris_watertank", help="dataset spec of the synthetic frames")
-    ap.add_argument("--synthetic-frames", type=int, default=8000)
+    ap.add_argument("--synthetic-frames", type=int, default=8000, help="synthetic training frames (default 8000)")
     ap.add_argument("--few", type=int, default=60, help="real training frames, few (10 %% of 600)")
     ap.add_argument("--most", type=int, default=480, help="real training frames, most (80 %% of 600)")
-    ap.add_argument("--epochs", type=int, default=30, help="epochs on the synthetic frames")
+    ap.add_argument("--epochs", type=int, default=30, help="epochs on the synthetic frames (default 30)")
     ap.add_argument("--finetune-steps", type=int, default=600,
                     help="optimiser steps of every real-frame run, alone or fine-tuning (epochs follow from the "
-                         "frame count, so --few and --most runs train equally long)")
+                         "frame count, so --few and --most runs train equally long; default 600)")
     ap.add_argument("--splits", type=int, default=1,
                     help="random splits of the real frames (seeds --seed, --seed+1, ...); the table gives each "
                          "and their mean")
-    ap.add_argument("--width", type=int, default=24)
-    ap.add_argument("--batch-size", type=int, default=16)
-    ap.add_argument("--lr", type=float, default=0.004)
+    ap.add_argument("--width", type=int, default=24, help="detector base channel width (default 24)")
+    ap.add_argument("--batch-size", type=int, default=16, help="training batch size (default 16)")
+    ap.add_argument("--lr", type=float, default=0.004, help="learning rate (default 0.004)")
     ap.add_argument("--crop", default="224x224", help="training crop HxW (multiples of 16) or none")
-    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--seed", type=int, default=0,
+                    help="root seed: synthetic frames, splits, training (default 0)")
     ap.add_argument("--workers", type=int, default=1, help="dataset worker processes")
     ap.add_argument("--smoke", action="store_true", help="every step on a few frames, one epoch (a plumbing check)")
     ap.add_argument("--quiet", action="store_true")
     args = ap.parse_args(argv)
-    if args.smoke:
-        args.synthetic_frames, args.epochs, args.finetune_steps, args.width, args.batch_size = 8, 1, 1, 4, 4
-        args.few, args.most = min(args.few, 2), min(args.most, 4)
     bad = next((f"--{k.replace('_', '-')} {v}: must be >= 1" for k, v in vars(args).items()
                 if k in ("synthetic_frames", "few", "most", "epochs", "finetune_steps", "splits", "width", "batch_size",
                          "workers") and v < 1), None)
     if bad is None and not args.few < args.most:
         bad = f"--few {args.few}: must be below --most {args.most}"
+    if bad is None and not args.lr > 0:
+        bad = f"--lr {args.lr}: must be > 0"
     if bad:
         print(f"sim_to_real: {bad}", file=sys.stderr)
         return 2
+    if args.smoke:  # the user's values are checked above, then replaced by tiny ones
+        args.synthetic_frames, args.epochs, args.finetune_steps, args.width, args.batch_size = 8, 1, 1, 4, 4
+        args.few, args.most = min(args.few, 2), min(args.most, 4)
+        if not args.quiet:
+            print("sim_to_real: --smoke: 8 synthetic frames, 2 and 4 real training frames, one epoch or step each, "
+                  "width 4 (a check of the plumbing, not a measurement)", flush=True)
     try:
         res = run(args)
     except (DatasetError, ValueError) as exc:

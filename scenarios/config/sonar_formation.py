@@ -43,7 +43,7 @@ class SonarFormationConfig(StrictModel):
         object_back_wall_ratio: energy of the echo from an object's far wall over its near
             wall's (sound passes through a thin shell, a bottle or a can, and returns from the
             far side as well); 0: the near surface only. The far wall is where each ray leaves
-            the object's mesh.
+            the object. Objects of bounding radius above 1 m (walls, structures) are solid.
         object_back_wall_repeats: echoes of sound ringing between the walls: the k-th comes one
             more wall-to-wall crossing later, with ``object_back_wall_ratio ** k`` of the energy.
         side_lobe_floor_db: two-way level (dB re the main lobe) the azimuth pattern keeps outside
@@ -69,7 +69,7 @@ class SonarFormationConfig(StrictModel):
     object_specular_share: float = Field(0.0, ge=0.0, le=1.0)
     object_specular_exponent: float = Field(20.0, ge=1.0, le=1000.0)
     object_back_wall_ratio: float = Field(0.0, ge=0.0, le=1.0)
-    object_back_wall_repeats: int = Field(1, ge=1, le=6)
+    object_back_wall_repeats: int = Field(1, ge=1, le=6, strict=True)
 
     @property
     def is_default(self) -> bool:

@@ -61,7 +61,7 @@ def _cmd_eval(args: argparse.Namespace) -> int:
                        f"({sweep[0]['score_threshold']:.2f}-{sweep[-1]['score_threshold']:.2f})")
         if args.json:
             print(json.dumps({"data": str(data), "sweep": sweep, "chosen": best,
-                              **({"note": none_chosen} if best is None else {})}, indent=1))
+                              **({"note": none_chosen} if best is None else {})}))
             return 0
         print(f"eval-atr sweep {args.detector} on {data}")
         for r in sweep:
@@ -75,7 +75,7 @@ def _cmd_eval(args: argparse.Namespace) -> int:
     res = evaluate_detector(detector, Path(data), cfg.score_threshold, max_images=args.max_images)
     res.update(detector=args.detector, data=str(data))
     if args.json:
-        print(json.dumps(res, indent=1))
+        print(json.dumps(res))
         return 0
     print(f"eval-atr {res['detector']} on {res['data']} ({res['layout']} layout, {res['frames']} frames, "
           f"classes {', '.join(res['classes'])})")
@@ -109,7 +109,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--threshold", type=probability, default=None,
                    help="operating threshold, 0 to 1 (default: the detector config's)")
     p.add_argument("--max-images", type=positive_int, default=None)
-    p.add_argument("--json", action="store_true", help="print the figures as JSON")
+    p.add_argument("--json", action="store_true", help="print the figures as one JSON object on one line")
     p.add_argument("--sweep", action="store_true",
                    help="print precision/recall over thresholds 0.10-0.90 and the chosen operating point "
                         "(highest recall at precision >= 0.95, else best F1, among thresholds with a true "

@@ -38,10 +38,13 @@ def require_dataset(path: str | Path, arg: str = "--data") -> Path:
     if not ann.is_file() and (p / "images").is_dir():
         raise DatasetError(f"{arg} {p}: has images/ but neither boxes/ (the watertank layout: boxes/<stem>.xml per "
                            f"image) nor {ANNOTATIONS_FILE} (a dataset written by `auvsim dataset`)")
+    if not ann.is_file() and (p / "manifest.json").is_file():
+        raise DatasetError(f"{arg} {p}: an `auvsim dataset` folder whose generation did not finish (no "
+                           f"{ANNOTATIONS_FILE} yet); rerun `auvsim dataset` with the same arguments to complete it")
     if not ann.is_file():
-        raise DatasetError(f"{arg} {p}: no {ANNOTATIONS_FILE} here (not a dataset folder written by `auvsim "
-                           "dataset`, nor a watertank-layout folder with images/ and boxes/; or its generation "
-                           "did not finish: rerun `auvsim dataset` with the same arguments to complete it)")
+        inside = " (it is an images/ folder: give the folder that holds it)" if p.name == "images" else ""
+        raise DatasetError(f"{arg} {p}: not a labelled folder: expected {ANNOTATIONS_FILE} (a dataset written by "
+                           f"`auvsim dataset`) or images/ and boxes/ (the watertank layout of real frames){inside}")
     try:
         doc = json.loads(ann.read_text())
     except (OSError, UnicodeDecodeError, ValueError) as exc:

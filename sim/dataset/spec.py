@@ -80,13 +80,30 @@ class SonarSpec(StrictModel):
         except ValidationError as exc:
             err = exc.errors(include_url=False)[0]
             loc = ".".join(str(p) for p in err["loc"])
-            msg = err["msg"].replace("Extra inputs are not permitted", "not a forward-looking sonar setting")
+            msg = err["msg"]
+            if err["type"] == "extra_forbidden":
+                msg = _unknown_key_message(err["loc"])
             raise ValueError(f"settings.{loc}: {msg}") from None
         try:
             resolve_geometry(cfg)
         except ValueError as exc:
             raise ValueError(str(exc).replace("sensors.fls.", "sonar.")) from None
         return self
+
+
+def _unknown_key_message(loc: tuple) -> str:
+    """'not a ... setting' for an unknown key at ``loc`` (in the sonar's settings or in its
+    ``formation``), with the closest known key and where the keys are listed."""
+    import difflib
+
+    from scenarios.config.sonar_formation import SonarFormationConfig
+
+    in_formation = len(loc) > 1 and loc[0] == "formation"
+    known = SonarFormationConfig.model_fields if in_formation else FlsConfig.model_fields
+    close = difflib.get_close_matches(str(loc[-1]), list(known), n=1, cutoff=0.6)
+    what = "an image-formation setting" if in_formation else "a forward-looking sonar setting"
+    hint = f"; did you mean {close[0]}?" if close else ""
+    return f"not {what}{hint} (the keys are listed in docs/cli.md)"
 
 
 class LabelRules(StrictModel):

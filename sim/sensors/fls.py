@@ -52,6 +52,7 @@ from sim.dynamics.truth import VehicleTruth
 
 FloatArray = NDArray[np.float64]
 OBJECT_RAYS_ACROSS = 8  # rays across an object (each way) where the base rays are sparser
+SHELL_MAX_RADIUS_M = 1.0  # objects larger than this (walls, structures) are solid: no back-wall echo
 BACK_WALL_MAX_M = 2.0  # far walls deeper than this behind the near wall are not echoed
 OBJECT_RAYS_SPAN_LIMIT = 3.0  # objects spanning this many base ray spacings or more keep the base rays
 
@@ -256,7 +257,9 @@ class FlsSensor(Sensor[FlsRender]):
         (:mod:`sim.sensors.sonar.image_formation`): each ray on an object is followed through
         it to where it leaves it (``caster.exit_distances``); the ``k``-th echo comes
         ``k`` wall-to-wall crossings after the near wall's with ``back_wall_ratio ** k`` of its
-        strength. Intervals join rays that leave the same object only.
+        strength. Intervals join rays that leave the same object only. Objects whose bounding
+        sphere is larger than :data:`SHELL_MAX_RADIUS_M` (a tank wall, a structure) are solid
+        and get none.
 
         Raises:
             ValueError: the caster cannot cast from points (the analytic test caster).
@@ -267,6 +270,10 @@ class FlsSensor(Sensor[FlsRender]):
             raise ValueError("formation.object_back_wall_ratio needs a caster that finds where rays leave objects "
                              f"(MujocoRayCaster); {type(caster).__name__} does not")
         hit = np.flatnonzero((rays.obj >= 0) & np.isfinite(rays.dist))
+        if hit.size and hasattr(caster, "object_bounding_sphere"):
+            ids = np.unique(rays.obj[hit])
+            solid = [k for k in ids if caster.object_bounding_sphere(int(k))[1] > SHELL_MAX_RADIUS_M]
+            hit = hit[~np.isin(rays.obj[hit], solid)]
         if hit.size == 0:
             return echoes
         pts = origin[None, :] + rays.dirs[hit] * rays.dist[hit][:, None]

@@ -169,6 +169,12 @@ def test_sim_to_real_runs_every_step_on_a_few_frames_and_refuses_bad_input(capsy
     script_refusal(mod, ["--real", str(real), "--out", str(tmp_path / "o"), "--few", "5", "--most", "3"], capsys,
                    "--few 5", "below --most 3")
     script_refusal(mod, ["--real", str(tmp_path), "--out", str(tmp_path / "o")], capsys, "--real")
+    # bad values are refused in --smoke too (not replaced), and a refused run leaves no folder
+    script_refusal(mod, ["--real", str(real), "--out", str(tmp_path / "o"), "--smoke", "--splits", "0"], capsys,
+                   "--splits 0")
+    script_refusal(mod, ["--real", str(real), "--out", str(tmp_path / "o"), "--few", "3", "--most", "6"], capsys,
+                   "--most 6", "below the 6 frames")
+    assert not (tmp_path / "o").exists()
     assert mod.main(["--real", str(real), "--out", str(tmp_path / "s2r"), "--smoke", "--quiet"]) == 0
     res = json.loads((tmp_path / "s2r" / "sim_to_real.json").read_text())
     assert [r["model"] for r in res["rows"]] == ["synthetic", "synthetic", "real_few", "synthetic+real_few",
@@ -177,6 +183,7 @@ def test_sim_to_real_runs_every_step_on_a_few_frames_and_refuses_bad_input(capsy
     assert res["training"]["synthetic+real_few"]["init_from"].endswith("synthetic.ckpt")
     assert (tmp_path / "s2r" / "real_frames_synthetic_only.png").is_file()
     assert (tmp_path / "s2r" / "sim_to_real_pr.png").is_file()
+    assert res["smoke"] is True and (tmp_path / "s2r" / "sim_to_real.md").read_text().startswith("**Smoke run**")
     conf = res["confusion_synthetic_only"]["by_true_class"]  # every labelled object counted once
     assert sum(conf["Bottle"].values()) == 6 and sum(conf["Tire"].values()) == 6
     # equal optimiser steps whatever the frame count: 2 frames and 4 frames are one batch of 4 each

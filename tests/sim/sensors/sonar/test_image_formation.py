@@ -266,3 +266,35 @@ def test_specular_share_reweights_object_rays_only():
     assert out[1] == pytest.approx(0.2 * 0.5 ** 2 + 0.8 * 0.5 ** 10)
     assert out[2] == s[2]  # the floor keeps its diffuse law
     assert out[3] == 0.0
+
+
+def test_back_wall_echoes_skip_objects_larger_than_a_shell_and_repeats_must_be_an_integer():
+    """A box of 2.4 m (bounding radius above 1 m: a wall) gets no far-wall echo; the repeats
+    key takes integers only (a bool or a string is refused, not coerced)."""
+    from pydantic import ValidationError
+
+    from scenarios.config.world import SeabedConfig, TargetConfig, WorldConfig
+    from scenarios.schema import Scenario
+    from sim.scene.world import build_world
+    from sim.sensors.raycast import MujocoRayCaster
+
+    wall = TargetConfig(name="wall", shape="box", pos_ned=(2.05, 0.0, 2.0), rpy_deg=(0.0, 0.0, 0.0),
+                        size_m=(0.3, 2.4, 0.3), reflectivity=0.9, class_name="Wall", is_target=False)
+    w = build_world(Scenario(name="w", seed=0, world=WorldConfig(
+        seabed=SeabedConfig(kind="plane", depth_m=20.0, reflectivity=0.3, extent_m=40.0), targets=(wall,))),
+        with_vehicle=False)
+    caster = MujocoRayCaster(w.model, w.data, w.geom_object_id, w.geom_reflectivity, exclude_body_id=-1)
+
+    def mean(ratio):
+        cfg = FlsConfig(preset="aris3000", tilt_deg=0.0, range_window_m=(0.7, 3.0), rate_hz=1.0,
+                        noise_floor_db=-200.0,
+                        formation=SonarFormationConfig(pulse_length_m=0.003, object_back_wall_ratio=ratio))
+        s = FlsSensor(cfg, rng=np.random.default_rng(0))
+        return s.echo_at(0.0, np.array([0.0, 0.0, 1.85]), np.eye(3), caster, w.objects).mean_intensity
+
+    plain, walled = mean(0.0), mean(0.5)
+    assert plain.max() > 0 and np.array_equal(plain, walled)
+    for bad in (True, "2", 1.5):
+        with pytest.raises(ValidationError):
+            SonarFormationConfig(object_back_wall_repeats=bad)
+    assert SonarFormationConfig(object_back_wall_repeats=3).object_back_wall_repeats == 3
