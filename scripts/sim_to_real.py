@@ -7,8 +7,9 @@ stopped training resumes from its checkpoint):
 
 1. ``OUT/synthetic``: ``--synthetic-frames`` frames of the dataset spec ``--spec`` (default
    ``marine_debris_watertank``), and ``OUT/synthetic_val`` (a tenth as many, another seed);
-2. ``OUT/split60``, ``OUT/split480``: the real folder split into ``--few`` and ``--most``
-   training frames and the rest (links, ``sim.dataset.split``);
+2. ``OUT/split_few``, ``OUT/split_most`` (and ``_s1``, ``_s2``... with ``--splits``): the real
+   folder split into ``--few`` and ``--most`` training frames and the rest (links,
+   ``sim.dataset.split``; by whole scenes unless ``--split-by frame``);
 3. trainings (``auvsim train-atr``, stride-8 native-resolution CenterNet, one thread):
    ``synthetic``, ``real_few``, ``real_most``, ``synthetic+real_few``, ``synthetic+real_most``
    (the last two start from ``synthetic``'s network, ``--init-from``);
@@ -286,7 +287,10 @@ def run(args) -> dict:
         for name, n in (("few", args.few), ("most", args.most)):
             d = out / f"split_{name}{tag}"
             if not (d / "split.json").is_file():
-                split_folder(real, n, args.seed + k, d)
+                split_folder(real, n, args.seed + k, d, by=args.split_by)
+            elif json.loads((d / "split.json").read_text()).get("by", "frame") != args.split_by:
+                raise ValueError(f"--split-by {args.split_by}: {out} holds splits made by "
+                                 f"{json.loads((d / 'split.json').read_text()).get('by', 'frame')}; use a new --out")
             tr, rest = d / "train", d / "rest"
             # every real-frame run gets the same optimiser steps, whatever its frame count
             epochs = max(1, -(-args.finetune_steps // -(-n // args.batch_size)))  # train.py: ceil(n / batch) a step
@@ -300,7 +304,7 @@ def run(args) -> dict:
     classes = list(folder.target_classes)
     results = {"real": str(real.resolve()), "spec": spec.name, "synthetic_frames": args.synthetic_frames,
                "few": args.few, "most": args.most, "seed": args.seed, "splits": args.splits,
-               "finetune_steps": args.finetune_steps, "smoke": bool(args.smoke), "classes": classes, "rows": rows,
+               "finetune_steps": args.finetune_steps, "split_by": args.split_by, "smoke": bool(args.smoke), "classes": classes, "rows": rows,
                "training": train, "wall_s": time.perf_counter() - t}
     (out / "sim_to_real.json").write_text(json.dumps(results, indent=1))
     smoke = ("**Smoke run** (`--smoke`: a check of the plumbing on a few frames and one epoch or step each; "
@@ -332,6 +336,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--splits", type=int, default=1,
                     help="random splits of the real frames (seeds --seed, --seed+1, ...); the table gives each "
                          "and their mean")
+    ap.add_argument("--split-by", choices=("scene", "frame"), default="scene",
+                    help="scene (default): whole scenes go to training or to scoring, so no model is scored on "
+                         "near-copies of its training frames (sim/dataset/split.py); frame: a random draw of frames")
     ap.add_argument("--width", type=int, default=24, help="detector base channel width (default 24)")
     ap.add_argument("--batch-size", type=int, default=16, help="training batch size (default 16)")
     ap.add_argument("--lr", type=float, default=0.004, help="learning rate (default 0.004)")

@@ -26,9 +26,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--train", type=int, required=True, help="frames in the training part")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", required=True, help="new folder for train/, rest/ and split.json")
+    ap.add_argument("--by", choices=("frame", "scene"), default="frame",
+                    help="frame (default): a random draw of frames; scene: whole scenes (near-copies together)")
     args = ap.parse_args(argv)
     try:
-        split = split_folder(Path(args.data), args.train, args.seed, Path(args.out))
+        split = split_folder(Path(args.data), args.train, args.seed, Path(args.out), by=args.by)
     except ValueError as exc:
         print(f"split_labelled_folder: {exc}", file=sys.stderr)
         return 2

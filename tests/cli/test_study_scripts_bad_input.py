@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 from tests.support import SCRIPTS, load_script, script_refusal
 
@@ -191,3 +192,30 @@ def test_sim_to_real_runs_every_step_on_a_few_frames_and_refuses_bad_input(capsy
     first = (tmp_path / "s2r" / "sim_to_real.json").read_text()
     assert mod.main(["--real", str(real), "--out", str(tmp_path / "s2r"), "--smoke", "--quiet"]) == 0  # resumes: done
     assert json.loads(first)["training"] == json.loads((tmp_path / "s2r" / "sim_to_real.json").read_text())["training"]
+
+
+def test_a_split_by_scene_keeps_near_copies_together(tmp_path):
+    """Frames of three scenes (near-copies within a scene, distinct between them): a split by
+    scene never puts one scene on both sides; the scene grouping finds the three scenes."""
+    import cv2
+
+    from sim.dataset.split import scene_groups, split_folder
+    from tests.support import write_watertank_folder
+
+    scenes = [0, 0, 0, 0, 1, 1, 2, 2, 2]
+    tank = write_watertank_folder(tmp_path / "tank", [[("Bottle", (120, 200, 30, 14))] for _ in scenes])
+    rng = np.random.default_rng(1)
+    bases = [rng.integers(0, 255, (480, 320)).astype(float) for _ in range(3)]
+    for i, s in enumerate(scenes):
+        img = np.clip(bases[s] + rng.normal(0.0, 2.0, (480, 320)), 0, 255).astype(np.uint8)
+        cv2.imwrite(str(tank / "images" / f"frame-{i}.png"), img)
+    label = scene_groups([tank / "images" / f"frame-{i}.png" for i in range(len(scenes))])
+    assert len(set(label)) == 3 and all((label[i] == label[j]) == (scenes[i] == scenes[j])
+                                        for i in range(9) for j in range(9))
+    for seed in range(4):
+        split = split_folder(tank, 5, seed, tmp_path / f"s{seed}", by="scene")
+        train_scenes = {scenes[int(n.split("-")[1])] for n in split["train"]}
+        rest_scenes = {scenes[int(n.split("-")[1])] for n in split["rest"]}
+        assert not train_scenes & rest_scenes and len(split["train"]) <= 5
+    with pytest.raises(ValueError, match="--split-by 'time'"):
+        split_folder(tank, 2, 0, tmp_path / "bad", by="time")
