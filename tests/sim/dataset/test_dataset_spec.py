@@ -47,6 +47,9 @@ def test_shipped_specs_load_and_the_survey_ones_are_the_presets():
             _manifest(10, 3, RANDOMIZATION_PRESETS[name], RenderSettings())
     tank = load_spec("marine_debris_watertank")
     assert tank.scene.class_names()[-1] == "Wall" and len(tank.scene.class_names()) == 11
+    from sim.dataset.tank_scenes import TANK_FORMATION_SHELLS
+
+    assert tank.sonar.settings["formation"] == TANK_FORMATION_SHELLS["formation"]  # the formation named in docs
     g = tank.image.geometry()
     assert (g.width_px, g.height_px) == (320, 480) and g.range_max_m == pytest.approx(2.913)
 
