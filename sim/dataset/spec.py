@@ -39,6 +39,7 @@ from pydantic import Field, ValidationError, model_validator
 from autonomy.sonar_geometry import FanGeometry
 from scenarios.config.base import StrictModel
 from scenarios.config.fls import FlsConfig, FlsPresetName
+from scenarios.config.sonar_formation import SonarFormationConfig
 from scenarios.config.world import DEBRIS_TARGET_SHAPES
 from scenarios.fls_presets import resolve_geometry
 from sim.dataset.errors import DatasetError
@@ -94,10 +95,6 @@ class SonarSpec(StrictModel):
 def _unknown_key_message(loc: tuple) -> str:
     """'not a ... setting' for an unknown key at ``loc`` (in the sonar's settings or in its
     ``formation``), with the closest known key and where the keys are listed."""
-    import difflib
-
-    from scenarios.config.sonar_formation import SonarFormationConfig
-
     in_formation = len(loc) > 1 and loc[0] == "formation"
     known = SonarFormationConfig.model_fields if in_formation else FlsConfig.model_fields
     close = difflib.get_close_matches(str(loc[-1]), list(known), n=1, cutoff=0.6)
