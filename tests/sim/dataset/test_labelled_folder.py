@@ -169,3 +169,13 @@ def test_the_real_development_split_reads_as_labelled_frames():
     fans = {json.dumps(im["fan_geometry"], sort_keys=True) for im in f.coco["images"]}
     assert len(fans) == 2  # the split's two recordings
     assert all(0.7 <= a["attributes"]["range_m"] <= 3.5 for a in f.coco["annotations"])
+
+
+def test_the_shipped_synthetic_debris_model_names_the_marine_debris_classes():
+    from autonomy.atr.build import resolve_model, shipped_model_names
+    from autonomy.atr.cnn_detector import CnnDetector
+    from sim.dataset.real_frames import MARINE_DEBRIS_CLASSES
+
+    assert "marine_debris_synthetic" in shipped_model_names()
+    det = CnnDetector(resolve_model("marine_debris_synthetic"))
+    assert list(det.class_names) == [MARINE_DEBRIS_CLASSES[k] for k in sorted(MARINE_DEBRIS_CLASSES)]
