@@ -45,7 +45,7 @@ import numpy as np
 from sim.cli import main as auvsim
 from sim.dataset.errors import DatasetError
 from sim.dataset.generate import generate_dataset, generation_args
-from sim.dataset.labelled_folder import load_labelled_folder
+from sim.dataset.labelled_folder import LabelledFolder, load_labelled_folder
 from sim.dataset.spec import load_spec
 from sim.dataset.split import split_folder
 
@@ -97,15 +97,15 @@ def _score(model: Path, data: Path) -> dict:
                                   "recall", "ground_truth", "pr50_by_class")}
 
 
-def _confusion(model: Path, data: Path, iou_min: float = 0.5, score_min: float = 0.3) -> dict:
+def _confusion(model: Path, folder: LabelledFolder, iou_min: float = 0.5, score_min: float = 0.3) -> dict:
     """What the detector called each labelled object of ``data``: per true class, the counts
     of the class of the highest-scoring detection overlapping it (IoU >= ``iou_min``, any
     class, score >= ``score_min``), or ``missed``; and the detections overlapping no object
     (``false``) by detected class. Separates "found but named wrong" from "not found"."""
     from autonomy.atr.cnn_detector import CnnDetector
+    from autonomy.atr.nms import box_iou
     from sim.evaluation.atr_metrics import frame_from_record
 
-    folder = load_labelled_folder(data)
     det = CnnDetector(model, score_threshold=score_min)
     cats = {c["id"]: c["name"] for c in folder.coco["categories"]}
     by_image: dict[int, list[dict]] = {}
@@ -119,7 +119,7 @@ def _confusion(model: Path, data: Path, iou_min: float = 0.5, score_min: float =
         gts = by_image.get(rec["id"], [])
         g = np.array([[a["bbox"][0], a["bbox"][1], a["bbox"][0] + a["bbox"][2], a["bbox"][1] + a["bbox"][3]]
                       for a in gts], dtype=float).reshape(-1, 4)
-        iou = _iou(boxes, g)
+        iou = box_iou(boxes, g)
         for j, a in enumerate(gts):
             row = table.setdefault(cats[a["category_id"]], {})
             hits = np.flatnonzero(iou[:, j] >= iou_min) if len(dets) else np.array([], int)
@@ -129,18 +129,6 @@ def _confusion(model: Path, data: Path, iou_min: float = 0.5, score_min: float =
             if not len(gts) or iou[i].max() < iou_min:
                 false[d.class_name] = false.get(d.class_name, 0) + 1
     return {"iou_min": iou_min, "score_min": score_min, "by_true_class": table, "false_by_detected_class": false}
-
-
-def _iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """(len(a), len(b)) IoU of xyxy boxes."""
-    if not len(a) or not len(b):
-        return np.zeros((len(a), len(b)))
-    lo = np.maximum(a[:, None, :2], b[None, :, :2])
-    hi = np.minimum(a[:, None, 2:], b[None, :, 2:])
-    inter = np.prod(np.clip(hi - lo, 0.0, None), axis=2)
-    area_a = np.prod(a[:, 2:] - a[:, :2], axis=1)
-    area_b = np.prod(b[:, 2:] - b[:, :2], axis=1)
-    return inter / (area_a[:, None] + area_b[None, :] - inter)
 
 
 def _pr_png(results: dict, out: Path) -> None:
@@ -178,12 +166,11 @@ def _pr_png(results: dict, out: Path) -> None:
     fig.savefig(str(out), dpi=110)
 
 
-def _page(model: Path, real: Path, out: Path, n: int = 8) -> None:
+def _page(model: Path, folder: LabelledFolder, out: Path, n: int = 8) -> None:
     """Real frames with the model's boxes (green) and the true ones (thin white)."""
     from autonomy.atr.cnn_detector import CnnDetector
     from sim.evaluation.atr_metrics import frame_from_record
 
-    folder = load_labelled_folder(real)
     det = CnnDetector(model, score_threshold=0.3)
     tiles = []
     step = max(1, len(folder.coco["images"]) // n)
@@ -263,7 +250,8 @@ def _confusion_table(conf: dict, classes: list[str]) -> str:
 def run(args) -> dict:
     out = Path(args.out)
     real = Path(args.real)
-    n_real = len(load_labelled_folder(real, "--real").coco["images"])  # refuses a folder that is not labelled frames
+    real_folder = load_labelled_folder(real, "--real")  # refuses a folder that is not labelled frames, before any work
+    n_real = len(real_folder.coco["images"])
     if not args.most < n_real:
         raise ValueError(f"--most {args.most}: must be below the {n_real} frames of --real {real} (the rest are "
                          "scored)")
@@ -288,9 +276,8 @@ def run(args) -> dict:
             d = out / f"split_{name}{tag}"
             if not (d / "split.json").is_file():
                 split_folder(real, n, args.seed + k, d, by=args.split_by)
-            elif json.loads((d / "split.json").read_text()).get("by", "frame") != args.split_by:
-                raise ValueError(f"--split-by {args.split_by}: {out} holds splits made by "
-                                 f"{json.loads((d / 'split.json').read_text()).get('by', 'frame')}; use a new --out")
+            elif (made_by := json.loads((d / "split.json").read_text()).get("by", "frame")) != args.split_by:
+                raise ValueError(f"--split-by {args.split_by}: {out} holds splits made by {made_by}; use a new --out")
             tr, rest = d / "train", d / "rest"
             # every real-frame run gets the same optimiser steps, whatever its frame count
             epochs = max(1, -(-args.finetune_steps // -(-n // args.batch_size)))  # train.py: ceil(n / batch) a step
@@ -300,22 +287,19 @@ def run(args) -> dict:
             for m in ("synthetic", f"real_{name}{tag}", f"synthetic+real_{name}{tag}"):
                 rows.append({"model": m, "on": f"the {name} split's rest", "split": k,
                              "score": _score(Path(train[m]["onnx"]), rest)})
-    folder = load_labelled_folder(real)
-    classes = list(folder.target_classes)
+    classes = list(real_folder.target_classes)
     results = {"real": str(real.resolve()), "spec": spec.name, "synthetic_frames": args.synthetic_frames,
                "few": args.few, "most": args.most, "seed": args.seed, "splits": args.splits,
-               "finetune_steps": args.finetune_steps, "split_by": args.split_by, "smoke": bool(args.smoke), "classes": classes, "rows": rows,
-               "training": train, "wall_s": time.perf_counter() - t}
+               "finetune_steps": args.finetune_steps, "split_by": args.split_by, "smoke": bool(args.smoke),
+               "classes": classes, "rows": rows, "training": train, "wall_s": time.perf_counter() - t,
+               "confusion_synthetic_only": _confusion(Path(train["synthetic"]["onnx"]), real_folder)}
     (out / "sim_to_real.json").write_text(json.dumps(results, indent=1))
     smoke = ("**Smoke run** (`--smoke`: a check of the plumbing on a few frames and one epoch or step each; "
              "not a measurement)\n\n") if args.smoke else ""
-    (out / "sim_to_real.md").write_text(smoke + _table(results, train) + "\n")
-    results["confusion_synthetic_only"] = _confusion(Path(train["synthetic"]["onnx"]), real)
-    (out / "sim_to_real.json").write_text(json.dumps(results, indent=1))
-    with (out / "sim_to_real.md").open("a") as f:
-        f.write("\n" + _confusion_table(results["confusion_synthetic_only"], classes) + "\n")
+    (out / "sim_to_real.md").write_text(smoke + _table(results, train) + "\n\n"
+                                        + _confusion_table(results["confusion_synthetic_only"], classes) + "\n")
     _pr_png(results, out / "sim_to_real_pr.png")
-    _page(Path(train["synthetic"]["onnx"]), real, out / "real_frames_synthetic_only.png")
+    _page(Path(train["synthetic"]["onnx"]), real_folder, out / "real_frames_synthetic_only.png")
     return results
 
 
@@ -372,8 +356,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"sim_to_real: {exc}", file=sys.stderr)
         return 2
     print((Path(args.out) / "sim_to_real.md").read_text(), end="")
-    print(f"sim_to_real: wrote {args.out}/sim_to_real.json, sim_to_real.md, sim_to_real_pr.png, real_frames_synthetic_only.png "
-          f"({res['wall_s'] / 60:.1f} min)")
+    print(f"sim_to_real: wrote {args.out}/sim_to_real.json, sim_to_real.md, sim_to_real_pr.png, "
+          f"real_frames_synthetic_only.png ({res['wall_s'] / 60:.1f} min)")
     return 0
 
 

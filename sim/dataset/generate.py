@@ -197,12 +197,17 @@ def merge_parts(out_dir: Path, manifest: dict) -> None:
     write_coco(out_dir / ANNOTATIONS_FILE, images, annotations, categories, info)
 
 
+def _frames_per_scene(settings, randomization) -> int:
+    """Frames (side-scan: tiles) one scene gives under ``settings``."""
+    return (settings.tiles_per_scene() if isinstance(settings, SssSettings) else
+            settings.frames_per_scene if isinstance(settings, TankSettings) else randomization.frames_per_scene)
+
+
 def _extend(out_dir: Path, old_n: int, settings, randomization) -> None:
     """Prepare ``out_dir`` to grow from ``old_n`` frames: scene ``k`` depends on the seed and
     ``k`` alone, so the scenes already written stay; a last scene cut short by ``old_n`` is
     rendered again whole (its part file removed; its frames come out the same)."""
-    fps = (settings.tiles_per_scene() if isinstance(settings, SssSettings) else
-           settings.frames_per_scene if isinstance(settings, TankSettings) else randomization.frames_per_scene)
+    fps = _frames_per_scene(settings, randomization)
     if old_n % fps:
         (out_dir / PARTS_DIR / f"scene_{old_n // fps:05d}.json").unlink(missing_ok=True)
 
@@ -273,8 +278,7 @@ def generate_dataset(out_dir: str | Path, n_frames: int, seed: int = 0, workers:
 
         (out_dir / BOXES_DIR).mkdir(exist_ok=True)
         (out_dir / MASKS_DIR).mkdir(exist_ok=True)
-    fps = (settings.tiles_per_scene() if isinstance(settings, SssSettings) else
-           settings.frames_per_scene if isinstance(settings, TankSettings) else randomization.frames_per_scene)
+    fps = _frames_per_scene(settings, randomization)
     n_scenes = math.ceil(n_frames / fps)
     rz_json = randomization.model_dump_json()
     jobs = []

@@ -270,7 +270,7 @@ class FlsSensor(Sensor[FlsRender]):
             raise ValueError("formation.object_back_wall_ratio needs a caster that finds where rays leave objects "
                              f"(MujocoRayCaster); {type(caster).__name__} does not")
         hit = np.flatnonzero((rays.obj >= 0) & np.isfinite(rays.dist))
-        if hit.size and hasattr(caster, "object_bounding_sphere"):
+        if hit.size:
             ids = np.unique(rays.obj[hit])
             solid = [k for k in ids if caster.object_bounding_sphere(int(k))[1] > SHELL_MAX_RADIUS_M]
             hit = hit[~np.isin(rays.obj[hit], solid)]

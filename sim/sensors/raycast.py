@@ -185,7 +185,6 @@ class MujocoRayCaster:
             self.model.geom_group[:] = saved
         return out
 
-
     def object_bounding_sphere(self, object_id: int) -> tuple[FloatArray, float]:
         """Sphere about the object's geom centres enclosing their bounding spheres.
 

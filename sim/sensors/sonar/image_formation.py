@@ -57,6 +57,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sim.sensors.sonar.beam_pattern import SINC_3DB
+from sim.sensors.sonar.ray_fan import row_dot
 from sim.sensors.sonar.speckle import complement_uniform_f32
 
 
@@ -217,7 +218,7 @@ def specular_objects(strength: NDArray[np.float64], rays, diffuse_exponent: floa
     on = np.flatnonzero(rays.obj >= 0)
     if on.size == 0:
         return out
-    cos = np.abs(np.einsum("ij,ij->i", rays.dirs[on], rays.normal[on]))
+    cos = np.abs(row_dot(rays.dirs[on], rays.normal[on]))
     diffuse = cos ** diffuse_exponent
     with np.errstate(divide="ignore", invalid="ignore"):
         factor = np.where(diffuse > 0.0, ((1.0 - share) * diffuse + share * cos ** exponent) / diffuse, 0.0)
