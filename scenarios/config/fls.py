@@ -79,6 +79,11 @@ class FlsConfig(SensorConfig):
         3.0, ge=0.0, le=20.0, description="azimuth beam-pattern kernel half-width")
     speckle: Literal["none", "rayleigh", "k"] = Field(
         "rayleigh", description="rayleigh: exponential intensity; k: K-distributed seabed clutter")
+    speckle_generator: Literal["counter", "stream"] = Field(
+        "counter", description="counter: one draw per frame keys a hash per pixel pair, Rayleigh speckle "
+        "and the dB display in one pass (used with speckle rayleigh and no correlated speckle, texture or "
+        "power-law display; otherwise stream); stream: every pixel drawn from the sensor's generator "
+        "(the renderer before)")
     k_shape: float = Field(2.0, gt=0.0, le=100.0, description="K-distribution shape (texture)")
     noise_floor_db: float = Field(
         -90.0, ge=-200.0, le=0.0, description="receiver noise power before TVG, dB re one base "

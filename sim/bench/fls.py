@@ -5,7 +5,11 @@ from a survey pose, 2 m above the seabed looking along the target rows, with the
 scenario's sonar limited to a 30 m range window, noise on, ground truth included; then the
 same frames again without the ground truth (what the mission renders when no observer reads
 it: no scoring, no recording), from the same noise state; the first frames are rendered again
-both ways, untimed, and compared byte for byte.
+both ways, untimed, and compared byte for byte. With ``baseline`` (the default when the
+scenario uses the counter-based speckle), the same frames are rendered again in the same run
+with ``speckle_generator: stream`` (every pixel drawn from the generator's stream, the display
+in its own passes: the renderer before the one-pass speckle), the two interleaved in rounds so
+that a machine's drift falls on both; ``speedup_cpu`` is the ratio of frames per CPU-second.
 """
 
 from __future__ import annotations
@@ -53,7 +57,7 @@ class _TimedCaster:
 
 
 def run(scenario: Scenario, n_frames: int = 60, range_window_m: tuple[float, float] | None = (1.0, 30.0),
-        altitude_m: float = 2.0, *, without_truth: bool = True) -> dict:
+        altitude_m: float = 2.0, *, without_truth: bool = True, baseline: bool | None = None) -> dict:
     """Render ``n_frames`` frames and report throughput.
 
     ``range_window_m`` is clipped to the sonar preset's range limits (a short-range sonar
@@ -68,7 +72,10 @@ def run(scenario: Scenario, n_frames: int = 60, range_window_m: tuple[float, flo
         refinement and occlusion casts included, per second of total frame time),
         ``raw_raycast_fraction`` (time inside ``mj_multiRay`` calls / total),
         ``n_rays`` (base rays per frame), ``rays_cast_per_frame``, ``n_beams``, ``n_bins``,
-        ``visible_objects`` (mean per frame); ``no_truth`` the same frames rendered without the
+        ``visible_objects`` (mean per frame); ``baseline`` (see the module; None: only when the
+        scenario's sonar uses the counter-based speckle): ``stream`` (``cpu_ms_per_frame``,
+        ``cpu_frames_per_s`` of the stream-drawn renderer), ``counter`` (the same, timed in the
+        same rounds) and ``speedup_cpu``; ``no_truth`` the same frames rendered without the
         ground truth (``frames_per_s``, ``ms_per_frame``, ``cpu_ms_per_frame``,
         ``cpu_frames_per_s``, ``identical_frames``: the fan and polar images of the first
         :data:`IDENTITY_FRAMES` frames byte-identical with and without the truth, rendered
@@ -123,9 +130,40 @@ def run(scenario: Scenario, n_frames: int = 60, range_window_m: tuple[float, flo
         "visible_objects": round(visible / n_frames, 2),
         "n_frames": n_frames,
     }
+    if baseline is None:
+        baseline = cfg.speckle_generator == "counter"
+    if baseline:
+        result["baseline"] = _against_stream(scenario, cfg, mount, pose, R_nb, caster, world.objects, n_frames)
     if without_truth:
         result["no_truth"] = _without_truth(scenario, cfg, mount, pose, R_nb, caster, world.objects, n_frames)
     return result
+
+
+BASELINE_ROUNDS = 3  # counter / stream rounds, interleaved
+
+
+def _against_stream(scenario: Scenario, cfg: FlsConfig, mount: np.ndarray, pose, R_nb: np.ndarray, caster, objects,
+                    n_frames: int) -> dict:
+    """CPU per frame of the bench's frames with the counter-based speckle and with the stream
+    one, in :data:`BASELINE_ROUNDS` interleaved rounds (with the ground truth)."""
+    sensors = {"counter": FlsSensor(cfg.model_copy(update={"speckle_generator": "counter"}), mount,
+                                    component_rng(scenario.seed, "fls")),
+               "stream": FlsSensor(cfg.model_copy(update={"speckle_generator": "stream"}), mount,
+                                   component_rng(scenario.seed, "fls"))}
+    cpu = dict.fromkeys(sensors, 0.0)
+    for s in sensors.values():
+        s.render(0.0, pose(0), R_nb, caster, objects)  # warm-up
+    for _ in range(BASELINE_ROUNDS):
+        for name, s in sensors.items():
+            c0 = time.process_time()
+            for i in range(n_frames):
+                s.render(i / 3.0, pose(i), R_nb, caster, objects)
+            cpu[name] += time.process_time() - c0
+    n = BASELINE_ROUNDS * n_frames
+    out = {name: {"cpu_ms_per_frame": round(1e3 * c / n, 3), "cpu_frames_per_s": round(n / c, 2)}
+           for name, c in cpu.items()}
+    out["speedup_cpu"] = round(cpu["stream"] / cpu["counter"], 3)
+    return out
 
 
 def _without_truth(scenario: Scenario, cfg: FlsConfig, mount: np.ndarray, pose, R_nb: np.ndarray, caster,

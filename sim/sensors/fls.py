@@ -136,7 +136,8 @@ class FlsSensor(Sensor[FlsRender]):
             azimuth_kernel(g.fov_rad / n_cols, g.beamwidth_az_rad, cfg.side_lobe_extent_beamwidths,
                            cfg.formation.side_lobe_floor_db),
             formation=formation_model(cfg.formation, g.bin_centres_m(), g.range_resolution_m, g.beam_spacing_rad,
-                                      g.beamwidth_az_rad, g.absorption_db_per_m, cfg.side_lobe_extent_beamwidths))
+                                      g.beamwidth_az_rad, g.absorption_db_per_m, cfg.side_lobe_extent_beamwidths),
+            counter_speckle=cfg.speckle_generator == "counter")
         beam_az = g.beam_azimuths_rad()
         col_az = self.rays.column_azimuths_rad
         col_step = g.fov_rad / n_cols
@@ -301,8 +302,8 @@ class FlsSensor(Sensor[FlsRender]):
     def _frame(self, echo: FlsEcho, *, noise: bool) -> FlsRender:
         """The frame of ``echo``: speckle and receiver noise (``noise``: drawn from the sensor's
         stream; else the expected intensity), the dB display and the fan image."""
-        intensity = self.echo.realise(echo.mean_intensity, self._rng, noise=noise, clutter=echo.clutter)
-        polar_u8 = self.echo.display(intensity)
+        intensity, polar_u8 = self.echo.realise_display(echo.mean_intensity, self._rng, noise=noise,
+                                                        clutter=echo.clutter)
         fan_u8 = self._remap.image(polar_u8)
         frame = FlsFrame(t_s=echo.t_s, polar=polar_u8, fan=fan_u8, geometry=self.fan_geometry,
                          mount_pos_body_m=self.mount_pos_body_m.copy(), mount_rpy_rad=self.mount_roll_tilt_yaw_rad)

@@ -14,6 +14,7 @@ from numba.extending import intrinsic
 
 f32 = np.float32
 u64 = np.uint64
+u32 = np.uint32
 TWO_M24 = f32(2.0 ** -24)  # the float32 uniform's grid step
 LOW32 = u64(0xFFFFFFFF)
 
@@ -401,3 +402,47 @@ def echo_segments(seg_a, seg_b, conn, col, phi, dist, obj, strength, range_slope
                 o_line[n], o_u0[n], o_u1[n], o_e[n], o_obj[n] = col[r], u, u, energy, obj[r]
                 n += 1
     return o_line[:n], o_u0[:n], o_u1[:n], o_e[:n], o_obj[:n]
+
+
+@intrinsic
+def f32_bits(typingctx, x):
+    """The IEEE-754 bits of a float32 as a uint32 (a bit cast, no conversion)."""
+    sig = types.uint32(types.float32)
+
+    def codegen(context, builder, signature, args):
+        return builder.bitcast(args[0], ir.IntType(32))
+
+    return sig, codegen
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def mix32(x):
+    """Wellons' ``lowbias32`` integer hash of a uint32 (a bijection; [Wellons2018])."""
+    x = u32(x ^ (x >> u32(16)))
+    x = u32(x * u32(0x7FEB352D))
+    x = u32(x ^ (x >> u32(15)))
+    x = u32(x * u32(0x846CA68B))
+    return u32(x ^ (x >> u32(16)))
+
+
+@nb.njit(cache=True, nogil=True)
+def counter_speckle_display(mean, add, gain, key0, key1, exp_table, lut, shift, hashes, intensity, out):
+    """Counter-based speckle, receiver noise and the display in one pass over (rows, cols).
+
+    Per pair of pixels ``(r, 2j)``, ``(r, 2j + 1)``: ``h = mix32(mix32(n * 0x9E3779B9 + key0) ^ key1)``
+    with ``n = r * ceil(cols / 2) + j``; its low and high 16 bits pick the two pixels'
+    unit-mean exponential quantiles ``exp_table[.]``. ``intensity = (mean + add) * e``;
+    ``out = lut[bits(intensity * gain[col]) >> shift]`` (the display law tabulated on the
+    float's exponent and top mantissa bits). ``hashes``: a scratch uint32 row of
+    ``ceil(cols / 2)`` words."""
+    rows, cols = mean.shape
+    half = hashes.size
+    h16 = hashes.view(np.uint16)
+    for r in range(rows):
+        base = u32(u32(r) * u32(half))
+        for j in range(half):
+            hashes[j] = mix32(u32(mix32(u32(u32(u32(base + u32(j)) * u32(0x9E3779B9)) + key0)) ^ key1))
+        for c in range(cols):
+            v = (mean[r, c] + add) * exp_table[h16[c]]
+            intensity[r, c] = v
+            out[r, c] = lut[u32(f32_bits(f32(v * gain[c])) >> shift)]

@@ -19,6 +19,7 @@ from sim.sensors.sonar.image_formation import (FormationModel, lognormal_texture
                                                to_uint8_gamma)
 from sim.sensors.sonar.propagation import transmission_gain, tvg_gain
 from sim.sensors.sonar.speckle import SpeckleKind, add_speckle_and_noise, standard_exponential_f32
+from sim.sensors.sonar.speckle_display import CounterSpeckleDisplay
 
 FloatArray = NDArray[np.float64]
 
@@ -40,6 +41,11 @@ class EchoChain:
         formation: correlated speckle, seabed texture, volume reverberation and the power-law
             display (:class:`sim.sensors.sonar.image_formation.FormationModel`); None: none of
             them (independent speckle per bin, dB display).
+        counter_speckle: draw Rayleigh speckle and noise with the counter-based generator and
+            display them in the same pass (:mod:`sim.sensors.sonar.speckle_display`) where
+            :meth:`realise_display` can (``speckle == "rayleigh"``, no correlated speckle,
+            texture or Rice objects, the dB display); False: every pixel from the generator's
+            stream (:meth:`realise`, then :meth:`display`).
 
     Raises:
         ValueError: if ``bin_centres_m`` is empty or ``dynamic_range_db`` is not positive.
@@ -49,7 +55,7 @@ class EchoChain:
                  tvg_absorption_db_per_m: float, noise_floor_db: float, speckle: SpeckleKind, k_shape: float,
                  gain_db: float, dynamic_range_db: float,
                  azimuth_kernel: NDArray[np.float32] | None = None, *,
-                 formation: FormationModel | None = None) -> None:
+                 formation: FormationModel | None = None, counter_speckle: bool = False) -> None:
         bins_m = np.asarray(bin_centres_m, dtype=float).reshape(-1)
         if bins_m.size == 0 or not dynamic_range_db > 0.0:
             raise ValueError("need at least one range bin and dynamic_range_db > 0")
@@ -69,6 +75,10 @@ class EchoChain:
                            else ((rk ** 2) / np.sum(rk ** 2)).astype(np.float32).reshape(1, -1))
         self._reverb = (None if formation is None or not np.any(formation.reverberation > 0)
                         else formation.reverberation.astype(np.float32))
+        f = formation
+        plain = f is None or not (f.correlated or f.textured or f.object_rice_k > 0.0 or f.display_gamma is not None)
+        self.counter = (CounterSpeckleDisplay(self.tvg, self.gain_db, self.dynamic_range_db, self.noise_power)
+                        if counter_speckle and speckle == "rayleigh" and plain else None)
 
     @property
     def needs_clutter(self) -> bool:
@@ -105,6 +115,18 @@ class EchoChain:
             return add_speckle_and_noise(mean, rng, self.speckle, self.noise_power, k_shape=self.k_shape,
                                          clutter=clutter)
         return mean + np.float32(self.noise_power)
+
+    def realise_display(self, mean: NDArray[np.float32], rng: np.random.Generator, *, noise: bool = True,
+                        clutter: NDArray[np.bool_] | None = None) -> tuple[NDArray[np.float32], NDArray[np.uint8]]:
+        """:meth:`realise` and :meth:`display` of ``mean`` (n_lines, n_bins): the received
+        intensity and its 8-bit lines. With the counter-based speckle (``counter_speckle`` and a
+        chain it applies to) and ``noise``, one compiled pass and one draw from ``rng``
+        (:class:`sim.sensors.sonar.speckle_display.CounterSpeckleDisplay`); otherwise the two
+        steps."""
+        if noise and self.counter is not None:
+            return self.counter.realise_display(mean, rng)
+        intensity = self.realise(mean, rng, noise=noise, clutter=clutter)
+        return intensity, self.display(intensity)
 
     def _realise_formed(self, mean: NDArray[np.float32], rng: np.random.Generator,
                         clutter: NDArray[np.bool_] | None) -> NDArray[np.float32]:

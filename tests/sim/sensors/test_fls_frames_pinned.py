@@ -6,7 +6,9 @@ is) covers the bench pose sequence and dataset scenes with K clutter, rough mesh
 basin walls. It was rendered by the code whose every byte equals the renders pinned before the
 speed-ups of the renderer (with OpenBLAS's Haswell kernels, ``OPENBLAS_CORETYPE=Haswell``,
 today's code gives those SHA-256 digests: 4ae6ce2d... bench, 22b99aa6... train/1, f5608036...
-wide/1). Labels (masks, boxes, ray counts, visibility, noise generator state) must be the same
+wide/1). The Rayleigh cases (bench, train/0, wide/1) were re-pinned when the FLS speckle moved to
+the counter-based generator (:mod:`sim.sensors.sonar.speckle_display`): their labels and mean
+intensities did not change, their realised images and noise generator states did. Labels (masks, boxes, ray counts, visibility, noise generator state) must be the same
 on any machine; a change to image formation that shifts the images by more than the
 tolerance fails; on a machine whose numerics are the pinning machine's every byte must match.
 """
@@ -75,8 +77,13 @@ def _gain(monkeypatch, where: str, factor: float) -> None:
     from sim.sensors.sonar.echo_chain import EchoChain
 
     if where == "display":  # the display gain: the float intensities stay, the 8-bit images move
-        inner = EchoChain.display
-        monkeypatch.setattr(EchoChain, "display", lambda self, x: inner(self, x * np.float32(factor)))
+        inner = EchoChain.realise_display
+
+        def louder(self, mean, rng, **kwargs):
+            intensity, _ = inner(self, mean, rng, **kwargs)
+            return intensity, self.display(intensity * np.float32(factor))
+
+        monkeypatch.setattr(EchoChain, "realise_display", louder)
     else:  # the echo level: every intensity and image moves
         inner_mean = EchoChain.mean_intensity
         monkeypatch.setattr(EchoChain, "mean_intensity", lambda self, x: inner_mean(self, x) * np.float32(factor))
@@ -98,7 +105,7 @@ def test_one_label_pixel_or_one_extra_noise_draw_fails(reference, monkeypatch):
     import sim.sensors.fls as fls
     from sim.sensors.sonar.echo_chain import EchoChain
 
-    inner_bins, inner_realise = fls.label_bins, EchoChain.realise
+    inner_bins, inner_realise = fls.label_bins, EchoChain.realise_display
 
     def one_pixel_moved(*args, **kwargs):  # one labelled bin of an object given to another
         mask, extents = inner_bins(*args, **kwargs)
@@ -118,7 +125,7 @@ def test_one_label_pixel_or_one_extra_noise_draw_fails(reference, monkeypatch):
     assert any("mask_polar_sha256" in b for b in bad)
     assert not any("steps" in b or "db_blocks" in b for b in bad)  # the images stay within the tolerance
     monkeypatch.setattr(fls, "label_bins", inner_bins)
-    monkeypatch.setattr(EchoChain, "realise", one_more_draw)
+    monkeypatch.setattr(EchoChain, "realise_display", one_more_draw)
     bad = fr.compare_case(reference.cases["bench"], fr.render_case("bench"))
     assert any("rng_state" in b for b in bad)
 
