@@ -35,10 +35,15 @@ def retired_env(*, env_id: str, **_kwargs) -> None:
     raise DeprecatedEnv(RETIRED[env_id])
 
 
+# batched forms (``gymnasium.make_vec(..., vectorization_mode="vector_entry_point")``)
+_VECTOR_ENVS = {SURVEY_ID: "sim.envs.survey_vector:make_survey_vector_env"}
+
+
 def register_envs() -> None:
     for env_id, entry_point in _ENVS.items():
         if env_id not in registry:
-            register(id=env_id, entry_point=entry_point, disable_env_checker=False)
+            register(id=env_id, entry_point=entry_point, vector_entry_point=_VECTOR_ENVS.get(env_id),
+                     disable_env_checker=False)
     for env_id in RETIRED:
         if env_id not in registry:
             register(id=env_id, entry_point="sim.envs.registration:retired_env", kwargs={"env_id": env_id},

@@ -13,7 +13,6 @@ from typing import Any
 
 import numpy as np
 
-from autonomy.atr import build_detector
 from autonomy.frames import euler_from_rot
 from autonomy.localization import fls_visibility, localize
 from autonomy.messages import Detection, NavEstimate
@@ -23,6 +22,7 @@ from autonomy.world_model.surface import SonarFootprint
 from scenarios.schema import Scenario
 from sim.evaluation.world_model_score import score_world_model
 from sim.events.records import PerceptionResult
+from sim.features.shared_detector import shared_detector
 from sim.scene.seabed import Seabed
 from sim.sensors.fls import FlsRender, FlsSensor
 
@@ -47,7 +47,7 @@ class Perception:
         self.seabed = seabed
         self.nav_source = nav_source
         auto = scenario.autonomy
-        self.detector = build_detector(auto.atr)
+        self.detector = shared_detector(auto.atr)  # one per configuration and process
         #: The ATR's class labels (the class table of the detection messages).
         self.class_names: tuple[str, ...] = tuple(self.detector.class_names)
         self.loc_cfg = auto.localization
