@@ -13,6 +13,8 @@ BENCHES: dict[str, tuple[str, str, str]] = {
     "mission": ("sim.bench.mission", "run", "closed-loop mission, sensors and FLS included; time per stage"),
     "pmha": ("sim.bench.pmha", "run", "PMHA world-model update time"),
     "gym": ("sim.bench.gym", "run", "gymnasium environment step rate"),
+    "vector": ("sim.bench.vector", "run", "batched Survey env (N = 1, 4, 16, 64) steps per second, CPU and memory, "
+                                          "without and with sonar"),
     "tracking": ("sim.bench.tracking", "run", "USBL + sonar target tracker time per 10 Hz tick"),
     "sss": ("sim.bench.sss", "run", "side-scan sonar ping rendering (1000 bins per side)"),
     "msis": ("sim.bench.msis", "run", "scanning sonar pings per second and feature-extraction cost per ping"),

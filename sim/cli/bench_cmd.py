@@ -13,8 +13,8 @@ from sim.cli.args import non_negative_int, positive_int
 from sim.cli.errors import CliError
 from sim.cli.scenario_cmds import DEFAULT_SCENARIO, add_scenario_args, load_scenario_noting, refuse_sweep_only
 
-SLOW_BENCHES = ("mission", "gym", "export", "dataset", "atr", "fls")  # a minute or more
-OPTION_BENCHES = {"workers": ("mission", "gym", "dataset"), "sonar": ("mission",), "model": ("atr",)}  # benches taking each option
+SLOW_BENCHES = ("mission", "gym", "vector", "export", "dataset", "atr", "fls")  # a minute or more
+OPTION_BENCHES = {"workers": ("mission", "gym", "dataset", "vector"), "sonar": ("mission",), "model": ("atr",)}  # benches taking each option
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
@@ -85,7 +85,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON object as the last line")
     p.add_argument("--workers", type=positive_int, default=None, metavar="N",
                    help="mission, gym, dataset: also time N threads (mission: the pipelined loop), N "
-                        "vector-env processes (gym) or N dataset worker processes against one, in the same run")
+                        "vector-env processes (gym) or N dataset worker processes against one, in the same run; "
+                        "vector: the worker processes (default the cores)")
     p.add_argument("--no-sonar", action="store_true", help="mission: without the forward-looking sonar "
                                                            "(and so without perception)")
     p.add_argument("--model", default=None, metavar="FILE.onnx",

@@ -26,9 +26,10 @@ class EnvBlock:
     worker process of :class:`SurveyVectorEnv` holds)."""
 
     def __init__(self, n: int, scenario: str | Path | Scenario, options: SurveyEnvOptions | dict | None,
-                 overrides: tuple[str, ...]) -> None:
+                 overrides: tuple[str, ...], same_step: bool = False) -> None:
         self.envs = [SurveyEnv(scenario, options, overrides) for _ in range(n)]
         self.needs_reset = np.zeros(n, dtype=bool)
+        self.same_step = same_step
 
     def reset(self, seeds: list[int | None], options: dict | None) -> list[tuple[dict, dict]]:
         self.needs_reset[:] = False
@@ -43,15 +44,20 @@ class EnvBlock:
                 self.needs_reset[i] = False
             else:
                 obs, reward, term, trunc, info = env.step(a)
+                if self.same_step and (term or trunc):  # gymnasium's SAME_STEP: the final step in the info
+                    final = {"final_obs": obs, "final_info": info}
+                    obs, info = env.reset()
+                    info = {**final, **info}
+                else:
+                    self.needs_reset[i] = term or trunc
                 out.append((obs, float(reward), bool(term), bool(trunc), info))
-                self.needs_reset[i] = term or trunc
         return out
 
 
-def _worker(conn, n: int, scenario, options, overrides) -> None:
+def _worker(conn, n: int, scenario, options, overrides, same_step: bool) -> None:
     """A worker process: build a block, then answer ``reset`` / ``step`` / ``close``."""
     try:
-        block = EnvBlock(n, scenario, options, overrides)
+        block = EnvBlock(n, scenario, options, overrides, same_step)
         conn.send(("ok", None))
     except BaseException as e:  # reported to the parent, which raises
         conn.send(("error", f"{type(e).__name__}: {e}"))
@@ -93,7 +99,7 @@ class SurveyVectorEnv(VectorEnv):
     |---|---|
     | observation space | ``Dict`` of the single env's fields, each batched along a leading axis of N |
     | action space | ``Box([-1, 1], (N, 3))`` |
-    | autoreset | ``AutoresetMode.NEXT_STEP``: the step after an env's episode ends resets it (its action is ignored; reward 0, not terminated, not truncated) |
+    | autoreset | ``AutoresetMode.NEXT_STEP`` (default): the step after an env's episode ends resets it (its action is ignored; reward 0, not terminated, not truncated); ``SAME_STEP``: the ending step returns the new episode's first observation, the final one in ``info["final_obs"]`` / ``info["final_info"]`` |
     | seeding | ``reset(seed=s)``: env ``i`` is reset with ``s + i``; a list gives one seed per env; None continues each env's generator |
     | determinism | env ``i``'s trajectory depends only on its own seed and actions: the same whatever N, the order of the envs and the number of workers |
     | infos | gymnasium's vector convention: each key an array over envs with a ``_key`` mask |
@@ -104,9 +110,12 @@ class SurveyVectorEnv(VectorEnv):
             every env).
         workers: processes holding the envs (1 <= workers <= N; default 1, this process).
         context: ``multiprocessing`` start method for the workers (None: the platform's default).
+    autoreset_mode: ``AutoresetMode.NEXT_STEP`` or ``AutoresetMode.SAME_STEP`` (what
+        Stable-Baselines3's vector envs do; :mod:`sim.envs.sb3_vec`).
 
     Raises:
-        ValueError: ``num_envs`` < 1 or ``workers`` outside [1, num_envs]; as ``SurveyEnv``.
+        ValueError: ``num_envs`` < 1, ``workers`` outside [1, num_envs] or another autoreset mode;
+        as ``SurveyEnv``.
         RuntimeError: a worker failed (its error message in the text).
     """
 
@@ -114,11 +123,16 @@ class SurveyVectorEnv(VectorEnv):
 
     def __init__(self, num_envs: int, scenario: str | Path | Scenario = "cssn_lawnmower",
                  options: SurveyEnvOptions | dict | None = None, overrides: tuple[str, ...] = (), *,
-                 workers: int = 1, context: str | None = None) -> None:
+                 workers: int = 1, context: str | None = None,
+                 autoreset_mode: AutoresetMode = AutoresetMode.NEXT_STEP) -> None:
         if not isinstance(num_envs, int | np.integer) or num_envs < 1:
             raise ValueError(f"num_envs must be an integer >= 1, got {num_envs!r}")
         if not isinstance(workers, int | np.integer) or not 1 <= workers <= num_envs:
             raise ValueError(f"workers must be an integer in [1, num_envs={num_envs}], got {workers!r}")
+        if autoreset_mode not in (AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP):
+            raise ValueError(f"autoreset_mode must be NEXT_STEP or SAME_STEP, got {autoreset_mode!r}")
+        self.metadata = {**self.metadata, "autoreset_mode": autoreset_mode}
+        same_step = autoreset_mode == AutoresetMode.SAME_STEP
         self.num_envs = int(num_envs)
         self.workers = int(workers)
         sizes = [len(b) for b in np.array_split(np.arange(self.num_envs), self.workers)]
@@ -128,14 +142,14 @@ class SurveyVectorEnv(VectorEnv):
         self._procs: list = []
         self.closed = False
         if self.workers == 1:
-            self._block = EnvBlock(self.num_envs, scenario, options, overrides)
+            self._block = EnvBlock(self.num_envs, scenario, options, overrides, same_step)
             single = self._block.envs[0]
         else:
             single = SurveyEnv(scenario, options, overrides)  # the spaces (and the inputs' checks) here
             ctx = mp.get_context(context)
             for n in sizes:
                 parent, child = ctx.Pipe()
-                p = ctx.Process(target=_worker, args=(child, n, scenario, options, overrides), daemon=True)
+                p = ctx.Process(target=_worker, args=(child, n, scenario, options, overrides, same_step), daemon=True)
                 p.start()
                 child.close()
                 self._conns.append(parent)
@@ -151,6 +165,7 @@ class SurveyVectorEnv(VectorEnv):
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.decision_interval_s = single.decision_interval_s
         self._fields = tuple(self.single_observation_space.spaces)
+        del single  # the block or the workers hold the envs
 
     # ------------------------------------------------------------------ gymnasium API
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None

@@ -1,0 +1,93 @@
+"""The batched Survey env as a Stable-Baselines3 ``VecEnv`` ([Raffin2021]; the ``train`` extra).
+
+Stable-Baselines3 keeps its own vector-env interface (``reset() -> obs``, ``step_async`` /
+``step_wait -> (obs, rewards, dones, infos)`` with one info dict per env, the ending step
+returning the next episode's first observation and the final one in
+``info["terminal_observation"]``, ``info["TimeLimit.truncated"]`` for a time limit).
+:class:`Sb3SurveyVecEnv` runs a :class:`sim.envs.survey_vector.SurveyVectorEnv` in
+``AutoresetMode.SAME_STEP`` and translates, so PPO, A2C, SAC ... train on it as on their own
+vector envs, with its worker processes and shared detector.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from gymnasium.vector import AutoresetMode
+from stable_baselines3.common.vec_env.base_vec_env import VecEnv
+
+from scenarios.schema import Scenario
+from sim.envs.survey_task import SurveyEnvOptions
+from sim.envs.survey_vector import SurveyVectorEnv
+
+
+class Sb3SurveyVecEnv(VecEnv):
+    """N Survey envs for Stable-Baselines3.
+
+    Args:
+        num_envs, scenario, options, overrides, workers: as :class:`SurveyVectorEnv`.
+        seed: root seed; env ``i`` is reset with ``seed + i`` on the first :meth:`reset`
+            (None: unseeded), and continues its own generator after that.
+
+    Raises:
+        ValueError: as :class:`SurveyVectorEnv`.
+    """
+
+    def __init__(self, num_envs: int, scenario: str | Path | Scenario = "cssn_lawnmower",
+                 options: SurveyEnvOptions | dict | None = None, overrides: tuple[str, ...] = (), *,
+                 workers: int = 1, seed: int | None = None) -> None:
+        self.venv = SurveyVectorEnv(num_envs, scenario, options, overrides, workers=workers,
+                                    autoreset_mode=AutoresetMode.SAME_STEP)
+        super().__init__(num_envs, self.venv.single_observation_space, self.venv.single_action_space)
+        self._seed = seed
+        self._seeded = False
+        self._actions: np.ndarray | None = None
+
+    def reset(self) -> dict[str, np.ndarray]:
+        seed = None if self._seeded or self._seed is None else self._seed
+        self._seeded = True
+        obs, _ = self.venv.reset(seed=seed)
+        return obs
+
+    def step_async(self, actions: np.ndarray) -> None:
+        self._actions = np.asarray(actions, dtype=np.float32).reshape(self.num_envs, -1)
+
+    def step_wait(self):
+        obs, rewards, terms, truncs, infos = self.venv.step(self._actions)
+        dones = terms | truncs
+        out: list[dict[str, Any]] = []
+        for i in range(self.num_envs):
+            info = {k: v[i] for k, v in infos.items()
+                    if not k.startswith("_") and k not in ("final_obs", "final_info") and infos.get(f"_{k}", dones | True)[i]}
+            if dones[i]:
+                final = infos["final_obs"]  # gymnasium keeps dict observations as an object array
+                info["terminal_observation"] = (final[i] if not isinstance(final, dict)
+                                                else {k: final[k][i] for k in final if not k.startswith("_")})
+                info["TimeLimit.truncated"] = bool(truncs[i] and not terms[i])
+            out.append(info)
+        return obs, rewards.astype(np.float32), dones, out
+
+    def close(self) -> None:
+        self.venv.close()
+
+    # the rest of SB3's interface: attributes and methods of the envs, which live in the workers
+    def get_attr(self, attr_name: str, indices=None) -> list[Any]:
+        if attr_name == "render_mode":
+            return [None] * len(self._indices(indices))
+        raise AttributeError(f"Sb3SurveyVecEnv: {attr_name!r} of the envs is not reachable (they live in the workers)")
+
+    def set_attr(self, attr_name: str, value: Any, indices=None) -> None:
+        raise AttributeError(f"Sb3SurveyVecEnv: cannot set {attr_name!r} on the envs")
+
+    def env_method(self, method_name: str, *method_args, indices=None, **method_kwargs) -> list[Any]:
+        raise AttributeError(f"Sb3SurveyVecEnv: cannot call {method_name!r} on the envs")
+
+    def env_is_wrapped(self, wrapper_class, indices=None) -> list[bool]:
+        return [False] * len(self._indices(indices))
+
+    def _indices(self, indices) -> list[int]:
+        if indices is None:
+            return list(range(self.num_envs))
+        return [indices] if isinstance(indices, int) else list(indices)
