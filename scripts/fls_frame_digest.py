@@ -66,7 +66,7 @@ def digest(args) -> int:
 
     FlsSensor.render = hashed
     try:
-        part("bench", lambda: bench_fls.run(scenario, args.bench_frames, without_truth=False))
+        part("bench", lambda: bench_fls.run(scenario, args.bench_frames, without_truth=False, baseline=False))
         for rz_name in ("train", "wide", "heldout"):
             rz = RANDOMIZATION_PRESETS[rz_name]
             for i in range(args.scenes):

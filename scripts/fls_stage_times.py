@@ -81,13 +81,13 @@ def main() -> None:
     for label, (module, path) in {**STAGES, **NESTED, "render": ("sim.sensors.fls", "FlsSensor.render")}.items():
         _wrap(totals, label, module, path)
     scenario = load_scenario(args.scenario)
-    bench_fls.run(scenario, 3, without_truth=False)  # imports, compiled kernels, caches
+    bench_fls.run(scenario, 3, without_truth=False, baseline=False)  # imports, compiled kernels, caches
     totals.clear()
     if args.dataset_scenes > 0:
         n = _dataset_frames(args.dataset_scenes, args.dataset_frames)
         extra = {"dataset_scenes": args.dataset_scenes, "cpu_frames_per_s": round(n / totals["render"], 2)}
     else:
-        result = bench_fls.run(scenario, args.frames, without_truth=False)
+        result = bench_fls.run(scenario, args.frames, without_truth=False, baseline=False)
         n = args.frames + 1  # the bench's own warm-up frame is timed too
         extra = {"cpu_frames_per_s": result["cpu_frames_per_s"]}
     ms = {k: round(1e3 * v / n, 3) for k, v in sorted(totals.items(), key=lambda kv: -kv[1])}

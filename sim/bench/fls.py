@@ -6,10 +6,13 @@ scenario's sonar limited to a 30 m range window, noise on, ground truth included
 same frames again without the ground truth (what the mission renders when no observer reads
 it: no scoring, no recording), from the same noise state; the first frames are rendered again
 both ways, untimed, and compared byte for byte. With ``baseline`` (the default when the
-scenario uses the counter-based speckle), the same frames are rendered again in the same run
-with ``speckle_generator: stream`` (every pixel drawn from the generator's stream, the display
-in its own passes: the renderer before the one-pass speckle), the two interleaved in rounds so
-that a machine's drift falls on both; ``speedup_cpu`` is the ratio of frames per CPU-second.
+scenario uses the counter-based speckle), the same frames are rendered again in the same run by
+the renderer before the speed-ups of the RL-throughput work (``speckle_generator: stream``:
+every pixel drawn from the generator's stream, the display in its own passes; MuJoCo's ray
+casts), by the scenario's renderer, and, where ``embreex`` is installed, by the scenario's
+renderer with Embree's ray casts (``physics.ray_caster: embree``), interleaved in rounds so that
+a machine's drift falls on all; each one's ``speedup_cpu`` is its frames per CPU-second over the
+renderer before's.
 """
 
 from __future__ import annotations
@@ -23,6 +26,7 @@ from scenarios.config.fls import FlsConfig
 from scenarios.schema import Scenario
 from sim.rng import component_rng
 from sim.sensors.fls import FlsSensor
+from sim.sensors.embree_scene import available as embree_available
 from sim.sensors.raycast import MujocoRayCaster
 from sim.scene.world import build_world
 from scenarios.fls_presets import PRESETS
@@ -73,9 +77,9 @@ def run(scenario: Scenario, n_frames: int = 60, range_window_m: tuple[float, flo
         ``raw_raycast_fraction`` (time inside ``mj_multiRay`` calls / total),
         ``n_rays`` (base rays per frame), ``rays_cast_per_frame``, ``n_beams``, ``n_bins``,
         ``visible_objects`` (mean per frame); ``baseline`` (see the module; None: only when the
-        scenario's sonar uses the counter-based speckle): ``stream`` (``cpu_ms_per_frame``,
-        ``cpu_frames_per_s`` of the stream-drawn renderer), ``counter`` (the same, timed in the
-        same rounds) and ``speedup_cpu``; ``no_truth`` the same frames rendered without the
+        scenario's sonar uses the counter-based speckle): ``before``, ``scenario`` and
+        ``embree`` (when installed), each ``cpu_ms_per_frame``, ``cpu_frames_per_s`` and
+        ``speedup_cpu``; ``no_truth`` the same frames rendered without the
         ground truth (``frames_per_s``, ``ms_per_frame``, ``cpu_ms_per_frame``,
         ``cpu_frames_per_s``, ``identical_frames``: the fan and polar images of the first
         :data:`IDENTITY_FRAMES` frames byte-identical with and without the truth, rendered
@@ -90,7 +94,7 @@ def run(scenario: Scenario, n_frames: int = 60, range_window_m: tuple[float, flo
     cfg = base
     world = build_world(scenario)
     caster = _TimedCaster(MujocoRayCaster(world.model, world.data, world.geom_object_id, world.geom_reflectivity,
-                                          world.vehicle_body_id))
+                                          world.vehicle_body_id, backend=scenario.physics.ray_caster))
     mount = world.site_pos_body(cfg.mount_site) if cfg.mount_site in world.site_ids else np.zeros(3)
     sensor = FlsSensor(cfg, mount, component_rng(scenario.seed, "fls"))
 
@@ -133,37 +137,41 @@ def run(scenario: Scenario, n_frames: int = 60, range_window_m: tuple[float, flo
     if baseline is None:
         baseline = cfg.speckle_generator == "counter"
     if baseline:
-        result["baseline"] = _against_stream(scenario, cfg, mount, pose, R_nb, caster, world.objects, n_frames)
+        result["baseline"] = _against_before(scenario, cfg, mount, pose, R_nb, world, n_frames)
     if without_truth:
         result["no_truth"] = _without_truth(scenario, cfg, mount, pose, R_nb, caster, world.objects, n_frames)
     return result
 
 
-BASELINE_ROUNDS = 3  # counter / stream rounds, interleaved
+BASELINE_ROUNDS = 3  # rounds of the renderers compared, interleaved
 
 
-def _against_stream(scenario: Scenario, cfg: FlsConfig, mount: np.ndarray, pose, R_nb: np.ndarray, caster, objects,
+def _against_before(scenario: Scenario, cfg: FlsConfig, mount: np.ndarray, pose, R_nb: np.ndarray, world,
                     n_frames: int) -> dict:
-    """CPU per frame of the bench's frames with the counter-based speckle and with the stream
-    one, in :data:`BASELINE_ROUNDS` interleaved rounds (with the ground truth)."""
-    sensors = {"counter": FlsSensor(cfg.model_copy(update={"speckle_generator": "counter"}), mount,
-                                    component_rng(scenario.seed, "fls")),
-               "stream": FlsSensor(cfg.model_copy(update={"speckle_generator": "stream"}), mount,
-                                   component_rng(scenario.seed, "fls"))}
+    """CPU per frame of the bench's frames by the renderer before, the scenario's and the
+    scenario's with Embree, in :data:`BASELINE_ROUNDS` interleaved rounds (with the ground truth)."""
+    def caster(backend: str) -> MujocoRayCaster:
+        return MujocoRayCaster(world.model, world.data, world.geom_object_id, world.geom_reflectivity,
+                               world.vehicle_body_id, backend=backend)
+
+    variants = {"before": (cfg.model_copy(update={"speckle_generator": "stream"}), caster("mujoco")),
+                "scenario": (cfg, caster(scenario.physics.ray_caster))}
+    if embree_available() and scenario.physics.ray_caster != "embree":
+        variants["embree"] = (cfg, caster("embree"))
+    sensors = {name: (FlsSensor(c, mount, component_rng(scenario.seed, "fls")), cast)
+               for name, (c, cast) in variants.items()}
     cpu = dict.fromkeys(sensors, 0.0)
-    for s in sensors.values():
-        s.render(0.0, pose(0), R_nb, caster, objects)  # warm-up
+    for s, cast in sensors.values():
+        s.render(0.0, pose(0), R_nb, cast, world.objects)  # warm-up
     for _ in range(BASELINE_ROUNDS):
-        for name, s in sensors.items():
+        for name, (s, cast) in sensors.items():
             c0 = time.process_time()
             for i in range(n_frames):
-                s.render(i / 3.0, pose(i), R_nb, caster, objects)
+                s.render(i / 3.0, pose(i), R_nb, cast, world.objects)
             cpu[name] += time.process_time() - c0
     n = BASELINE_ROUNDS * n_frames
-    out = {name: {"cpu_ms_per_frame": round(1e3 * c / n, 3), "cpu_frames_per_s": round(n / c, 2)}
-           for name, c in cpu.items()}
-    out["speedup_cpu"] = round(cpu["stream"] / cpu["counter"], 3)
-    return out
+    return {name: {"cpu_ms_per_frame": round(1e3 * c / n, 3), "cpu_frames_per_s": round(n / c, 2),
+                   "speedup_cpu": round(cpu["before"] / c, 3)} for name, c in cpu.items()}
 
 
 def _without_truth(scenario: Scenario, cfg: FlsConfig, mount: np.ndarray, pose, R_nb: np.ndarray, caster,

@@ -121,7 +121,7 @@ def render_case(case: str, perturb: Callable[[], object] | None = None) -> CaseR
         perturb()
     with capture(CaseRenders()) as out:
         if case == "bench":
-            bench_fls.run(load_scenario("cssn_lawnmower"), 2, without_truth=False)
+            bench_fls.run(load_scenario("cssn_lawnmower"), 2, without_truth=False, baseline=False)
         else:
             name, index = case.split("/")
             spec = scene_spec(0, int(index), RANDOMIZATION_PRESETS[name])

@@ -158,6 +158,7 @@ class SonarPipeline:
         render_setup = pickle.dumps({
             "sonar": sonar, "model": model, "geom_object_id": world.geom_object_id,
             "geom_reflectivity": world.geom_reflectivity, "vehicle_body_id": world.vehicle_body_id,
+            "ray_caster": physics.caster.backend,
             "geom_xpos": data.geom_xpos.copy(), "geom_xmat": data.geom_xmat.copy(), "moving_geoms": self._moving,
             "objects": physics.objects(), "truth_to_perception": getattr(perception, "nav_source", "") == "truth",
         }, protocol=pickle.HIGHEST_PROTOCOL)

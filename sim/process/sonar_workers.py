@@ -90,7 +90,8 @@ def render_main(conn: Any, to_detection: Any, ring_detection: FrameRing, to_main
         sonar, model, moving = s["sonar"], s["model"], s["moving_geoms"]
         data = mujoco.MjData(model)
         data.geom_xpos[:], data.geom_xmat[:] = s["geom_xpos"], s["geom_xmat"]
-        caster = MujocoRayCaster(model, data, s["geom_object_id"], s["geom_reflectivity"], s["vehicle_body_id"])
+        caster = MujocoRayCaster(model, data, s["geom_object_id"], s["geom_reflectivity"], s["vehicle_body_id"],
+                                 backend=s["ray_caster"])
         objects, with_truth = s["objects"], s["truth_to_perception"]
         shared_ids = {id(v): name for name, v in shared_objects(sonar).items()}
         while True:

@@ -69,7 +69,8 @@ class Physics:
         self.model, self.data = self.world.model, self.world.data
         self.dt_s = float(self.model.opt.timestep)
         self.caster = MujocoRayCaster(self.model, self.data, self.world.geom_object_id,
-                                      self.world.geom_reflectivity, self.world.vehicle_body_id)
+                                      self.world.geom_reflectivity, self.world.vehicle_body_id,
+                                      backend=scenario.physics.ray_caster)
         self.vehicle = VehicleDynamics(self.model, self.data, self.params, None, body_id=self.world.vehicle_body_id)
         self.extras: dict[str, SurfaceVesselDynamics] = {
             name: SurfaceVesselDynamics(self.model, self.data, load_params_file(params_path(cfg.preset)),

@@ -13,6 +13,9 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from sim.sensors import embree_scene
+from sim.sensors.embree_scene import TriangleScene
+
 FloatArray = NDArray[np.float64]
 BACKGROUND_ID = -1  # object id of seabed, walls and anything not a scene object
 
@@ -69,11 +72,26 @@ class MujocoRayCaster:
         geom_reflectivity: (ngeom,) acoustic reflectivity per geom in [0, 1].
         exclude_body_id: body whose geoms rays ignore (the hull); -1 for none.
         geomgroup: (6,) ``mj_multiRay`` group mask; default: the groups of the acoustic geoms.
+        backend: ``"mujoco"`` (default): ``mj_multiRay`` always; ``"embree"``: Embree (:mod:`sim.sensors.embree_scene`) where
+            ``embreex`` is installed, every geom the rays may meet is a mesh, box or plane and
+            the scene stays still, else ``mj_multiRay`` (the scenario's ``physics.ray_caster``).
+            :meth:`exit_distances` and :meth:`object_bounding_sphere` are MuJoCo's either way.
+
+    Attributes:
+        backend: the backend asked for; :attr:`uses_embree` whether the last cast used Embree.
     """
 
     def __init__(self, model, data, geom_object_id: NDArray[np.integer], geom_reflectivity: FloatArray,
-                 exclude_body_id: int, geomgroup: NDArray[np.uint8] | None = None) -> None:
+                 exclude_body_id: int, geomgroup: NDArray[np.uint8] | None = None, *,
+                 backend: str = "mujoco") -> None:
         import mujoco
+
+        if backend not in ("mujoco", "embree"):
+            raise ValueError(f"backend must be 'mujoco' or 'embree', got {backend!r}")
+        self.backend = backend
+        self.uses_embree = False
+        self._embree: TriangleScene | None | bool = None  # None: not tried yet; False: not used
+        self._embree_isolated: dict[int, TriangleScene | bool] = {}
 
         self._mj = mujoco
         self.model = model
@@ -104,9 +122,48 @@ class MujocoRayCaster:
         self._isolated_group[5] = 1
         self._spheres: dict[int, tuple[bytes, FloatArray, float]] = {}  # id -> (geom poses, centre, radius)
 
+    def _embree_scene(self, key: int | None) -> TriangleScene | None:
+        """The Embree scene of every cast geom (``key`` None) or of object ``key`` alone, at the
+        geoms' current poses; None where MuJoCo casts (see ``backend``)."""
+        if self.backend != "embree" or not embree_scene.available():
+            return None
+        scene = self._embree if key is None else self._embree_isolated.get(key)
+        if scene is False:
+            return None
+        if scene is None:
+            if key is None:
+                groups = self.geomgroup[np.clip(self.model.geom_group, 0, 5)] > 0
+                geoms = np.flatnonzero(groups & (np.asarray(self.model.geom_bodyid) != self.exclude_body_id))
+            else:
+                geoms = self._object_geoms.get(int(key), np.zeros(0, np.int64))
+            try:
+                scene = TriangleScene(self.model, self.data, geoms)
+            except ValueError:  # a sphere, cylinder, height field...: MuJoCo casts
+                scene = False
+            if key is None:
+                self._embree = scene
+            else:
+                self._embree_isolated[key] = scene
+            if scene is False:
+                return None
+        scene.current()
+        if scene.rebuilds > embree_scene.MAX_REBUILDS:  # a moving scene: MuJoCo from now on
+            if key is None:
+                self._embree = False
+            else:
+                self._embree_isolated[key] = False
+            return None
+        return scene
+
     def _raw(self, origin_ned: FloatArray, dirs_ned: FloatArray, max_range_m: float, geomgroup: NDArray[np.uint8],
              body_exclude: int) -> tuple[NDArray[np.int32], FloatArray, FloatArray]:
-        """``mj_multiRay`` into fresh result arrays: geom ids (N,), distances (N,), normals (N, 3)."""
+        """``mj_multiRay`` (or Embree's casts, see ``backend``) into fresh result arrays: geom
+        ids (N,), distances (N,), normals (N, 3)."""
+        if geomgroup is self.geomgroup and body_exclude == self.exclude_body_id:
+            scene = self._embree_scene(None)
+            self.uses_embree = scene is not None
+            if scene is not None:
+                return scene.cast(origin_ned, np.ascontiguousarray(dirs_ned, dtype=float).reshape(-1, 3))
         n = int(dirs_ned.shape[0])
         geomid, dist, normal = np.empty(n, dtype=np.int32), np.empty(n), np.empty((n, 3))
         origin = np.ascontiguousarray(origin_ned, dtype=float).reshape(3)
@@ -138,6 +195,12 @@ class MujocoRayCaster:
         geoms = self._object_geoms.get(int(object_id))
         if geoms is None or len(dirs_ned) == 0:
             return np.full(len(dirs_ned), np.inf)
+        scene = self._embree_scene(int(object_id))
+        if scene is not None:
+            _, dist, _ = scene.cast(origin_ned, np.ascontiguousarray(dirs_ned, dtype=float).reshape(-1, 3))
+            d = np.where(dist >= 0.0, dist, np.inf)
+            d[d > max_range_m] = np.inf
+            return d
         saved = self.model.geom_group.copy()
         try:
             self.model.geom_group[:] = 0
