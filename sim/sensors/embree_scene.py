@@ -19,6 +19,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from sim.sensors.sonar.fused_passes import kernels
+
 try:  # optional: x86-64 and macOS wheels; elsewhere MuJoCo casts every ray
     from embreex import mesh_construction as _mc
     from embreex import rtcore_scene as _rs
@@ -84,7 +86,6 @@ class TriangleScene:
         self._local = parts
         offsets = np.cumsum([0] + [len(f) for _, f in parts])
         self._tri_geom = np.repeat(self.geoms, np.diff(offsets)).astype(np.int32)
-        self._tri_geom = np.append(self._tri_geom, np.int32(-1))  # primID -1 (a miss) -> -1
         self._scene = None
         self._pose_key: bytes | None = None
         self.rebuilds = 0
@@ -120,17 +121,10 @@ class TriangleScene:
         n = int(dirs_ned.shape[0])
         if n == 0 or not len(self.geoms):
             return np.full(n, -1, np.int32), np.full(n, -1.0), np.zeros((n, 3))
-        d32 = np.ascontiguousarray(dirs_ned, dtype=np.float32).reshape(-1, 3)
-        o32 = np.broadcast_to(np.asarray(origin_ned, dtype=np.float32).reshape(1, 3), (n, 3)).copy()
-        out = self._scene.run(o32, d32, output=1)
-        prim = out["primID"]
-        hit = prim >= 0
-        geomid = self._tri_geom[np.where(hit, prim, -1)]
-        dist = np.where(hit, out["tfar"].astype(np.float64), -1.0)
-        ng = out["Ng"].astype(np.float64)
-        norm = np.sqrt(np.einsum("ij,ij->i", ng, ng))
-        np.divide(ng, norm[:, None], out=ng, where=norm[:, None] > 0.0)
-        facing = np.einsum("ij,ij->i", ng, dirs_ned) > 0.0
-        ng[facing] *= -1.0
-        ng[~hit] = 0.0
-        return geomid, dist, ng
+        dirs = np.ascontiguousarray(dirs_ned, dtype=float).reshape(-1, 3)
+        o32 = np.empty((n, 3), dtype=np.float32)
+        o32[:] = np.asarray(origin_ned, dtype=np.float32).reshape(1, 3)
+        out = self._scene.run(o32, dirs.astype(np.float32), output=1)
+        geomid, dist, normal = np.empty(n, dtype=np.int32), np.empty(n), np.empty((n, 3))
+        kernels().triangle_hits(out["primID"], out["tfar"], out["Ng"], dirs, self._tri_geom, geomid, dist, normal)
+        return geomid, dist, normal

@@ -446,3 +446,30 @@ def counter_speckle_display(mean, add, gain, key0, key1, exp_table, lut, shift, 
             v = (mean[r, c] + add) * exp_table[h16[c]]
             intensity[r, c] = v
             out[r, c] = lut[u32(f32_bits(f32(v * gain[c])) >> shift)]
+
+
+@nb.njit(cache=True, nogil=True)
+def triangle_hits(prim, tfar, ng, dirs, tri_geom, geomid, dist, normal):
+    """Embree's per-ray results as ``mj_multiRay``'s: ``geomid = tri_geom[prim]`` (-1 where
+    ``prim`` < 0, a miss), ``dist = tfar`` (-1 where missed), ``normal`` the unit geometric
+    normal ``ng`` turned to face the ray (zeros where missed, or where ``ng`` is 0)."""
+    for i in range(prim.size):
+        p = prim[i]
+        if p < 0:
+            geomid[i] = -1
+            dist[i] = -1.0
+            normal[i, 0] = 0.0
+            normal[i, 1] = 0.0
+            normal[i, 2] = 0.0
+            continue
+        geomid[i] = tri_geom[p]
+        dist[i] = tfar[i]
+        x, y, z = float(ng[i, 0]), float(ng[i, 1]), float(ng[i, 2])
+        n = np.sqrt(x * x + y * y + z * z)
+        if n > 0.0:
+            if x * dirs[i, 0] + y * dirs[i, 1] + z * dirs[i, 2] > 0.0:
+                n = -n
+            x, y, z = x / n, y / n, z / n
+        normal[i, 0] = x
+        normal[i, 1] = y
+        normal[i, 2] = z
