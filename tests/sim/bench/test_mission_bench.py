@@ -23,7 +23,7 @@ def test_no_sonar_and_workers_report_both_loops_of_one_run():
 
 
 @pytest.mark.parametrize("argv, says", [
-    (["bench", "physics", "--workers", "2"], "--workers: only for bench mission, gym, dataset, not physics"),
+    (["bench", "physics", "--workers", "2"], "--workers: only for bench mission, gym, dataset, vector, not physics"),
     (["bench", "pmha", "--no-sonar"], "--no-sonar: only for bench mission, not pmha"),
     (["bench", "mission", "--workers", "0"], "--workers: must be a whole number >= 1"),
 ])
