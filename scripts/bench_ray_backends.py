@@ -48,12 +48,14 @@ def compare(args) -> int:
     if not embree_scene.available():
         raise CliError("this comparison needs Embree's binding: pip install 'auvsim[fast]' (embreex, x86-64 wheels)")
     scenario = load_scenario(args.scenario, [])
-    if scenario.sensors.fls is None:
-        raise CliError(f"--scenario {args.scenario}: has no forward-looking sonar (sensors.fls)")
+    fls = scenario.sensors.get("fls")
+    if fls is None or fls.kind != "fls":
+        raise CliError(f"--scenario {args.scenario}: has no forward-looking sonar entry sensors.fls (kind fls) whose "
+                       "fan to cast; use cssn_lawnmower or a scenario with one")
     world = build_world(scenario)
     casters = {b: MujocoRayCaster(world.model, world.data, world.geom_object_id, world.geom_reflectivity,
                                   world.vehicle_body_id, backend=b) for b in ("mujoco", "embree")}
-    cfg = FlsConfig(**{**scenario.sensors.fls.model_dump(), "range_window_m": (1.0, 30.0)})
+    cfg = FlsConfig(**{**fls.model_dump(), "range_window_m": (1.0, 30.0)})
     sensor = FlsSensor(cfg, rng=np.random.default_rng(0))
     centroids = np.array([o.centroid_ned for o in world.objects]) if world.objects else np.zeros((1, 3))
     seabed_z = float(world.seabed.depth_at(*centroids[:, :2].mean(axis=0)))

@@ -24,15 +24,10 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from sim.cli.app import run_script, script_parser  # noqa: E402
-from sim.cli.args import positive_int  # noqa: E402
+from sim.cli.args import non_negative_int, positive_float, positive_int  # noqa: E402
 from sim.cli.errors import CliError  # noqa: E402
 
-
-def _positive_float(text: str) -> float:
-    v = float(text)
-    if not v > 0.0:
-        raise ValueError(text)
-    return v
+MAX_SEED = 2**32 - 1 - 10_000  # Stable-Baselines3 seeds numpy's legacy generator: below 2**32, per env seed + i
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -43,9 +38,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--workers", type=positive_int, default=None, help="worker processes (default the cores, at most N)")
     ap.add_argument("--timesteps", type=positive_int, default=30000, help="env steps of training (default 30000)")
     ap.add_argument("--n-steps", type=positive_int, default=128, help="PPO rollout length per env (default 128)")
-    ap.add_argument("--max-episode-s", type=_positive_float, default=60.0, help="episode time limit, s (default 60)")
+    ap.add_argument("--max-episode-s", type=positive_float, default=60.0, help="episode time limit, s (default 60)")
     ap.add_argument("--sonar", action="store_true", help="with the FLS, ATR, world model and the sonar image")
-    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--seed", type=non_negative_int, default=0, help=f"root seed, 0 to {MAX_SEED} (default 0)")
     ap.add_argument("--out", type=Path, default=None, help="folder for ppo_survey.json and ppo_survey.png")
     return run_script(ap, train, argv)
 
@@ -65,8 +60,15 @@ def train(args) -> int:
 
     from sim.envs.sb3_vec import Sb3SurveyVecEnv
 
-    if args.out is not None and args.out.exists() and not args.out.is_dir():
-        raise CliError(f"--out {args.out}: exists and is not a folder")
+    if args.seed > MAX_SEED:
+        raise CliError(f"--seed: must be a whole number from 0 to {MAX_SEED}, got {args.seed}")
+    if args.out is not None:  # made now, so that a bad path costs no training
+        if args.out.exists() and not args.out.is_dir():
+            raise CliError(f"--out {args.out}: exists and is not a folder")
+        try:
+            args.out.mkdir(parents=True, exist_ok=True)
+        except OSError as e:
+            raise CliError(f"--out {args.out}: cannot make the folder ({e.strerror})") from None
     workers = min(args.workers or os.cpu_count() or 1, args.n_envs)
     options = {"sonar": args.sonar, "max_episode_s": args.max_episode_s}
     torch.set_num_threads(1)
@@ -91,7 +93,7 @@ def train(args) -> int:
 
         def _on_rollout_end(self) -> None:
             row = {"env_steps": int(self.num_timesteps), "episodes": len(self.current),
-                   "mean_return": float(np.mean(self.current)) if self.current else None}
+                   "mean_return": round(float(np.mean(self.current)), 4) if self.current else None}
             self.rows.append(row)
             print(f"ppo_survey: {row['env_steps']} env steps, {row['episodes']} episodes ended, mean return "
                   f"{row['mean_return']}", file=sys.stderr, flush=True)
@@ -122,7 +124,6 @@ def train(args) -> int:
               "random_policy_mean_return": float(np.mean(random_returns)), "random_episodes": len(random_returns),
               "train_wall_s": round(train_wall, 1), "cpu_s": round(time.process_time() - c0, 1)}
     if args.out is not None:
-        args.out.mkdir(parents=True, exist_ok=True)
         (args.out / "ppo_survey.json").write_text(json.dumps(result, indent=1))
         _plot(result, args.out / "ppo_survey.png")
     print(json.dumps(result))
@@ -151,8 +152,8 @@ def _plot(result: dict, path: Path) -> None:
         cv2.putText(img, "random policy", (w - m - 120, yr - 5), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (0, 0, 200), 1)
         pts = np.array([px(a, b) for a, b in zip(x, y)], np.int32)
         cv2.polylines(img, [pts], False, (200, 80, 0), 2)
-        cv2.putText(img, f"{lo:.1f}", (5, h - m), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (0, 0, 0), 1)
-        cv2.putText(img, f"{hi:.1f}", (5, m), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (0, 0, 0), 1)
+        cv2.putText(img, f"{lo:.2f}", (5, h - m), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (0, 0, 0), 1)
+        cv2.putText(img, f"{hi:.2f}", (5, m), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (0, 0, 0), 1)
         cv2.putText(img, f"{int(x.max())} env steps", (w - m - 110, h - 15), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (0, 0, 0), 1)
     title = f"PPO on the batched Survey env ({result['n_envs']} envs, {'sonar' if result['sonar'] else 'no sonar'})"
     cv2.putText(img, title, (m, 25), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (0, 0, 0), 1)

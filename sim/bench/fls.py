@@ -23,6 +23,7 @@ import numpy as np
 
 from autonomy.frames import rot_from_euler
 from scenarios.config.fls import FlsConfig
+from scenarios.load import ScenarioError
 from scenarios.schema import Scenario
 from sim.rng import component_rng
 from sim.sensors.fls import FlsSensor
@@ -85,7 +86,10 @@ def run(scenario: Scenario, n_frames: int = 60, range_window_m: tuple[float, flo
         :data:`IDENTITY_FRAMES` frames byte-identical with and without the truth, rendered
         again untimed from fresh noise states).
     """
-    base = scenario.sensors.fls
+    base = scenario.sensors.get("fls")
+    if base is None or base.kind != "fls":
+        raise ScenarioError(f"--scenario {scenario.name}: has no forward-looking sonar entry sensors.fls (kind fls) "
+                            "for bench fls to render; use cssn_lawnmower or a scenario with one")
     if range_window_m is not None:
         p = PRESETS[base.preset]
         lo, hi = base.range_min_m or p.range_min_m, base.range_max_m or p.range_max_m

@@ -1,7 +1,8 @@
 """Batched Survey env benchmark: env steps per second, CPU and memory against the batch size.
 
 ``auvsim bench vector`` builds :class:`sim.envs.survey_vector.SurveyVectorEnv` with N envs
-(default N = 1, 4, 16, 64) in ``min(N, workers)`` processes (default: the cores), without
+(default N = 1, 4, 16, 64) in ``min(N, workers)`` processes (default: the CPUs this process
+may use), without
 and with sonar (FLS, ATR, world model and the sonar image observation), resets it, takes
 :data:`WARMUP_STEPS` untimed steps, then times vector steps of the Survey bench's constant
 turn. Per N: ``steps_per_s`` (env steps, all envs, per wall second), ``cpu_ms_per_step``
@@ -62,7 +63,8 @@ def run(scenario: Scenario, *, workers: int | None = None, batch_sizes: tuple[in
     """Time the batched env at each of ``batch_sizes`` without and with sonar (``env_steps``
     env steps at least, two vector steps at least, per figure); ``workers``: processes
     (default the cores). Returns ``{"no_sonar": [...], "sonar": [...], "sonar_ratio": [...]}``."""
-    workers = workers or os.cpu_count() or 1
+    if workers is None:
+        workers = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
     out: dict[str, Any] = {"no_sonar": [], "sonar": []}
     for n in batch_sizes:
         for key, sonar in (("no_sonar", False), ("sonar", True)):

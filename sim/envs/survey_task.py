@@ -30,6 +30,8 @@ supporting detections) lies within ``match_radius_m`` of a true target.
 
 from __future__ import annotations
 
+import dataclasses
+import difflib
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -173,6 +175,12 @@ def _options(options: SurveyEnvOptions | dict | None) -> SurveyEnvOptions:
         return SurveyEnvOptions()
     if isinstance(options, dict):
         opts = dict(options)
+        known = {f.name for f in dataclasses.fields(SurveyEnvOptions)}
+        unknown = sorted(set(opts) - known)
+        if unknown:
+            close = difflib.get_close_matches(unknown[0], sorted(known), n=1)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            raise ValueError(f"SurveyEnvOptions: unknown option {unknown[0]!r}{hint}; allowed: {', '.join(sorted(known))}")
         if isinstance(opts.get("reward"), dict):
             opts["reward"] = SurveyRewardWeights(**opts["reward"])
         for key in ("coverage_shape", "sonar_shape", "speed_range_mps", "altitude_range_m", "area_size_ne_m"):

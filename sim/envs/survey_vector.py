@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from gymnasium.error import ClosedEnvironmentError, ResetNeeded
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
@@ -19,6 +20,11 @@ from sim.envs.survey_env import SurveyEnv
 from sim.envs.survey_task import SurveyEnvOptions
 
 Step = tuple[dict[str, np.ndarray], float, bool, bool, dict[str, Any]]
+
+
+def _is_int(v: Any) -> bool:
+    """An integer, not a bool."""
+    return isinstance(v, int | np.integer) and not isinstance(v, bool | np.bool_)
 
 
 class EnvBlock:
@@ -114,8 +120,10 @@ class SurveyVectorEnv(VectorEnv):
         Stable-Baselines3's vector envs do; :mod:`sim.envs.sb3_vec`).
 
     Raises:
-        ValueError: ``num_envs`` < 1, ``workers`` outside [1, num_envs] or another autoreset mode;
-        as ``SurveyEnv``.
+        ValueError: ``num_envs`` < 1, ``workers`` outside [1, num_envs], another autoreset mode,
+        overrides not a tuple of strings, a bad seed; as ``SurveyEnv``.
+    gymnasium.error.ResetNeeded: ``step`` before ``reset``.
+    gymnasium.error.ClosedEnvironmentError: ``reset`` or ``step`` after ``close``.
         RuntimeError: a worker failed (its error message in the text).
     """
 
@@ -125,10 +133,13 @@ class SurveyVectorEnv(VectorEnv):
                  options: SurveyEnvOptions | dict | None = None, overrides: tuple[str, ...] = (), *,
                  workers: int = 1, context: str | None = None,
                  autoreset_mode: AutoresetMode = AutoresetMode.NEXT_STEP) -> None:
-        if not isinstance(num_envs, int | np.integer) or num_envs < 1:
+        if not _is_int(num_envs) or num_envs < 1:
             raise ValueError(f"num_envs must be an integer >= 1, got {num_envs!r}")
-        if not isinstance(workers, int | np.integer) or not 1 <= workers <= num_envs:
+        if not _is_int(workers) or not 1 <= workers <= num_envs:
             raise ValueError(f"workers must be an integer in [1, num_envs={num_envs}], got {workers!r}")
+        if isinstance(overrides, str) or not all(isinstance(o, str) for o in overrides):
+            raise ValueError(f"overrides must be a tuple of 'key.path=value' strings, got {overrides!r}")
+        overrides = tuple(overrides)
         if autoreset_mode not in (AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP):
             raise ValueError(f"autoreset_mode must be NEXT_STEP or SAME_STEP, got {autoreset_mode!r}")
         self.metadata = {**self.metadata, "autoreset_mode": autoreset_mode}
@@ -138,6 +149,7 @@ class SurveyVectorEnv(VectorEnv):
         sizes = [len(b) for b in np.array_split(np.arange(self.num_envs), self.workers)]
         self._sizes = sizes
         self._block: EnvBlock | None = None
+        self._was_reset = False
         self._conns: list = []
         self._procs: list = []
         self.closed = False
@@ -170,14 +182,21 @@ class SurveyVectorEnv(VectorEnv):
     # ------------------------------------------------------------------ gymnasium API
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None
               ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        self._check_open()
         if seed is None:
             seeds: list[int | None] = [None] * self.num_envs
-        elif isinstance(seed, int | np.integer):
+        elif _is_int(seed):
             seeds = [int(seed) + i for i in range(self.num_envs)]
-        else:
-            seeds = list(seed)
+        elif isinstance(seed, list | tuple | np.ndarray):
+            seeds = [None if s is None else s for s in seed]
             if len(seeds) != self.num_envs:
                 raise ValueError(f"seed: {len(seeds)} seeds for {self.num_envs} envs")
+        else:
+            raise ValueError(f"seed must be an integer >= 0, a list of {self.num_envs} of them (None allowed), or "
+                             f"None; got {seed!r}")
+        bad = [s for s in seeds if s is not None and (not _is_int(s) or s < 0)]
+        if bad:
+            raise ValueError(f"seed: each must be an integer >= 0 (or None), got {bad[0]!r}")
         if self._block is not None:
             results = self._block.reset(seeds, options)
         else:
@@ -186,6 +205,7 @@ class SurveyVectorEnv(VectorEnv):
                 conn.send(("reset", (seeds[k:k + n], options)))
                 k += n
             results = [r for part in self._gather("reset") for r in part]
+        self._was_reset = True
         obs = self._stack([o for o, _ in results])
         infos: dict[str, Any] = {}
         for i, (_, info) in enumerate(results):
@@ -194,6 +214,9 @@ class SurveyVectorEnv(VectorEnv):
 
     def step(self, actions: np.ndarray) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray, np.ndarray,
                                                   dict[str, Any]]:
+        self._check_open()
+        if not self._was_reset:
+            raise ResetNeeded("SurveyVectorEnv: call reset() before step()")
         a = np.asarray(actions, dtype=np.float32)
         if a.shape != self.action_space.shape:
             raise ValueError(f"actions must have shape {self.action_space.shape}, got {a.shape}")
@@ -228,6 +251,10 @@ class SurveyVectorEnv(VectorEnv):
         self._conns, self._procs = [], []
 
     # ------------------------------------------------------------------ internals
+    def _check_open(self) -> None:
+        if self.closed:
+            raise ClosedEnvironmentError("SurveyVectorEnv: the env is closed (make a new one)")
+
     @property
     def envs(self) -> list[SurveyEnv]:
         """The envs, when they live in this process (``workers=1``).

@@ -7,6 +7,7 @@ the analytic casters in :mod:`sim.sensors.analytic_caster`.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -89,6 +90,9 @@ class MujocoRayCaster:
         if backend not in ("mujoco", "embree"):
             raise ValueError(f"backend must be 'mujoco' or 'embree', got {backend!r}")
         self.backend = backend
+        if backend == "embree" and not embree_scene.available():
+            warnings.warn("physics.ray_caster: embree asked for, but embreex is not installed (pip install "
+                          "'auvsim[fast]', x86-64 wheels): MuJoCo casts the rays", RuntimeWarning, stacklevel=2)
         self.uses_embree = False
         self._embree: TriangleScene | None | bool = None  # None: not tried yet; False: not used
         self._embree_isolated: dict[int, TriangleScene | bool] = {}

@@ -97,7 +97,7 @@ def test_boxes_are_bit_identical_to_the_plain_path(frames, detector, threshold):
     if threshold is None:
         assert 0 in counts and max(counts) >= 3  # frames without and with several detections
     else:
-        assert min(counts) > 10
+        assert min(counts) >= 5 and max(counts) >= 20  # several to tens of peaks in every frame
 
 
 def test_max_detections_cap_and_single_box(frames):

@@ -102,14 +102,29 @@ def test_bad_arguments_are_refused():
         SurveyVectorEnv(0, options=FAST)
     with pytest.raises(ValueError, match="workers"):
         SurveyVectorEnv(2, options=FAST, workers=3)
+    with pytest.raises(ValueError, match="num_envs"):
+        SurveyVectorEnv(True, options=FAST)
+    with pytest.raises(ValueError, match="overrides must be a tuple"):
+        SurveyVectorEnv(2, options=FAST, overrides="seed=3")
+    with pytest.raises(ValueError, match="unknown option 'max_episode' .did you mean 'max_episode_s'"):
+        SurveyVectorEnv(2, options={"max_episode": 3.0})
     venv = SurveyVectorEnv(2, options=FAST)
     try:
-        with pytest.raises(ValueError, match="shape"):
-            venv.step(np.zeros((3, 3), np.float32))
+        with pytest.raises(gym.error.ResetNeeded):
+            venv.step(np.zeros((2, 3), np.float32))
         with pytest.raises(ValueError, match="1 seeds for 2 envs"):
             venv.reset(seed=[1])
+        for bad in (1.5, -1, [0, "a"]):
+            with pytest.raises(ValueError, match="seed"):
+                venv.reset(seed=bad)
+        venv.reset(seed=0)
+        with pytest.raises(ValueError, match="shape"):
+            venv.step(np.zeros((3, 3), np.float32))
     finally:
         venv.close()
+    venv.close()  # twice: nothing
+    with pytest.raises(gym.error.ClosedEnvironmentError):
+        venv.reset(seed=0)
     venv = SurveyVectorEnv(2, options=FAST, workers=2)
     try:
         venv.reset(seed=0)
@@ -119,3 +134,36 @@ def test_bad_arguments_are_refused():
             venv.step(bad)
     finally:
         venv.close()
+
+
+def test_stable_baselines3_ppo_runs_on_the_batched_env():
+    """The Stable-Baselines3 adapter: PPO's rollouts and updates run, episodes end with
+    their final observation in ``terminal_observation`` and a time limit marked as such."""
+    pytest.importorskip("stable_baselines3", reason="the train extra (stable-baselines3) is not installed")
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.vec_env import VecMonitor
+
+    from sim.envs.sb3_vec import Sb3SurveyVecEnv
+
+    env = Sb3SurveyVecEnv(2, options={**FAST, "max_episode_s": 4.0}, seed=3)
+    try:
+        obs = env.reset()
+        assert obs["nav"].shape == (2, env.observation_space["nav"].shape[0])
+        ends, first_obs = [], None
+        for _ in range(5):
+            env.step_async(np.zeros((2, 3), np.float32))
+            obs, rew, done, infos = env.step_wait()
+            ends += [i for i, d in zip(infos, done) if d]
+            if done.all():
+                first_obs = obs["nav"].copy()
+        assert len(ends) == 2  # both envs truncated at 4 s, reset in the same step (SAME_STEP)
+        for info in ends:
+            assert info["TimeLimit.truncated"] is True
+            assert set(info["terminal_observation"]) == set(obs)
+            assert info["terminal_observation"]["nav"][-2] == 1.0  # the final observation: the whole time limit
+        assert np.all(first_obs[:, -2] == 0.0)  # returned with it: the new episodes' first, no time elapsed
+        model = PPO("MultiInputPolicy", VecMonitor(env), n_steps=16, batch_size=32, n_epochs=1, seed=0, device="cpu")
+        model.learn(total_timesteps=64)
+        assert len(model.ep_info_buffer) >= 2
+    finally:
+        env.close()

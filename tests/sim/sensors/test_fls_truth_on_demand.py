@@ -46,7 +46,7 @@ def test_bench_frames_without_truth_are_the_full_renders_bytes(paired):
     from scenarios.load import load_scenario
     from sim.bench import fls as bench_fls
 
-    bench_fls.run(load_scenario("cssn_lawnmower"), 2, without_truth=False)
+    bench_fls.run(load_scenario("cssn_lawnmower"), 2, without_truth=False, baseline=False)
     assert paired["frames"] == 3 and paired["objects"] > 0  # warm-up + 2 frames, with targets in view
 
 

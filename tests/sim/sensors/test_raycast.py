@@ -124,3 +124,16 @@ def test_bounding_sphere_follows_a_moved_object():
     mujoco.mj_forward(caster.model, caster.data)
     c2, r2 = caster.object_bounding_sphere(0)
     assert c2 == pytest.approx(SPHERE_C + [1.5, -0.5, 0.25]) and r2 == pytest.approx(SPHERE_R)
+
+
+def test_embree_asked_without_embreex_warns_and_mujoco_casts(monkeypatch):
+    from sim.sensors import embree_scene
+
+    monkeypatch.setattr(embree_scene, "available", lambda: False)
+    base = scene()
+    with pytest.warns(RuntimeWarning, match="embreex is not installed"):
+        caster = MujocoRayCaster(base.model, base.data, base.geom_object_id, base.geom_reflectivity,
+                                 base.exclude_body_id, backend="embree")
+    o, dirs = np.array([0.0, 0.0, 2.0]), random_dirs(200)
+    np.testing.assert_array_equal(caster.cast(o, dirs, 30.0).dist_m, base.cast(o, dirs, 30.0).dist_m)
+    assert not caster.uses_embree
