@@ -46,7 +46,7 @@ from sim.rng import component_rng
 from sim.process.spawn_guard import exit_if_spawn_reimport, main_guard_missing
 from sim.process.worker_signals import ignore_sigint, sigint_blocked
 
-GENERATOR_VERSION = "1.3.0"
+GENERATOR_VERSION = "1.4.0"  # 1.4.0: Rayleigh speckle from the counter-based generator (other frames, same labels)
 MANIFEST_FILE = "manifest.json"
 PARTS_DIR = "parts"
 RAY_HINT = "--ray needs Ray: pip install 'auvsim[scale]' (or pip install ray)"
