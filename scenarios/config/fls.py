@@ -80,10 +80,10 @@ class FlsConfig(SensorConfig):
     speckle: Literal["none", "rayleigh", "k"] = Field(
         "rayleigh", description="rayleigh: exponential intensity; k: K-distributed seabed clutter")
     speckle_generator: Literal["counter", "stream"] = Field(
-        "counter", description="counter: one draw per frame keys a hash per pixel pair, Rayleigh speckle "
-        "and the dB display in one pass (used with speckle rayleigh and no correlated speckle, texture or "
-        "power-law display; otherwise stream); stream: every pixel drawn from the sensor's generator "
-        "(the renderer before)")
+        "counter", description="counter: one draw per frame keys a hash per pixel, the speckle (rayleigh or "
+        "k) and the dB display in one pass (used without the formation model's correlated speckle, texture, "
+        "Rice objects or power-law display; otherwise stream); stream: every pixel drawn from the sensor's "
+        "generator (the renderer before)")
     k_shape: float = Field(2.0, gt=0.0, le=100.0, description="K-distribution shape (texture)")
     noise_floor_db: float = Field(
         -90.0, ge=-200.0, le=0.0, description="receiver noise power before TVG, dB re one base "

@@ -473,3 +473,23 @@ def triangle_hits(prim, tfar, ng, dirs, tri_geom, geomid, dist, normal):
         normal[i, 0] = x
         normal[i, 1] = y
         normal[i, 2] = z
+
+
+@nb.njit(cache=True, nogil=True)
+def counter_k_speckle_display(mean, clutter, add, gain, key0, key1, exp_table, texture_table, lut, shift, intensity,
+                              out):
+    """:func:`counter_speckle_display` with K-distributed clutter: one hash per pixel
+    ``h = mix32(mix32(n * 0x9E3779B9 + key0) ^ key1)``, ``n = r * cols + c``; its low 16
+    bits pick the speckle factor ``exp_table[.]``, its top 12 bits the unit-mean Gamma texture
+    ``texture_table[.]``, which scales the mean where ``clutter`` (uint8, non-zero)."""
+    rows, cols = mean.shape
+    for r in range(rows):
+        base = u32(u32(r) * u32(cols))
+        for c in range(cols):
+            h = mix32(u32(mix32(u32(u32(u32(base + u32(c)) * u32(0x9E3779B9)) + key0)) ^ key1))
+            m = mean[r, c]
+            if clutter[r, c]:
+                m = m * texture_table[h >> u32(20)]
+            v = (m + add) * exp_table[h & u32(0xFFFF)]
+            intensity[r, c] = v
+            out[r, c] = lut[u32(f32_bits(f32(v * gain[c])) >> shift)]

@@ -43,7 +43,7 @@ class EchoChain:
             them (independent speckle per bin, dB display).
         counter_speckle: draw Rayleigh speckle and noise with the counter-based generator and
             display them in the same pass (:mod:`sim.sensors.sonar.speckle_display`) where
-            :meth:`realise_display` can (``speckle == "rayleigh"``, no correlated speckle,
+            :meth:`realise_display` can (``speckle`` rayleigh or k, no correlated speckle,
             texture or Rice objects, the dB display); False: every pixel from the generator's
             stream (:meth:`realise`, then :meth:`display`).
 
@@ -77,8 +77,9 @@ class EchoChain:
                         else formation.reverberation.astype(np.float32))
         f = formation
         plain = f is None or not (f.correlated or f.textured or f.object_rice_k > 0.0 or f.display_gamma is not None)
-        self.counter = (CounterSpeckleDisplay(self.tvg, self.gain_db, self.dynamic_range_db, self.noise_power)
-                        if counter_speckle and speckle == "rayleigh" and plain else None)
+        self.counter = (CounterSpeckleDisplay(self.tvg, self.gain_db, self.dynamic_range_db, self.noise_power,
+                                              self.k_shape if speckle == "k" else None)
+                        if counter_speckle and speckle in ("rayleigh", "k") and plain else None)
 
     @property
     def needs_clutter(self) -> bool:
@@ -124,7 +125,7 @@ class EchoChain:
         (:class:`sim.sensors.sonar.speckle_display.CounterSpeckleDisplay`); otherwise the two
         steps."""
         if noise and self.counter is not None:
-            return self.counter.realise_display(mean, rng)
+            return self.counter.realise_display(mean, rng, clutter)
         intensity = self.realise(mean, rng, noise=noise, clutter=clutter)
         return intensity, self.display(intensity)
 

@@ -8,7 +8,10 @@ generator, takes two logarithms per pixel and passes over the image five times. 
   its index with the key (a counter-based generator, [Salmon2011]: two rounds of Wellons'
   ``lowbias32`` [Wellons2018], the key added before the first and xored before the second),
   and each pixel takes 16 of the 32 bits;
-- turns those 16 bits into a fully developed speckle factor by a table of the
+- with K-distributed clutter (``speckle: k``), hashes each pixel alone and takes its top 12
+  bits for a unit-mean Gamma(``k_shape``) texture by a table of 4,096 quantiles (where the
+  clutter mask says so), as the stream path draws ``Gamma(k) / k`` per pixel;
+- turns 16 bits into a fully developed speckle factor by a table of the
   Exp(1) quantiles at ``(i + 1/2) / 65536`` scaled to unit mean (the law is exact at
   65,536 levels; the largest factor is 11.8 where inversion on float32 reaches 16.6, a
   difference in 8e-6 of the pixels);
@@ -27,9 +30,12 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from scipy.special import gammaincinv
+
 from sim.sensors.sonar.fused_passes import kernels
 
 EXP_TABLE_BITS = 16  # speckle factor levels: 2^16 quantiles of Exp(1)
+TEXTURE_TABLE_BITS = 12  # K texture levels: 2^12 quantiles of Gamma(k) / k
 LUT_MANTISSA_BITS = 9  # mantissa bits of the display table's index (bucket width 2^-9 relative: 0.008 dB)
 _SHIFT = 23 - LUT_MANTISSA_BITS
 
@@ -39,6 +45,14 @@ def exponential_quantiles(bits: int = EXP_TABLE_BITS) -> NDArray[np.float32]:
     q = (np.arange(1 << bits, dtype=np.float64) + 0.5) / (1 << bits)
     e = -np.log1p(-q)
     return (e / e.mean()).astype(np.float32)
+
+
+def gamma_texture_quantiles(k_shape: float, bits: int = TEXTURE_TABLE_BITS) -> NDArray[np.float32]:
+    """(2**bits,) float32 quantiles of Gamma(``k_shape``) at ``(i + 1/2) / 2**bits``, scaled to
+    unit mean: the K distribution's texture (its variance 1 / ``k_shape``, less the cut tail)."""
+    q = (np.arange(1 << bits, dtype=np.float64) + 0.5) / (1 << bits)
+    g = gammaincinv(float(k_shape), q)
+    return (g / g.mean()).astype(np.float32)
 
 
 def db_display_table(gain_db: float, dynamic_range_db: float) -> NDArray[np.uint8]:
@@ -65,22 +79,25 @@ class CounterSpeckleDisplay:
         gain_db, dynamic_range_db: the display's gain and span (dB), as
             :func:`sim.sensors.sonar.display.to_uint8_db`.
         noise_power: receiver noise power added to the mean before the speckle (linear).
+        k_shape: the K distribution's shape (``speckle: k``); None: Rayleigh speckle.
     """
 
     def __init__(self, tvg_gain: NDArray[np.float32], gain_db: float, dynamic_range_db: float,
-                 noise_power: float) -> None:
+                 noise_power: float, k_shape: float | None = None) -> None:
         self.tvg_gain = np.ascontiguousarray(tvg_gain, dtype=np.float32)
         self.noise_power = np.float32(noise_power)
         self.exp_table = exponential_quantiles()
+        self.texture_table = None if k_shape is None else gamma_texture_quantiles(k_shape)
         self.lut = db_display_table(gain_db, dynamic_range_db)
 
-    def realise_display(self, mean: NDArray[np.float32], rng: np.random.Generator
-                        ) -> tuple[NDArray[np.float32], NDArray[np.uint8]]:
-        """One frame's (n_lines, n_bins) received intensity ``(mean + noise) E`` (linear power)
-        and its 8-bit display, from one 64-bit draw of ``rng``.
+    def realise_display(self, mean: NDArray[np.float32], rng: np.random.Generator,
+                        clutter: NDArray[np.bool_] | None = None) -> tuple[NDArray[np.float32], NDArray[np.uint8]]:
+        """One frame's (n_lines, n_bins) received intensity ``(mean T + noise) E`` (linear
+        power; ``T`` the K texture where ``clutter``, default everywhere, 1 elsewhere and with
+        Rayleigh speckle) and its 8-bit display, from one 64-bit draw of ``rng``.
 
         Raises:
-            ValueError: ``mean`` is not 2-D with ``n_bins`` columns.
+            ValueError: ``mean`` is not 2-D with ``n_bins`` columns, or ``clutter`` is not its shape.
         """
         if mean.ndim != 2 or mean.shape[1] != self.tvg_gain.size:
             raise ValueError(f"mean must be (n_lines, {self.tvg_gain.size}), got {mean.shape}")
@@ -88,8 +105,19 @@ class CounterSpeckleDisplay:
         rows, cols = mean.shape
         intensity = np.empty((rows, cols), dtype=np.float32)
         out = np.empty((rows, cols), dtype=np.uint8)
+        m = np.ascontiguousarray(mean, dtype=np.float32)
+        k0, k1 = np.uint32(key & 0xFFFFFFFF), np.uint32(key >> 32)
+        if self.texture_table is not None:
+            if clutter is None:
+                mask = np.ones((rows, cols), dtype=np.uint8)
+            elif clutter.shape != mean.shape:
+                raise ValueError(f"clutter must have the mean's shape {mean.shape}, got {clutter.shape}")
+            else:
+                mask = np.ascontiguousarray(clutter).view(np.uint8)
+            kernels().counter_k_speckle_display(m, mask, self.noise_power, self.tvg_gain, k0, k1, self.exp_table,
+                                                self.texture_table, self.lut, np.uint32(_SHIFT), intensity, out)
+            return intensity, out
         hashes = np.empty((cols + 1) // 2, dtype=np.uint32)
-        kernels().counter_speckle_display(np.ascontiguousarray(mean, dtype=np.float32), self.noise_power,
-                                          self.tvg_gain, np.uint32(key & 0xFFFFFFFF), np.uint32(key >> 32),
-                                          self.exp_table, self.lut, np.uint32(_SHIFT), hashes, intensity, out)
+        kernels().counter_speckle_display(m, self.noise_power, self.tvg_gain, k0, k1, self.exp_table, self.lut,
+                                          np.uint32(_SHIFT), hashes, intensity, out)
         return intensity, out

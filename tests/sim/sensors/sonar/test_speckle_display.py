@@ -82,7 +82,7 @@ def test_stream_generator_and_other_chains_keep_the_sequential_path():
     i2 = stream.realise(mean, np.random.default_rng(1))
     np.testing.assert_array_equal(i1, i2)
     np.testing.assert_array_equal(u1, stream.display(i2))
-    assert _chain(counter_speckle=True, speckle="k").counter is None
+    assert _chain(counter_speckle=True, speckle="none").counter is None
     # noise off: the expected image, no draw
     counter = _chain(counter_speckle=True)
     rng = np.random.default_rng(2)
@@ -90,3 +90,25 @@ def test_stream_generator_and_other_chains_keep_the_sequential_path():
     inten, _ = counter.realise_display(mean, rng, noise=False)
     np.testing.assert_array_equal(inten, mean + np.float32(counter.noise_power))
     assert rng.bit_generator.state == state
+
+
+@pytest.mark.parametrize("k_shape", [1.3, 4.0])
+def test_k_clutter_is_k_distributed_where_the_mask_says_and_rayleigh_elsewhere(k_shape):
+    """K = Gamma(k)/k texture times Exp(1): mean 1, variance 1 + 2 / k on the clutter;
+    Exp(1) off it (objects)."""
+    chain = _chain(counter_speckle=True, speckle="k", k_shape=k_shape, noise_floor_db=-120.0)
+    assert chain.counter is not None and chain.counter.texture_table is not None
+    mean = np.full((600, BINS_M.size), 1e-3, dtype=np.float32)
+    clutter = np.ones(mean.shape, dtype=bool)
+    clutter[:, 400:] = False
+    inten, u8 = chain.realise_display(mean, np.random.default_rng(3), clutter=clutter)
+    ratio = (inten / (mean + np.float32(chain.noise_power))).astype(np.float64)
+    on, off = ratio[:, :400].ravel(), ratio[:, 400:].ravel()
+    assert on.mean() == pytest.approx(1.0, abs=0.01)
+    assert on.var() == pytest.approx(1.0 + 2.0 / k_shape, rel=0.03)
+    # its law: the product of the two exact laws (K-S against a large sample of it)
+    ref = np.random.default_rng(4)
+    k_sample = ref.gamma(k_shape, 1.0 / k_shape, 200_000) * ref.exponential(1.0, 200_000)
+    assert stats.ks_2samp(on[::5], k_sample).statistic < 0.01
+    assert off.mean() == pytest.approx(1.0, abs=0.01) and off.var() == pytest.approx(1.0, abs=0.03)
+    assert np.abs(u8.astype(int) - chain.display(inten).astype(int)).max() <= 1
