@@ -6,7 +6,9 @@ returning the next episode's first observation and the final one in
 ``info["terminal_observation"]``, ``info["TimeLimit.truncated"]`` for a time limit).
 :class:`Sb3SurveyVecEnv` runs a :class:`sim.envs.survey_vector.SurveyVectorEnv` in
 ``AutoresetMode.SAME_STEP`` and translates, so PPO, A2C, SAC ... train on it as on their own
-vector envs, with its worker processes and shared detector.
+vector envs, with its worker processes and shared detector. The sonar image is given a channel
+axis, ``(1, H, W)`` uint8, so that Stable-Baselines3 sees an image: its multi-input policy
+scales it to [0, 1] and reads it with its CNN (a flat 0-255 vector in an MLP learns poorly).
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from gymnasium import spaces
 from gymnasium.vector import AutoresetMode
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv
 
@@ -40,7 +43,11 @@ class Sb3SurveyVecEnv(VecEnv):
                  workers: int = 1, seed: int | None = None) -> None:
         self.venv = SurveyVectorEnv(num_envs, scenario, options, overrides, workers=workers,
                                     autoreset_mode=AutoresetMode.SAME_STEP)
-        super().__init__(num_envs, self.venv.single_observation_space, self.venv.single_action_space)
+        space = self.venv.single_observation_space
+        if "sonar" in space.spaces:
+            s = space["sonar"]
+            space = spaces.Dict({**space.spaces, "sonar": spaces.Box(0, 255, (1, *s.shape), dtype=np.uint8)})
+        super().__init__(num_envs, space, self.venv.single_action_space)
         self._seed = seed
         self._seeded = False
         self._actions: np.ndarray | None = None
@@ -49,7 +56,7 @@ class Sb3SurveyVecEnv(VecEnv):
         seed = None if self._seeded or self._seed is None else self._seed
         self._seeded = True
         obs, _ = self.venv.reset(seed=seed)
-        return obs
+        return self._image(obs)
 
     def step_async(self, actions: np.ndarray) -> None:
         self._actions = np.asarray(actions, dtype=np.float32).reshape(self.num_envs, -1)
@@ -63,11 +70,17 @@ class Sb3SurveyVecEnv(VecEnv):
                     if not k.startswith("_") and k not in ("final_obs", "final_info") and infos.get(f"_{k}", dones | True)[i]}
             if dones[i]:
                 final = infos["final_obs"]  # gymnasium keeps dict observations as an object array
-                info["terminal_observation"] = (final[i] if not isinstance(final, dict)
-                                                else {k: final[k][i] for k in final if not k.startswith("_")})
+                one = (final[i] if not isinstance(final, dict)
+                       else {k: final[k][i] for k in final if not k.startswith("_")})
+                info["terminal_observation"] = ({**one, "sonar": one["sonar"][None]} if "sonar" in one else one)
                 info["TimeLimit.truncated"] = bool(truncs[i] and not terms[i])
             out.append(info)
-        return obs, rewards.astype(np.float32), dones, out
+        return self._image(obs), rewards.astype(np.float32), dones, out
+
+    @staticmethod
+    def _image(obs: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+        """The batch's sonar images with a channel axis, (N, 1, H, W)."""
+        return {**obs, "sonar": obs["sonar"][:, None]} if "sonar" in obs else obs
 
     def close(self) -> None:
         self.venv.close()
