@@ -61,6 +61,14 @@ class _TimedCaster:
         return self.caster.object_bounding_sphere(object_id)
 
 
+def check_scenario(scenario: Scenario) -> None:
+    """Raise ``ScenarioError`` (one line) when ``scenario`` has no FLS entry ``sensors.fls`` to render."""
+    base = scenario.sensors.get("fls")
+    if base is None or base.kind != "fls":
+        raise ScenarioError(f"--scenario {scenario.name}: has no forward-looking sonar entry sensors.fls (kind fls) "
+                            "for bench fls to render; use cssn_lawnmower or a scenario with one")
+
+
 def run(scenario: Scenario, n_frames: int = 60, range_window_m: tuple[float, float] | None = (1.0, 30.0),
         altitude_m: float = 2.0, *, without_truth: bool = True, baseline: bool | None = None) -> dict:
     """Render ``n_frames`` frames and report throughput.
@@ -86,10 +94,8 @@ def run(scenario: Scenario, n_frames: int = 60, range_window_m: tuple[float, flo
         :data:`IDENTITY_FRAMES` frames byte-identical with and without the truth, rendered
         again untimed from fresh noise states).
     """
-    base = scenario.sensors.get("fls")
-    if base is None or base.kind != "fls":
-        raise ScenarioError(f"--scenario {scenario.name}: has no forward-looking sonar entry sensors.fls (kind fls) "
-                            "for bench fls to render; use cssn_lawnmower or a scenario with one")
+    check_scenario(scenario)
+    base = scenario.sensors.fls
     if range_window_m is not None:
         p = PRESETS[base.preset]
         lo, hi = base.range_min_m or p.range_min_m, base.range_max_m or p.range_max_m

@@ -24,7 +24,10 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         overrides.append(f"seed={args.seed}")
     refuse_sweep_only(args.scenario, "bench")
     scenario = load_scenario_noting(args.scenario, overrides, "bench")
-    bench = getattr(importlib.import_module(module_name), func_name)
+    module = importlib.import_module(module_name)
+    bench = getattr(module, func_name)
+    if hasattr(module, "check_scenario"):  # before the "running" line: a scenario it cannot run is one line
+        module.check_scenario(scenario)
     params = inspect.signature(bench).parameters
     if "scenario" not in params and (args.scenario != DEFAULT_SCENARIO or args.overrides):
         what = "--scenario" if args.scenario != DEFAULT_SCENARIO else "--set"
