@@ -65,9 +65,11 @@ class Sb3SurveyVecEnv(VecEnv):
         obs, rewards, terms, truncs, infos = self.venv.step(self._actions)
         dones = terms | truncs
         out: list[dict[str, Any]] = []
+        everyone = np.ones(self.num_envs, dtype=bool)
         for i in range(self.num_envs):
-            info = {k: v[i] for k, v in infos.items()
-                    if not k.startswith("_") and k not in ("final_obs", "final_info") and infos.get(f"_{k}", dones | True)[i]}
+            info = {k: v[i] for k, v in infos.items()  # the keys this env reported (gymnasium's _key masks)
+                    if not k.startswith("_") and k not in ("final_obs", "final_info")
+                    and infos.get(f"_{k}", everyone)[i]}
             if dones[i]:
                 final = infos["final_obs"]  # gymnasium keeps dict observations as an object array
                 one = (final[i] if not isinstance(final, dict)

@@ -73,9 +73,11 @@ class MujocoRayCaster:
         geom_reflectivity: (ngeom,) acoustic reflectivity per geom in [0, 1].
         exclude_body_id: body whose geoms rays ignore (the hull); -1 for none.
         geomgroup: (6,) ``mj_multiRay`` group mask; default: the groups of the acoustic geoms.
-        backend: ``"mujoco"`` (default): ``mj_multiRay`` always; ``"embree"``: Embree (:mod:`sim.sensors.embree_scene`) where
-            ``embreex`` is installed, every geom the rays may meet is a mesh, box or plane and
-            the scene stays still, else ``mj_multiRay`` (the scenario's ``physics.ray_caster``).
+        backend: ``"mujoco"`` (default): ``mj_multiRay`` always; ``"embree"``: Embree
+            (:mod:`sim.sensors.embree_scene`) where ``embreex`` is installed, every geom the rays
+            may meet is a mesh, box or plane and the scene stays still, else ``mj_multiRay``
+            (the scenario's ``physics.ray_caster``). Asking for Embree without ``embreex``
+            warns (``RuntimeWarning``).
             :meth:`exit_distances` and :meth:`object_bounding_sphere` are MuJoCo's either way.
 
     Attributes:
