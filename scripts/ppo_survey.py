@@ -5,7 +5,7 @@ Stable-Baselines3's PPO ([Raffin2021], [Schulman2017]) with its multi-input poli
 processes), then the same number of episodes of the env's uniform random policy are run for
 comparison. Prints one JSON object: per PPO rollout the env steps so far and the mean return
 of the episodes that ended in it, the first and last rollouts' means, the random policy's mean
-return, the wall and CPU time; ``--out DIR`` writes it as ``ppo_survey.json`` with the learning
+return, the training's wall time and CPU time (this process and the env workers); ``--out DIR`` writes it as ``ppo_survey.json`` with the learning
 curve as ``ppo_survey.png``.
 
     python scripts/ppo_survey.py --n-envs 8 --timesteps 30000 --max-episode-s 60 --out runs/ppo
@@ -24,10 +24,11 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from sim.cli.app import run_script, script_parser  # noqa: E402
-from sim.cli.args import non_negative_int, positive_float, positive_int  # noqa: E402
+from sim.cli.args import int_between, positive_float, positive_int  # noqa: E402
 from sim.cli.errors import CliError  # noqa: E402
 
 MAX_SEED = 2**32 - 1 - 10_000  # Stable-Baselines3 seeds numpy's legacy generator: below 2**32, per env seed + i
+seed_int = int_between(0, MAX_SEED)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -40,7 +41,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--n-steps", type=positive_int, default=128, help="PPO rollout length per env (default 128)")
     ap.add_argument("--max-episode-s", type=positive_float, default=60.0, help="episode time limit, s (default 60)")
     ap.add_argument("--sonar", action="store_true", help="with the FLS, ATR, world model and the sonar image")
-    ap.add_argument("--seed", type=non_negative_int, default=0, help=f"root seed, 0 to {MAX_SEED} (default 0)")
+    ap.add_argument("--seed", type=seed_int, default=0, help=f"root seed, 0 to {MAX_SEED} (default 0)")
     ap.add_argument("--out", type=Path, default=None, help="folder for ppo_survey.json and ppo_survey.png")
     return run_script(ap, train, argv)
 
@@ -58,10 +59,9 @@ def train(args) -> int:
         raise CliError(f"needs the train extra (pip install 'auvsim[train]'): {e}") from None
     import numpy as np
 
+    from sim.bench.gym import process_cpu_s
     from sim.envs.sb3_vec import Sb3SurveyVecEnv
 
-    if args.seed > MAX_SEED:
-        raise CliError(f"--seed: must be a whole number from 0 to {MAX_SEED}, got {args.seed}")
     if args.out is not None:  # made now, so that a bad path costs no training
         if args.out.exists() and not args.out.is_dir():
             raise CliError(f"--out {args.out}: exists and is not a folder")
@@ -73,7 +73,11 @@ def train(args) -> int:
     options = {"sonar": args.sonar, "max_episode_s": args.max_episode_s}
     torch.set_num_threads(1)
     torch.manual_seed(args.seed)
-    env = VecMonitor(Sb3SurveyVecEnv(args.n_envs, args.scenario, options, workers=workers, seed=args.seed))
+    try:
+        env = VecMonitor(Sb3SurveyVecEnv(args.n_envs, args.scenario, options, workers=workers, seed=args.seed))
+    except ValueError as e:  # the scenario cannot hold the Survey task (no FLS entry, an area too small)
+        raise CliError(f"--scenario {args.scenario}: {e}") from None
+    pids = [os.getpid()] + [p.pid for p in env.venv.venv._procs]
 
     class Curve(BaseCallback):
         def __init__(self) -> None:
@@ -99,12 +103,13 @@ def train(args) -> int:
                   f"{row['mean_return']}", file=sys.stderr, flush=True)
 
     curve = Curve()
-    t0, c0 = time.perf_counter(), time.process_time()
+    t0, c0 = time.perf_counter(), sum(process_cpu_s(p) or 0.0 for p in pids)
     try:
         model = PPO("MultiInputPolicy", env, n_steps=args.n_steps, batch_size=min(256, args.n_steps * args.n_envs),
                     seed=args.seed, verbose=0, device="cpu")
         model.learn(total_timesteps=args.timesteps, callback=curve)
         train_wall = time.perf_counter() - t0
+        cpu_s = sum(process_cpu_s(p) or 0.0 for p in pids) - c0
         # the random policy on the same envs, as many episodes as the first rollouts ended
         rng = np.random.default_rng(args.seed + 1)
         env.reset()
@@ -122,7 +127,7 @@ def train(args) -> int:
               "first_rollout_mean_return": first and first["mean_return"],
               "last_rollout_mean_return": last and last["mean_return"],
               "random_policy_mean_return": float(np.mean(random_returns)), "random_episodes": len(random_returns),
-              "train_wall_s": round(train_wall, 1), "cpu_s": round(time.process_time() - c0, 1)}
+              "train_wall_s": round(train_wall, 1), "train_cpu_s": round(cpu_s, 1)}
     if args.out is not None:
         (args.out / "ppo_survey.json").write_text(json.dumps(result, indent=1))
         _plot(result, args.out / "ppo_survey.png")

@@ -21,6 +21,11 @@ def _checked(convert, ok, allowed: str):
     return parse
 
 
+def int_between(lo: int, hi: int):
+    """An argparse type: a whole number from ``lo`` to ``hi``."""
+    return _checked(int, lambda v: lo <= v <= hi, f"a whole number from {lo} to {hi}")
+
+
 positive_int = _checked(int, lambda v: v >= 1, "a whole number >= 1")
 MAX_DATASET_FRAMES = 1_000_000
 frame_count = _checked(int, lambda v: 1 <= v <= MAX_DATASET_FRAMES, f"a whole number from 1 to {MAX_DATASET_FRAMES}")

@@ -32,15 +32,22 @@ class Sb3SurveyVecEnv(VecEnv):
     Args:
         num_envs, scenario, options, overrides, workers: as :class:`SurveyVectorEnv`.
         seed: root seed; env ``i`` is reset with ``seed + i`` on the first :meth:`reset`
-            (None: unseeded), and continues its own generator after that.
+            (None: unseeded), and continues its own generator after that. ``seed(s)`` (what
+            ``PPO(..., seed=s)`` calls) seeds the next :meth:`reset` with ``s + i`` the same way.
+
+    At an episode's end the step's info is the ending step's (``terminal_observation`` and
+    ``TimeLimit.truncated`` added), the new episode's first info is in ``reset_infos[i]``, as
+    Stable-Baselines3's own vector envs do.
 
     Raises:
-        ValueError: as :class:`SurveyVectorEnv`.
+        ValueError: ``seed`` not an integer >= 0 or None; as :class:`SurveyVectorEnv`.
     """
 
     def __init__(self, num_envs: int, scenario: str | Path | Scenario = "cssn_lawnmower",
                  options: SurveyEnvOptions | dict | None = None, overrides: tuple[str, ...] = (), *,
                  workers: int = 1, seed: int | None = None) -> None:
+        if seed is not None and (not isinstance(seed, int | np.integer) or isinstance(seed, bool) or seed < 0):
+            raise ValueError(f"seed must be an integer >= 0 or None, got {seed!r}")
         self.venv = SurveyVectorEnv(num_envs, scenario, options, overrides, workers=workers,
                                     autoreset_mode=AutoresetMode.SAME_STEP)
         space = self.venv.single_observation_space
@@ -53,10 +60,22 @@ class Sb3SurveyVecEnv(VecEnv):
         self._actions: np.ndarray | None = None
 
     def reset(self) -> dict[str, np.ndarray]:
-        seed = None if self._seeded or self._seed is None else self._seed
+        if any(s is not None for s in self._seeds):  # seed(s) before this reset
+            seed: int | list[int | None] | None = list(self._seeds)
+        else:
+            seed = None if self._seeded or self._seed is None else self._seed
         self._seeded = True
-        obs, _ = self.venv.reset(seed=seed)
+        obs, infos = self.venv.reset(seed=seed)
+        self._reset_seeds()
+        self.reset_infos = [self._info(infos, i, np.ones(self.num_envs, dtype=bool)) for i in range(self.num_envs)]
         return self._image(obs)
+
+    @staticmethod
+    def _info(infos: dict[str, Any], i: int, reported: np.ndarray) -> dict[str, Any]:
+        """Env ``i``'s entries of gymnasium's vector info (the keys its ``_key`` mask marks)."""
+        return {k: v[i] for k, v in infos.items()
+                if not k.startswith("_") and k not in ("final_obs", "final_info")
+                and infos.get(f"_{k}", reported)[i]}
 
     def step_async(self, actions: np.ndarray) -> None:
         self._actions = np.asarray(actions, dtype=np.float32).reshape(self.num_envs, -1)
@@ -67,10 +86,11 @@ class Sb3SurveyVecEnv(VecEnv):
         out: list[dict[str, Any]] = []
         everyone = np.ones(self.num_envs, dtype=bool)
         for i in range(self.num_envs):
-            info = {k: v[i] for k, v in infos.items()  # the keys this env reported (gymnasium's _key masks)
-                    if not k.startswith("_") and k not in ("final_obs", "final_info")
-                    and infos.get(f"_{k}", everyone)[i]}
-            if dones[i]:
+            info = self._info(infos, i, everyone)
+            if dones[i]:  # the ending step's info; the new episode's first one goes to reset_infos
+                self.reset_infos[i] = info
+                final_info = infos["final_info"]
+                info = dict(final_info[i]) if not isinstance(final_info, dict) else self._info(final_info, i, everyone)
                 final = infos["final_obs"]  # gymnasium keeps dict observations as an object array
                 one = (final[i] if not isinstance(final, dict)
                        else {k: final[k][i] for k in final if not k.startswith("_")})

@@ -59,6 +59,8 @@ class SurveyEnv(gym.Env):
         self.action_space = spaces.Box(-1.0, 1.0, (task.n_act,), dtype=np.float32)
 
     def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[dict, dict[str, Any]]:
+        if options:
+            raise ValueError(f"options: the Survey env's reset takes none (set them when making the env), got {options!r}")
         super().reset(seed=seed)
         return self.task.reset(self.np_random)
 

@@ -137,6 +137,8 @@ class SurveyEnvOptions:
     reward: SurveyRewardWeights = field(default_factory=SurveyRewardWeights)
 
     def __post_init__(self) -> None:
+        for f in dataclasses.fields(self):
+            _check_option_type(f.name, f.type, getattr(self, f.name))
         if not self.decision_interval_s > 0.0:
             raise ValueError(f"SurveyEnvOptions.decision_interval_s must be > 0, got {self.decision_interval_s}")
         if self.max_episode_s is not None and not self.max_episode_s > 0.0:
@@ -170,6 +172,29 @@ class SurveyEnvOptions:
             raise ValueError(f"SurveyEnvOptions.min_target_spacing_m must be >= 0, got {self.min_target_spacing_m}")
 
 
+def _is_number(v: Any) -> bool:
+    return isinstance(v, int | float | np.integer | np.floating) and not isinstance(v, bool | np.bool_)
+
+
+def _check_option_type(name: str, annotation: str, value: Any) -> None:
+    """Raise ValueError naming ``SurveyEnvOptions.<name>`` when ``value`` is not of its
+    declared kind (``bool``, ``int``, ``float`` or None, ``str``, a tuple of two numbers)."""
+    kind = annotation.replace(" | None", "")
+    if value is None and annotation.endswith("| None"):
+        return
+    ok = {"bool": lambda v: isinstance(v, bool | np.bool_),
+          "int": lambda v: isinstance(v, int | np.integer) and not isinstance(v, bool | np.bool_),
+          "float": _is_number,
+          "str": lambda v: isinstance(v, str)}.get(kind)
+    if kind.startswith("tuple["):
+        ok = lambda v: isinstance(v, tuple) and len(v) == 2 and all(_is_number(x) for x in v)  # noqa: E731
+    if ok is not None and not ok(value):
+        allowed = {"bool": "True or False", "int": "an integer", "float": "a number", "str": "a string"}.get(
+            kind, "two numbers")
+        none = " (or None)" if annotation.endswith("| None") else ""
+        raise ValueError(f"SurveyEnvOptions.{name} must be {allowed}{none}, got {value!r}")
+
+
 def _options(options: SurveyEnvOptions | dict | None) -> SurveyEnvOptions:
     if options is None:
         return SurveyEnvOptions()
@@ -187,6 +212,8 @@ def _options(options: SurveyEnvOptions | dict | None) -> SurveyEnvOptions:
             if key in opts:
                 opts[key] = tuple(opts[key])
         return SurveyEnvOptions(**opts)
+    if not isinstance(options, SurveyEnvOptions):
+        raise ValueError(f"options must be a SurveyEnvOptions, a dict of its fields or None, got {options!r}")
     return options
 
 

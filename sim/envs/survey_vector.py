@@ -79,7 +79,9 @@ def _worker(conn, n: int, scenario, options, overrides, same_step: bool) -> None
         try:
             result = block.reset(*arg) if cmd == "reset" else block.step(arg)
             conn.send(("ok", result))
-        except BaseException as e:
+        except (ValueError, TypeError) as e:  # bad input: one line, raised as its own type in the parent
+            conn.send((type(e).__name__, f"{type(e).__name__}: {e}"))
+        except BaseException as e:  # a bug: its traceback travels
             conn.send(("error", f"{type(e).__name__}: {e}\n{traceback.format_exc()}"))
 
 
@@ -109,6 +111,7 @@ class SurveyVectorEnv(VectorEnv):
     | seeding | ``reset(seed=s)``: env ``i`` is reset with ``s + i``; a list gives one seed per env; None continues each env's generator |
     | determinism | env ``i``'s trajectory depends only on its own seed and actions: the same whatever N, the order of the envs and the number of workers |
     | infos | gymnasium's vector convention: each key an array over envs with a ``_key`` mask |
+| errors | an env's error in a worker names the worker: bad input (``ValueError``, ``TypeError``) in one line of its own type, as with ``workers=1``; anything else a ``RuntimeError`` with the worker's traceback |
 
     Args:
         num_envs: N >= 1.
@@ -124,7 +127,8 @@ class SurveyVectorEnv(VectorEnv):
         overrides not a tuple of strings, a bad seed; as ``SurveyEnv``.
     gymnasium.error.ResetNeeded: ``step`` before ``reset``.
     gymnasium.error.ClosedEnvironmentError: ``reset`` or ``step`` after ``close``.
-        RuntimeError: a worker failed (its error message in the text).
+        RuntimeError: a worker failed on something other than bad input (its error and traceback in
+        the text).
     """
 
     metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
@@ -183,6 +187,8 @@ class SurveyVectorEnv(VectorEnv):
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None
               ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
         self._check_open()
+        if options:
+            raise ValueError(f"options: the Survey env's reset takes none (set them when making the env), got {options!r}")
         if seed is None:
             seeds: list[int | None] = [None] * self.num_envs
         elif _is_int(seed):
@@ -217,7 +223,10 @@ class SurveyVectorEnv(VectorEnv):
         self._check_open()
         if not self._was_reset:
             raise ResetNeeded("SurveyVectorEnv: call reset() before step()")
-        a = np.asarray(actions, dtype=np.float32)
+        try:
+            a = np.asarray(actions, dtype=np.float32)
+        except (TypeError, ValueError):
+            raise ValueError(f"actions must be numbers of shape {self.action_space.shape}, got {actions!r}") from None
         if a.shape != self.action_space.shape:
             raise ValueError(f"actions must have shape {self.action_space.shape}, got {a.shape}")
         if self._block is not None:
@@ -269,18 +278,21 @@ class SurveyVectorEnv(VectorEnv):
         return {k: np.stack([o[k] for o in items]) for k in self._fields}
 
     def _gather(self, what: str) -> list:
-        out, errors = [], []
+        out, errors, kinds = [], [], set()
         for w, conn in enumerate(self._conns):
             try:
                 status, payload = conn.recv()
             except EOFError:
                 status, payload = "error", "the worker process exited"
-            if status == "error":
-                errors.append(f"worker {w}: {payload}")
-            else:
+            if status == "ok":
                 out.append(payload)
+            else:
+                errors.append(f"worker {w}: {payload}")
+                kinds.add(status)
         if errors:
-            raise RuntimeError(f"SurveyVectorEnv {what}: " + "; ".join(errors))
+            exc = {"ValueError": ValueError, "TypeError": TypeError}.get(kinds.pop(), RuntimeError) \
+                if len(kinds) == 1 else RuntimeError
+            raise exc(f"SurveyVectorEnv {what}: " + "; ".join(errors))
         return out
 
 

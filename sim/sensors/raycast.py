@@ -61,6 +61,7 @@ class IsolatingRayCaster(RayCaster, Protocol):
 
 
 NO_HIT_ID = -2  # object id reported where a ray hits nothing
+_WARNED_NO_EMBREE: list[bool] = []  # the "embreex is not installed" warning, given once per process
 
 
 class MujocoRayCaster:
@@ -92,7 +93,8 @@ class MujocoRayCaster:
         if backend not in ("mujoco", "embree"):
             raise ValueError(f"backend must be 'mujoco' or 'embree', got {backend!r}")
         self.backend = backend
-        if backend == "embree" and not embree_scene.available():
+        if backend == "embree" and not embree_scene.available() and not _WARNED_NO_EMBREE:
+            _WARNED_NO_EMBREE.append(True)  # once per process: every mission, worker and env builds a caster
             warnings.warn("physics.ray_caster: embree asked for, but embreex is not installed (pip install "
                           "'auvsim[fast]', x86-64 wheels): MuJoCo casts the rays", RuntimeWarning, stacklevel=2)
         self.uses_embree = False

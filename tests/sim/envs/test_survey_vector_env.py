@@ -108,6 +108,10 @@ def test_bad_arguments_are_refused():
         SurveyVectorEnv(2, options=FAST, overrides="seed=3")
     with pytest.raises(ValueError, match="unknown option 'max_episode' .did you mean 'max_episode_s'"):
         SurveyVectorEnv(2, options={"max_episode": 3.0})
+    for bad, says in (({"sonar": "no"}, "sonar must be True or False"), ({"max_episode_s": "10"}, "must be a number"),
+                      (["sonar"], "options must be")):
+        with pytest.raises(ValueError, match=says):
+            SurveyVectorEnv(1, options=bad)
     venv = SurveyVectorEnv(2, options=FAST)
     try:
         with pytest.raises(gym.error.ResetNeeded):
@@ -130,8 +134,13 @@ def test_bad_arguments_are_refused():
         venv.reset(seed=0)
         bad = np.zeros((2, 3), np.float32)
         bad[1, 0] = np.nan
-        with pytest.raises(RuntimeError, match="worker 1: ValueError"):  # an env's own check, from its worker
+        with pytest.raises(ValueError, match="worker 1: ValueError") as err:  # an env's check, from its worker
             venv.step(bad)
+        assert "\n" not in str(err.value)  # one line, as with workers=1
+        with pytest.raises(ValueError, match="actions must be numbers"):
+            venv.step("go")
+        with pytest.raises(ValueError, match="reset takes none"):
+            venv.reset(options={"foo": 1})
     finally:
         venv.close()
 
@@ -167,3 +176,34 @@ def test_stable_baselines3_ppo_runs_on_the_batched_env():
         assert len(model.ep_info_buffer) >= 2
     finally:
         env.close()
+
+
+def test_stable_baselines3_seeds_and_infos_as_its_own_vector_envs():
+    """``seed(s)`` (what ``PPO(seed=s)`` calls) seeds the next reset; at an episode's end the
+    step's info is the ending step's and the new episode's first is in ``reset_infos``."""
+    pytest.importorskip("stable_baselines3", reason="the train extra (stable-baselines3) is not installed")
+    from sim.envs.sb3_vec import Sb3SurveyVecEnv
+
+    with pytest.raises(ValueError, match="seed"):
+        Sb3SurveyVecEnv(1, options=FAST, seed=-1)
+    runs = []
+    for _ in range(2):
+        env = Sb3SurveyVecEnv(2, options={**FAST, "max_episode_s": 3.0})
+        try:
+            assert env.seed(5) == [5, 6]
+            first = env.reset()["nav"].copy()
+            ends = []
+            for _ in range(3):
+                env.step_async(np.zeros((2, 3), np.float32))
+                _, _, done, infos = env.step_wait()
+                ends += [(i, info) for i, (info, d) in enumerate(zip(infos, done)) if d]
+            runs.append(first)
+            assert len(ends) == 2
+            for i, info in ends:
+                assert info["t_s"] == 3.0 and "complete" in info  # the ending step's info
+                assert env.reset_infos[i]["t_s"] == 0.0  # the new episode's first
+        finally:
+            env.close()
+    np.testing.assert_array_equal(runs[0], runs[1])
+    single = SurveyEnv(options=FAST)
+    np.testing.assert_array_equal(single.reset(seed=6)[0]["nav"], runs[0][1])

@@ -129,7 +129,10 @@ def test_bounding_sphere_follows_a_moved_object():
 def test_embree_asked_without_embreex_warns_and_mujoco_casts(monkeypatch):
     from sim.sensors import embree_scene
 
+    import sim.sensors.raycast as raycast
+
     monkeypatch.setattr(embree_scene, "available", lambda: False)
+    monkeypatch.setattr(raycast, "_WARNED_NO_EMBREE", [])
     base = scene()
     with pytest.warns(RuntimeWarning, match="embreex is not installed"):
         caster = MujocoRayCaster(base.model, base.data, base.geom_object_id, base.geom_reflectivity,
