@@ -136,34 +136,27 @@ def train(args) -> int:
 
 
 def _plot(result: dict, path: Path) -> None:
-    import cv2
-    import numpy as np
+    """The learning curve (mean return of the episodes ended in each rollout against env steps)
+    with the random policy's mean, PNG at ``path``."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
 
     rows = [r for r in result["curve"] if r["mean_return"] is not None]
-    w, h, m = 640, 360, 50
-    img = np.full((h, w, 3), 255, np.uint8)
-    if rows:
-        x = np.array([r["env_steps"] for r in rows], float)
-        y = np.array([r["mean_return"] for r in rows], float)
-        lo = min(y.min(), result["random_policy_mean_return"])
-        hi = max(y.max(), result["random_policy_mean_return"])
-        span = max(hi - lo, 1e-9)
-
-        def px(xv, yv):
-            return (int(m + (w - 2 * m) * xv / max(x.max(), 1.0)), int(h - m - (h - 2 * m) * (yv - lo) / span))
-
-        yr = px(0, result["random_policy_mean_return"])[1]
-        cv2.line(img, (m, yr), (w - m, yr), (0, 0, 200), 1)
-        cv2.putText(img, "random policy", (w - m - 120, yr - 5), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (0, 0, 200), 1)
-        pts = np.array([px(a, b) for a, b in zip(x, y)], np.int32)
-        cv2.polylines(img, [pts], False, (200, 80, 0), 2)
-        cv2.putText(img, f"{lo:.2f}", (5, h - m), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (0, 0, 0), 1)
-        cv2.putText(img, f"{hi:.2f}", (5, m), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (0, 0, 0), 1)
-        cv2.putText(img, f"{int(x.max())} env steps", (w - m - 110, h - 15), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (0, 0, 0), 1)
-    title = f"PPO on the batched Survey env ({result['n_envs']} envs, {'sonar' if result['sonar'] else 'no sonar'})"
-    cv2.putText(img, title, (m, 25), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (0, 0, 0), 1)
-    cv2.putText(img, "mean episode return per rollout", (m, h - 15), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (200, 80, 0), 1)
-    cv2.imwrite(str(path), img)
+    fig, ax = plt.subplots(figsize=(7, 4))
+    ax.plot([r["env_steps"] for r in rows], [r["mean_return"] for r in rows], "o-", ms=3, label="PPO, per rollout")
+    ax.axhline(result["random_policy_mean_return"], color="r", ls="--", lw=1,
+               label=f"random policy ({result['random_episodes']} episodes)")
+    ax.set_xlabel("env steps")
+    ax.set_ylabel("mean episode return")
+    ax.set_title(f"PPO on the batched Survey env: {result['n_envs']} envs, "
+                 f"{'sonar' if result['sonar'] else 'no sonar'}, {result['max_episode_s']:g} s episodes", fontsize=9)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
 
 
 if __name__ == "__main__":

@@ -340,3 +340,10 @@ def write_watertank_folder(root: Path, frames: list[list[tuple[str, tuple[int, i
         cv2.imwrite(str(root / "masks" / f"frame-{i}.png"), mask)
         (root / "boxes" / f"frame-{i}.xml").write_text(watertank_box_xml(boxes))
     return root
+
+
+def random_dirs(n: int, seed: int = 0) -> np.ndarray:
+    """(n, 3) unit ray directions, all with a forward (+x) component of at least about 0.5."""
+    v = np.random.default_rng(seed).normal(size=(n, 3))
+    v[:, 0] = np.abs(v[:, 0]) + 0.5
+    return v / np.linalg.norm(v, axis=1, keepdims=True)

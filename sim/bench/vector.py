@@ -19,18 +19,15 @@ import time
 from typing import Any
 
 import numpy as np
+import psutil
 
 from scenarios.schema import Scenario
 from sim.bench.gym import SURVEY_ACTION, process_cpu_s
+from sim.process.cpus import usable_cpus
 from sim.envs.survey_vector import SurveyVectorEnv
 
 WARMUP_STEPS = 1
 BATCH_SIZES = (1, 4, 16, 64)
-
-
-def _rss_mb(pid: int) -> float:
-    with open(f"/proc/{pid}/statm", encoding="ascii") as f:
-        return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20
 
 
 def _time(scenario: Scenario, n_envs: int, workers: int, sonar: bool, env_steps: int) -> dict[str, Any]:
@@ -49,7 +46,7 @@ def _time(scenario: Scenario, n_envs: int, workers: int, sonar: bool, env_steps:
             venv.step(act)
         wall = time.perf_counter() - t0
         cpu = sum(process_cpu_s(p) or 0.0 for p in pids) - cpu0
-        rss = sum(_rss_mb(p) for p in pids)
+        rss = sum(psutil.Process(p).memory_info().rss for p in pids) / 2**20
     finally:
         venv.close()
     total = n_steps * n_envs
@@ -63,8 +60,7 @@ def run(scenario: Scenario, *, workers: int | None = None, batch_sizes: tuple[in
     """Time the batched env at each of ``batch_sizes`` without and with sonar (``env_steps``
     env steps at least, two vector steps at least, per figure); ``workers``: processes
     (default the cores). Returns ``{"no_sonar": [...], "sonar": [...], "sonar_ratio": [...]}``."""
-    if workers is None:
-        workers = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    workers = workers or usable_cpus()
     out: dict[str, Any] = {"no_sonar": [], "sonar": []}
     for n in batch_sizes:
         for key, sonar in (("no_sonar", False), ("sonar", True)):

@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 
 from sim.cli.args import MAX_DATASET_FRAMES, frame_count, non_negative_int, positive_float, positive_int
 from sim.cli.errors import CliError
+from sim.process.cpus import usable_cpus
 
 
 def _cmd_dataset(args: argparse.Namespace) -> int:
@@ -55,13 +55,6 @@ def _cmd_dataset(args: argparse.Namespace) -> int:
         raise
     print(f"dataset: wrote {path}")
     return 0
-
-
-def usable_cpus() -> int:
-    """CPUs this process may run on (its affinity mask where the platform tells it, else all)."""
-    if hasattr(os, "sched_getaffinity"):
-        return max(1, len(os.sched_getaffinity(0)))
-    return os.cpu_count() or 1
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:

@@ -22,7 +22,7 @@ from gymnasium.vector import AutoresetMode
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv
 
 from scenarios.schema import Scenario
-from sim.envs.survey_task import SurveyEnvOptions
+from sim.envs.survey_task import SurveyEnvOptions, is_int
 from sim.envs.survey_vector import SurveyVectorEnv
 
 
@@ -46,7 +46,7 @@ class Sb3SurveyVecEnv(VecEnv):
     def __init__(self, num_envs: int, scenario: str | Path | Scenario = "cssn_lawnmower",
                  options: SurveyEnvOptions | dict | None = None, overrides: tuple[str, ...] = (), *,
                  workers: int = 1, seed: int | None = None) -> None:
-        if seed is not None and (not isinstance(seed, int | np.integer) or isinstance(seed, bool) or seed < 0):
+        if seed is not None and (not is_int(seed) or seed < 0):
             raise ValueError(f"seed must be an integer >= 0 or None, got {seed!r}")
         self.venv = SurveyVectorEnv(num_envs, scenario, options, overrides, workers=workers,
                                     autoreset_mode=AutoresetMode.SAME_STEP)
@@ -55,27 +55,23 @@ class Sb3SurveyVecEnv(VecEnv):
             s = space["sonar"]
             space = spaces.Dict({**space.spaces, "sonar": spaces.Box(0, 255, (1, *s.shape), dtype=np.uint8)})
         super().__init__(num_envs, space, self.venv.single_action_space)
-        self._seed = seed
-        self._seeded = False
+        if seed is not None:
+            self.seed(seed)  # the first reset's seeds, as PPO(seed=...) sets them
         self._actions: np.ndarray | None = None
 
     def reset(self) -> dict[str, np.ndarray]:
-        if any(s is not None for s in self._seeds):  # seed(s) before this reset
-            seed: int | list[int | None] | None = list(self._seeds)
-        else:
-            seed = None if self._seeded or self._seed is None else self._seed
-        self._seeded = True
-        obs, infos = self.venv.reset(seed=seed)
+        seeded = any(s is not None for s in self._seeds)  # seed(s) before this reset
+        obs, infos = self.venv.reset(seed=list(self._seeds) if seeded else None)
         self._reset_seeds()
-        self.reset_infos = [self._info(infos, i, np.ones(self.num_envs, dtype=bool)) for i in range(self.num_envs)]
+        self.reset_infos = [self._info(infos, i) for i in range(self.num_envs)]
         return self._image(obs)
 
     @staticmethod
-    def _info(infos: dict[str, Any], i: int, reported: np.ndarray) -> dict[str, Any]:
+    def _info(infos: dict[str, Any], i: int) -> dict[str, Any]:
         """Env ``i``'s entries of gymnasium's vector info (the keys its ``_key`` mask marks)."""
         return {k: v[i] for k, v in infos.items()
                 if not k.startswith("_") and k not in ("final_obs", "final_info")
-                and infos.get(f"_{k}", reported)[i]}
+                and (f"_{k}" not in infos or infos[f"_{k}"][i])}
 
     def step_async(self, actions: np.ndarray) -> None:
         self._actions = np.asarray(actions, dtype=np.float32).reshape(self.num_envs, -1)
@@ -84,17 +80,13 @@ class Sb3SurveyVecEnv(VecEnv):
         obs, rewards, terms, truncs, infos = self.venv.step(self._actions)
         dones = terms | truncs
         out: list[dict[str, Any]] = []
-        everyone = np.ones(self.num_envs, dtype=bool)
         for i in range(self.num_envs):
-            info = self._info(infos, i, everyone)
+            info = self._info(infos, i)
             if dones[i]:  # the ending step's info; the new episode's first one goes to reset_infos
                 self.reset_infos[i] = info
-                final_info = infos["final_info"]
-                info = dict(final_info[i]) if not isinstance(final_info, dict) else self._info(final_info, i, everyone)
-                final = infos["final_obs"]  # gymnasium keeps dict observations as an object array
-                one = (final[i] if not isinstance(final, dict)
-                       else {k: final[k][i] for k in final if not k.startswith("_")})
-                info["terminal_observation"] = ({**one, "sonar": one["sonar"][None]} if "sonar" in one else one)
+                info = self._info(infos["final_info"], i)  # gymnasium's vector form, as the step's infos
+                final = infos["final_obs"][i]  # gymnasium keeps the final dict observations in an object array
+                info["terminal_observation"] = {**final, "sonar": final["sonar"][None]} if "sonar" in final else final
                 info["TimeLimit.truncated"] = bool(truncs[i] and not terms[i])
             out.append(info)
         return self._image(obs), rewards.astype(np.float32), dones, out

@@ -21,7 +21,13 @@ from sim.envs.survey_task import NAV_FEATURES, SurveyEnvOptions, SurveyRewardWei
 from sim.mission import Mission
 from sim.scene.seabed import Seabed
 
-__all__ = ["NAV_FEATURES", "SurveyEnv", "SurveyEnvOptions", "SurveyRewardWeights", "SurveyTask"]
+__all__ = ["NAV_FEATURES", "SurveyEnv", "SurveyEnvOptions", "SurveyRewardWeights", "SurveyTask", "refuse_reset_options"]
+
+
+def refuse_reset_options(options: dict | None) -> None:
+    """Raise ValueError for reset options: the Survey env takes its options when it is made."""
+    if options:
+        raise ValueError(f"options: the Survey env's reset takes none (set them when making the env), got {options!r}")
 
 
 class SurveyEnv(gym.Env):
@@ -59,8 +65,7 @@ class SurveyEnv(gym.Env):
         self.action_space = spaces.Box(-1.0, 1.0, (task.n_act,), dtype=np.float32)
 
     def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[dict, dict[str, Any]]:
-        if options:
-            raise ValueError(f"options: the Survey env's reset takes none (set them when making the env), got {options!r}")
+        refuse_reset_options(options)
         super().reset(seed=seed)
         return self.task.reset(self.np_random)
 

@@ -172,27 +172,40 @@ class SurveyEnvOptions:
             raise ValueError(f"SurveyEnvOptions.min_target_spacing_m must be >= 0, got {self.min_target_spacing_m}")
 
 
+def is_int(v: Any) -> bool:
+    """An integer (Python or numpy), not a bool."""
+    return isinstance(v, int | np.integer) and not isinstance(v, bool | np.bool_)
+
+
 def _is_number(v: Any) -> bool:
     return isinstance(v, int | float | np.integer | np.floating) and not isinstance(v, bool | np.bool_)
 
 
+def _is_pair(v: Any) -> bool:
+    return isinstance(v, tuple) and len(v) == 2 and all(_is_number(x) for x in v)
+
+
+#: A ``SurveyEnvOptions`` field's declared type (``| None`` aside) -> (check, what is allowed).
+_OPTION_KINDS = {
+    "bool": (lambda v: isinstance(v, bool | np.bool_), "True or False"),
+    "int": (is_int, "an integer"),
+    "float": (_is_number, "a number"),
+    "str": (lambda v: isinstance(v, str), "a string"),
+    "tuple[int, int]": (_is_pair, "two numbers"),
+    "tuple[float, float]": (_is_pair, "two numbers"),
+}
+
+
 def _check_option_type(name: str, annotation: str, value: Any) -> None:
     """Raise ValueError naming ``SurveyEnvOptions.<name>`` when ``value`` is not of its
-    declared kind (``bool``, ``int``, ``float`` or None, ``str``, a tuple of two numbers)."""
-    kind = annotation.replace(" | None", "")
-    if value is None and annotation.endswith("| None"):
+    declared kind (:data:`_OPTION_KINDS`; fields of other types are checked where they are used)."""
+    optional = annotation.endswith(" | None")
+    kind = _OPTION_KINDS.get(annotation.removesuffix(" | None"))
+    if kind is None or (optional and value is None):
         return
-    ok = {"bool": lambda v: isinstance(v, bool | np.bool_),
-          "int": lambda v: isinstance(v, int | np.integer) and not isinstance(v, bool | np.bool_),
-          "float": _is_number,
-          "str": lambda v: isinstance(v, str)}.get(kind)
-    if kind.startswith("tuple["):
-        ok = lambda v: isinstance(v, tuple) and len(v) == 2 and all(_is_number(x) for x in v)  # noqa: E731
-    if ok is not None and not ok(value):
-        allowed = {"bool": "True or False", "int": "an integer", "float": "a number", "str": "a string"}.get(
-            kind, "two numbers")
-        none = " (or None)" if annotation.endswith("| None") else ""
-        raise ValueError(f"SurveyEnvOptions.{name} must be {allowed}{none}, got {value!r}")
+    check, allowed = kind
+    if not check(value):
+        raise ValueError(f"SurveyEnvOptions.{name} must be {allowed}{' (or None)' if optional else ''}, got {value!r}")
 
 
 def _options(options: SurveyEnvOptions | dict | None) -> SurveyEnvOptions:

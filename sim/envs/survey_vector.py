@@ -16,15 +16,10 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from scenarios.schema import Scenario
-from sim.envs.survey_env import SurveyEnv
-from sim.envs.survey_task import SurveyEnvOptions
+from sim.envs.survey_env import SurveyEnv, refuse_reset_options
+from sim.envs.survey_task import SurveyEnvOptions, is_int
 
 Step = tuple[dict[str, np.ndarray], float, bool, bool, dict[str, Any]]
-
-
-def _is_int(v: Any) -> bool:
-    """An integer, not a bool."""
-    return isinstance(v, int | np.integer) and not isinstance(v, bool | np.bool_)
 
 
 class EnvBlock:
@@ -37,9 +32,9 @@ class EnvBlock:
         self.needs_reset = np.zeros(n, dtype=bool)
         self.same_step = same_step
 
-    def reset(self, seeds: list[int | None], options: dict | None) -> list[tuple[dict, dict]]:
+    def reset(self, seeds: list[int | None]) -> list[tuple[dict, dict]]:
         self.needs_reset[:] = False
-        return [env.reset(seed=s, options=options) for env, s in zip(self.envs, seeds)]
+        return [env.reset(seed=s) for env, s in zip(self.envs, seeds)]
 
     def step(self, actions: np.ndarray) -> list[Step]:
         out: list[Step] = []
@@ -77,8 +72,7 @@ def _worker(conn, n: int, scenario, options, overrides, same_step: bool) -> None
             conn.send(("ok", None))
             return
         try:
-            result = block.reset(*arg) if cmd == "reset" else block.step(arg)
-            conn.send(("ok", result))
+            conn.send(("ok", getattr(block, cmd)(arg)))  # "reset" (seeds) or "step" (actions)
         except (ValueError, TypeError) as e:  # bad input: one line, raised as its own type in the parent
             conn.send((type(e).__name__, f"{type(e).__name__}: {e}"))
         except BaseException as e:  # a bug: its traceback travels
@@ -111,7 +105,7 @@ class SurveyVectorEnv(VectorEnv):
     | seeding | ``reset(seed=s)``: env ``i`` is reset with ``s + i``; a list gives one seed per env; None continues each env's generator |
     | determinism | env ``i``'s trajectory depends only on its own seed and actions: the same whatever N, the order of the envs and the number of workers |
     | infos | gymnasium's vector convention: each key an array over envs with a ``_key`` mask |
-| errors | an env's error in a worker names the worker: bad input (``ValueError``, ``TypeError``) in one line of its own type, as with ``workers=1``; anything else a ``RuntimeError`` with the worker's traceback |
+    | errors | an env's error in a worker names the worker: bad input (``ValueError``, ``TypeError``) in one line of its own type, as with ``workers=1``; anything else a ``RuntimeError`` with the worker's traceback |
 
     Args:
         num_envs: N >= 1.
@@ -119,16 +113,16 @@ class SurveyVectorEnv(VectorEnv):
             every env).
         workers: processes holding the envs (1 <= workers <= N; default 1, this process).
         context: ``multiprocessing`` start method for the workers (None: the platform's default).
-    autoreset_mode: ``AutoresetMode.NEXT_STEP`` or ``AutoresetMode.SAME_STEP`` (what
-        Stable-Baselines3's vector envs do; :mod:`sim.envs.sb3_vec`).
+        autoreset_mode: ``AutoresetMode.NEXT_STEP`` or ``AutoresetMode.SAME_STEP`` (what
+            Stable-Baselines3's vector envs do; :mod:`sim.envs.sb3_vec`).
 
     Raises:
         ValueError: ``num_envs`` < 1, ``workers`` outside [1, num_envs], another autoreset mode,
-        overrides not a tuple of strings, a bad seed; as ``SurveyEnv``.
-    gymnasium.error.ResetNeeded: ``step`` before ``reset``.
-    gymnasium.error.ClosedEnvironmentError: ``reset`` or ``step`` after ``close``.
-        RuntimeError: a worker failed on something other than bad input (its error and traceback in
-        the text).
+            overrides not a tuple of strings, a bad seed, reset options; as ``SurveyEnv``.
+        gymnasium.error.ResetNeeded: ``step`` before ``reset``.
+        gymnasium.error.ClosedEnvironmentError: ``reset`` or ``step`` after ``close``.
+        RuntimeError: a worker failed on something other than bad input (its error and traceback
+            in the text).
     """
 
     metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
@@ -137,9 +131,9 @@ class SurveyVectorEnv(VectorEnv):
                  options: SurveyEnvOptions | dict | None = None, overrides: tuple[str, ...] = (), *,
                  workers: int = 1, context: str | None = None,
                  autoreset_mode: AutoresetMode = AutoresetMode.NEXT_STEP) -> None:
-        if not _is_int(num_envs) or num_envs < 1:
+        if not is_int(num_envs) or num_envs < 1:
             raise ValueError(f"num_envs must be an integer >= 1, got {num_envs!r}")
-        if not _is_int(workers) or not 1 <= workers <= num_envs:
+        if not is_int(workers) or not 1 <= workers <= num_envs:
             raise ValueError(f"workers must be an integer in [1, num_envs={num_envs}], got {workers!r}")
         if isinstance(overrides, str) or not all(isinstance(o, str) for o in overrides):
             raise ValueError(f"overrides must be a tuple of 'key.path=value' strings, got {overrides!r}")
@@ -150,8 +144,7 @@ class SurveyVectorEnv(VectorEnv):
         same_step = autoreset_mode == AutoresetMode.SAME_STEP
         self.num_envs = int(num_envs)
         self.workers = int(workers)
-        sizes = [len(b) for b in np.array_split(np.arange(self.num_envs), self.workers)]
-        self._sizes = sizes
+        self._sizes = [len(b) for b in np.array_split(np.arange(self.num_envs), self.workers)]
         self._block: EnvBlock | None = None
         self._was_reset = False
         self._conns: list = []
@@ -163,7 +156,7 @@ class SurveyVectorEnv(VectorEnv):
         else:
             single = SurveyEnv(scenario, options, overrides)  # the spaces (and the inputs' checks) here
             ctx = mp.get_context(context)
-            for n in sizes:
+            for n in self._sizes:
                 parent, child = ctx.Pipe()
                 p = ctx.Process(target=_worker, args=(child, n, scenario, options, overrides, same_step), daemon=True)
                 p.start()
@@ -187,36 +180,24 @@ class SurveyVectorEnv(VectorEnv):
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None
               ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
         self._check_open()
-        if options:
-            raise ValueError(f"options: the Survey env's reset takes none (set them when making the env), got {options!r}")
+        refuse_reset_options(options)
         if seed is None:
             seeds: list[int | None] = [None] * self.num_envs
-        elif _is_int(seed):
+        elif is_int(seed):
             seeds = [int(seed) + i for i in range(self.num_envs)]
         elif isinstance(seed, list | tuple | np.ndarray):
-            seeds = [None if s is None else s for s in seed]
+            seeds = list(seed)
             if len(seeds) != self.num_envs:
                 raise ValueError(f"seed: {len(seeds)} seeds for {self.num_envs} envs")
         else:
             raise ValueError(f"seed must be an integer >= 0, a list of {self.num_envs} of them (None allowed), or "
                              f"None; got {seed!r}")
-        bad = [s for s in seeds if s is not None and (not _is_int(s) or s < 0)]
+        bad = [s for s in seeds if s is not None and (not is_int(s) or s < 0)]
         if bad:
             raise ValueError(f"seed: each must be an integer >= 0 (or None), got {bad[0]!r}")
-        if self._block is not None:
-            results = self._block.reset(seeds, options)
-        else:
-            k = 0
-            for conn, n in zip(self._conns, self._sizes):
-                conn.send(("reset", (seeds[k:k + n], options)))
-                k += n
-            results = [r for part in self._gather("reset") for r in part]
+        results = self._call("reset", seeds)
         self._was_reset = True
-        obs = self._stack([o for o, _ in results])
-        infos: dict[str, Any] = {}
-        for i, (_, info) in enumerate(results):
-            infos = self._add_info(infos, info, i)
-        return obs, infos
+        return self._stack([o for o, _ in results]), self._infos([info for _, info in results])
 
     def step(self, actions: np.ndarray) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray, np.ndarray,
                                                   dict[str, Any]]:
@@ -229,22 +210,12 @@ class SurveyVectorEnv(VectorEnv):
             raise ValueError(f"actions must be numbers of shape {self.action_space.shape}, got {actions!r}") from None
         if a.shape != self.action_space.shape:
             raise ValueError(f"actions must have shape {self.action_space.shape}, got {a.shape}")
-        if self._block is not None:
-            results = self._block.step(a)
-        else:
-            k = 0
-            for conn, n in zip(self._conns, self._sizes):
-                conn.send(("step", a[k:k + n]))
-                k += n
-            results = [r for part in self._gather("step") for r in part]
+        results = self._call("step", a)
         obs = self._stack([r[0] for r in results])
         rewards = np.array([r[1] for r in results], dtype=np.float64)
         terms = np.array([r[2] for r in results], dtype=bool)
         truncs = np.array([r[3] for r in results], dtype=bool)
-        infos: dict[str, Any] = {}
-        for i, r in enumerate(results):
-            infos = self._add_info(infos, r[4], i)
-        return obs, rewards, terms, truncs, infos
+        return obs, rewards, terms, truncs, self._infos([r[4] for r in results])
 
     def close_extras(self, **kwargs: Any) -> None:
         for conn in self._conns:
@@ -274,8 +245,26 @@ class SurveyVectorEnv(VectorEnv):
             raise AttributeError("the envs live in worker processes (workers > 1)")
         return self._block.envs
 
+    def _call(self, cmd: str, per_env) -> list:
+        """``EnvBlock.<cmd>`` (``reset``: seeds, ``step``: actions) on every env, in this
+        process or scattered to the workers by blocks; the results in env order."""
+        if self._block is not None:
+            return getattr(self._block, cmd)(per_env)
+        k = 0
+        for conn, n in zip(self._conns, self._sizes):
+            conn.send((cmd, per_env[k:k + n]))
+            k += n
+        return [r for part in self._gather(cmd) for r in part]
+
     def _stack(self, items: list[dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
         return {k: np.stack([o[k] for o in items]) for k in self._fields}
+
+    def _infos(self, items: list[dict[str, Any]]) -> dict[str, Any]:
+        """The envs' info dicts in gymnasium's vector form (arrays over envs, ``_key`` masks)."""
+        infos: dict[str, Any] = {}
+        for i, info in enumerate(items):
+            infos = self._add_info(infos, info, i)
+        return infos
 
     def _gather(self, what: str) -> list:
         out, errors, kinds = [], [], set()

@@ -48,8 +48,3 @@ def shared_detector(cfg: AtrConfig) -> Detector:
     else:
         _DETECTORS.move_to_end(key)
     return det
-
-
-def clear() -> None:
-    """Drop the kept detectors (their memory returns once no mission holds them)."""
-    _DETECTORS.clear()

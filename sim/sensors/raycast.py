@@ -7,6 +7,7 @@ the analytic casters in :mod:`sim.sensors.analytic_caster`.
 
 from __future__ import annotations
 
+import functools
 import warnings
 from dataclasses import dataclass
 from typing import Protocol
@@ -61,7 +62,14 @@ class IsolatingRayCaster(RayCaster, Protocol):
 
 
 NO_HIT_ID = -2  # object id reported where a ray hits nothing
-_WARNED_NO_EMBREE: list[bool] = []  # the "embreex is not installed" warning, given once per process
+
+
+@functools.cache
+def _warn_no_embree() -> None:
+    """Say once per process (every mission, worker and env builds a caster) that Embree was
+    asked for and MuJoCo casts."""
+    warnings.warn("physics.ray_caster: embree asked for, but embreex is not installed (pip install "
+                  "'auvsim[fast]', x86-64 wheels): MuJoCo casts the rays", RuntimeWarning, stacklevel=3)
 
 
 class MujocoRayCaster:
@@ -93,13 +101,11 @@ class MujocoRayCaster:
         if backend not in ("mujoco", "embree"):
             raise ValueError(f"backend must be 'mujoco' or 'embree', got {backend!r}")
         self.backend = backend
-        if backend == "embree" and not embree_scene.available() and not _WARNED_NO_EMBREE:
-            _WARNED_NO_EMBREE.append(True)  # once per process: every mission, worker and env builds a caster
-            warnings.warn("physics.ray_caster: embree asked for, but embreex is not installed (pip install "
-                          "'auvsim[fast]', x86-64 wheels): MuJoCo casts the rays", RuntimeWarning, stacklevel=2)
+        if backend == "embree" and not embree_scene.available():
+            _warn_no_embree()
         self.uses_embree = False
-        self._embree: TriangleScene | None | bool = None  # None: not tried yet; False: not used
-        self._embree_isolated: dict[int, TriangleScene | bool] = {}
+        # Embree scenes: None for every cast geom, an object id for that object alone; False: MuJoCo casts
+        self._embree: dict[int | None, TriangleScene | bool] = {}
 
         self._mj = mujoco
         self.model = model
@@ -135,9 +141,7 @@ class MujocoRayCaster:
         geoms' current poses; None where MuJoCo casts (see ``backend``)."""
         if self.backend != "embree" or not embree_scene.available():
             return None
-        scene = self._embree if key is None else self._embree_isolated.get(key)
-        if scene is False:
-            return None
+        scene = self._embree.get(key)
         if scene is None:
             if key is None:
                 groups = self.geomgroup[np.clip(self.model.geom_group, 0, 5)] > 0
@@ -148,18 +152,12 @@ class MujocoRayCaster:
                 scene = TriangleScene(self.model, self.data, geoms)
             except ValueError:  # a sphere, cylinder, height field...: MuJoCo casts
                 scene = False
-            if key is None:
-                self._embree = scene
-            else:
-                self._embree_isolated[key] = scene
-            if scene is False:
-                return None
+            self._embree[key] = scene
+        if scene is False:
+            return None
         scene.current()
         if scene.rebuilds > embree_scene.MAX_REBUILDS:  # a moving scene: MuJoCo from now on
-            if key is None:
-                self._embree = False
-            else:
-                self._embree_isolated[key] = False
+            self._embree[key] = False
             return None
         return scene
 

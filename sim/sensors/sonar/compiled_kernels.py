@@ -425,12 +425,19 @@ def mix32(x):
     return u32(x ^ (x >> u32(16)))
 
 
+@nb.njit(cache=True, nogil=True, inline="always")
+def keyed_hash(n, key0, key1):
+    """The counter-based draw of element ``n``: ``mix32(mix32(n * 0x9E3779B9 + key0) ^ key1)``
+    (uint32 arithmetic; [Salmon2011], [Wellons2018])."""
+    return mix32(u32(mix32(u32(u32(u32(n) * u32(0x9E3779B9)) + key0)) ^ key1))
+
+
 @nb.njit(cache=True, nogil=True)
 def counter_speckle_display(mean, add, gain, key0, key1, exp_table, lut, shift, hashes, intensity, out):
     """Counter-based speckle, receiver noise and the display in one pass over (rows, cols).
 
-    Per pair of pixels ``(r, 2j)``, ``(r, 2j + 1)``: ``h = mix32(mix32(n * 0x9E3779B9 + key0) ^ key1)``
-    with ``n = r * ceil(cols / 2) + j``; its low and high 16 bits pick the two pixels'
+    Per pair of pixels ``(r, 2j)``, ``(r, 2j + 1)``: ``h = keyed_hash(n, key0, key1)`` with
+    ``n = r * ceil(cols / 2) + j``; its low and high 16 bits pick the two pixels'
     unit-mean exponential quantiles ``exp_table[.]``. ``intensity = (mean + add) * e``;
     ``out = lut[bits(intensity * gain[col]) >> shift]`` (the display law tabulated on the
     float's exponent and top mantissa bits). ``hashes``: a scratch uint32 row of
@@ -441,7 +448,7 @@ def counter_speckle_display(mean, add, gain, key0, key1, exp_table, lut, shift, 
     for r in range(rows):
         base = u32(u32(r) * u32(half))
         for j in range(half):
-            hashes[j] = mix32(u32(mix32(u32(u32(u32(base + u32(j)) * u32(0x9E3779B9)) + key0)) ^ key1))
+            hashes[j] = keyed_hash(u32(base + u32(j)), key0, key1)
         for c in range(cols):
             v = (mean[r, c] + add) * exp_table[h16[c]]
             intensity[r, c] = v
@@ -479,14 +486,14 @@ def triangle_hits(prim, tfar, ng, dirs, tri_geom, geomid, dist, normal):
 def counter_k_speckle_display(mean, clutter, add, gain, key0, key1, exp_table, texture_table, lut, shift, intensity,
                               out):
     """:func:`counter_speckle_display` with K-distributed clutter: one hash per pixel
-    ``h = mix32(mix32(n * 0x9E3779B9 + key0) ^ key1)``, ``n = r * cols + c``; its low 16
+    ``h = keyed_hash(n, key0, key1)``, ``n = r * cols + c``; its low 16
     bits pick the speckle factor ``exp_table[.]``, its top 12 bits the unit-mean Gamma texture
     ``texture_table[.]``, which scales the mean where ``clutter`` (uint8, non-zero)."""
     rows, cols = mean.shape
     for r in range(rows):
         base = u32(u32(r) * u32(cols))
         for c in range(cols):
-            h = mix32(u32(mix32(u32(u32(u32(base + u32(c)) * u32(0x9E3779B9)) + key0)) ^ key1))
+            h = keyed_hash(u32(base + u32(c)), key0, key1)
             m = mean[r, c]
             if clutter[r, c]:
                 m = m * texture_table[h >> u32(20)]

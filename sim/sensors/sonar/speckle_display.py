@@ -1,4 +1,4 @@
-"""Rayleigh speckle, receiver noise and the dB display of echo lines in one compiled pass.
+"""Rayleigh or K speckle, receiver noise and the dB display of echo lines in one compiled pass.
 
 The sequential path (:func:`sim.sensors.sonar.speckle.add_speckle_and_noise`, then
 :func:`sim.sensors.sonar.display.to_uint8_db`) draws every pixel's uniform from the sensor's
@@ -27,9 +27,10 @@ sequential path (other draws); their statistics are.
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 from numpy.typing import NDArray
-
 from scipy.special import gammaincinv
 
 from sim.sensors.sonar.fused_passes import kernels
@@ -40,19 +41,27 @@ LUT_MANTISSA_BITS = 9  # mantissa bits of the display table's index (bucket widt
 _SHIFT = 23 - LUT_MANTISSA_BITS
 
 
-def exponential_quantiles(bits: int = EXP_TABLE_BITS) -> NDArray[np.float32]:
-    """(2**bits,) float32 quantiles of Exp(1) at ``(i + 1/2) / 2**bits``, scaled to unit mean."""
+def _unit_mean_table(quantile_fn, bits: int) -> NDArray[np.float32]:
+    """(2**bits,) float32 ``quantile_fn(q)`` at the bin middles ``q = (i + 1/2) / 2**bits``,
+    scaled to unit mean; read-only (a cached table is shared)."""
     q = (np.arange(1 << bits, dtype=np.float64) + 0.5) / (1 << bits)
-    e = -np.log1p(-q)
-    return (e / e.mean()).astype(np.float32)
+    v = quantile_fn(q)
+    table = (v / v.mean()).astype(np.float32)
+    table.flags.writeable = False
+    return table
+
+
+@lru_cache(maxsize=4)
+def exponential_quantiles(bits: int = EXP_TABLE_BITS) -> NDArray[np.float32]:
+    """(2**bits,) float32 quantiles of Exp(1) at ``(i + 1/2) / 2**bits``, scaled to unit mean
+    (built once per process, read-only)."""
+    return _unit_mean_table(lambda q: -np.log1p(-q), bits)
 
 
 def gamma_texture_quantiles(k_shape: float, bits: int = TEXTURE_TABLE_BITS) -> NDArray[np.float32]:
     """(2**bits,) float32 quantiles of Gamma(``k_shape``) at ``(i + 1/2) / 2**bits``, scaled to
     unit mean: the K distribution's texture (its variance 1 / ``k_shape``, less the cut tail)."""
-    q = (np.arange(1 << bits, dtype=np.float64) + 0.5) / (1 << bits)
-    g = gammaincinv(float(k_shape), q)
-    return (g / g.mean()).astype(np.float32)
+    return _unit_mean_table(lambda q: gammaincinv(float(k_shape), q), bits)
 
 
 def db_display_table(gain_db: float, dynamic_range_db: float) -> NDArray[np.uint8]:

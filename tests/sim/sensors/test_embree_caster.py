@@ -15,6 +15,7 @@ from sim.scene.world import build_world
 from sim.sensors import embree_scene
 from sim.sensors.analytic_caster import AnalyticBox, AnalyticCaster
 from sim.sensors.raycast import BACKGROUND_ID, MujocoRayCaster
+from tests.support import random_dirs
 
 pytestmark = pytest.mark.skipif(not embree_scene.available(), reason="embreex is not installed (pip install "
                                 "'auvsim[fast]')")
@@ -41,12 +42,6 @@ def box_scene(*, sphere: bool = False, backend: str = "embree") -> MujocoRayCast
     obj = np.array([BACKGROUND_ID, 0] + ([1] if sphere else []) + [-3])
     refl = np.array([0.3, 0.8] + ([0.9] if sphere else []) + [0.0])
     return MujocoRayCaster(m, d, obj, refl, mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "hull"), backend=backend)
-
-
-def random_dirs(n: int, seed: int = 0) -> np.ndarray:
-    v = np.random.default_rng(seed).normal(size=(n, 3))
-    v[:, 0] = np.abs(v[:, 0]) + 0.5
-    return v / np.linalg.norm(v, axis=1, keepdims=True)
 
 
 def test_box_and_plane_match_closed_form_intersections():

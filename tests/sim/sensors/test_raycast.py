@@ -9,6 +9,7 @@ import pytest
 from autonomy.frames import quat_from_rot, rot_from_euler
 from sim.sensors.analytic_caster import AnalyticBox, AnalyticCaster, AnalyticSphere
 from sim.sensors.raycast import BACKGROUND_ID, NO_HIT_ID, MujocoRayCaster
+from tests.support import random_dirs
 
 DEPTH = 6.0
 SPHERE_C, SPHERE_R = np.array([8.0, 1.0, 4.0]), 0.7
@@ -51,12 +52,6 @@ def test_a_seabed_plane_centred_beyond_the_range_is_still_hit():
 def analytic():
     return AnalyticCaster(DEPTH, 0.3, spheres=(AnalyticSphere(SPHERE_C, SPHERE_R, 0, 0.9),),
                           boxes=(AnalyticBox(BOX_C, BOX_H, 1, 0.8, BOX_R),))
-
-
-def random_dirs(n: int, seed: int = 0) -> np.ndarray:
-    v = np.random.default_rng(seed).normal(size=(n, 3))
-    v[:, 0] = np.abs(v[:, 0]) + 0.5
-    return v / np.linalg.norm(v, axis=1, keepdims=True)
 
 
 def test_known_intersections():
@@ -132,7 +127,7 @@ def test_embree_asked_without_embreex_warns_and_mujoco_casts(monkeypatch):
     import sim.sensors.raycast as raycast
 
     monkeypatch.setattr(embree_scene, "available", lambda: False)
-    monkeypatch.setattr(raycast, "_WARNED_NO_EMBREE", [])
+    raycast._warn_no_embree.cache_clear()  # once per process: this test's caster is the first
     base = scene()
     with pytest.warns(RuntimeWarning, match="embreex is not installed"):
         caster = MujocoRayCaster(base.model, base.data, base.geom_object_id, base.geom_reflectivity,
