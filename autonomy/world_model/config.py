@@ -67,6 +67,16 @@ class WorldModelConfig(StrictModel):
         "detection count this close (squared Mahalanobis distance, summed covariances) count as one, "
         "so hypotheses differing only in them merge; None: no merging (budget keeps the top worlds)",
     )
+    duplicate_mahalanobis2: PositiveFloat | None = Field(
+        11.34, description="objects of the world model whose track-to-track squared Mahalanobis distance "
+        "(their shared errors cancelled) passes this gate and whose centres are within "
+        "duplicate_max_separation_m are reported as one object, fused (Bar-Shalom-Campo); 11.34 = 99 % of "
+        "one object's pairs (3 dof); None: never",
+    )
+    duplicate_max_separation_m: PositiveFloat = Field(
+        0.5, description="objects closer than this are one echo to a forward-looking sonar's detector, "
+        "so the duplicate test may join them; farther ones are always two",
+    )
     max_per_world: int = Field(
         10, ge=1, le=100_000,
         description="once the budget is full, hypotheses kept per distinct set of objects; a further "

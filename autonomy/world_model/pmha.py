@@ -33,6 +33,13 @@ again holds ``max_hypotheses`` distinct worlds: the budget keeps the best of eac
 rather than permutations of one, and a birth is not starved. Below the budget the tree is
 exact.
 
+Should the best world still hold two anchors of one object (a second anchor born when one
+look fell outside the first's gate, each then absorbing some of the object's detections),
+the reported world model joins them: the track-to-track test and fusion of
+:mod:`autonomy.estimation.track_fusion` ([BarShalomCampo1986]), their shared errors as the
+cross-covariance (``duplicate_mahalanobis2``, ``duplicate_max_separation_m``). The hypothesis
+tree itself is unchanged.
+
 The model is assembled from the estimation roles of :mod:`autonomy.estimation`: a
 constant-position transition with a Kalman predictor (and its fixed-Gaussian fallback), an
 identity position-fix measurement model with a Kalman updater and a single-measurement
@@ -62,6 +69,7 @@ from autonomy.estimation.gater import MahalanobisGater, innovation_log_likelihoo
 from autonomy.estimation.initiator import SingleMeasurementInitiator
 from autonomy.estimation.measurement import PositionFix
 from autonomy.estimation.predictor import KalmanPredictor
+from autonomy.estimation.track_fusion import cross_covariance, fuse_tracks, track_distance2
 from autonomy.estimation.transition import ConstantPosition
 from autonomy.estimation.updater import ConsiderKalmanUpdater
 from autonomy.localization.geolocate import SHARED_ERRORS, LocalizedDetection
@@ -482,7 +490,15 @@ class PMHA:
         return tuple(sorted((self._anchors[v] for v in hyp), key=lambda a: a.id))
 
     def world_model(self, min_detections: int | None = None) -> list[WorldObject]:
-        """Objects of the most probable hypothesis with enough supporting detections."""
+        """Objects of the most probable hypothesis with enough supporting detections.
+
+        Two of them that are one object by the track-to-track test
+        (``duplicate_mahalanobis2`` within ``duplicate_max_separation_m``) are reported as one:
+        the symbol with more detections, the two estimates fused (Bar-Shalom-Campo, their
+        shared errors as the cross-covariance), the detections summed, the class pmfs
+        multiplied (both are posteriors from the uniform prior) and the existence the
+        probability of the hypotheses holding either symbol.
+        """
         n_min = self.cfg.min_detections if min_detections is None else min_detections
         exist: dict[int, float] = {}
         for lw, hyp in zip(self._log_w, self._hyps):
@@ -490,18 +506,58 @@ class PMHA:
             for v in hyp:
                 i = self._anchors[v].id
                 exist[i] = exist.get(i, 0.0) + p
-        return [
-            WorldObject(
-                id=a.id,
-                class_pmf=a.class_pmf.copy(),
-                pos_ned=a.pos_ned.copy(),
-                cov_ned=a.cov_ned.copy(),
-                n_detections=a.n_detections,
-                existence_probability=exist[a.id],
-            )
-            for a in self._world(self._hyps[0])
-            if a.n_detections >= n_min
-        ]
+        shown = [a for a in self._world(self._hyps[0]) if a.n_detections >= n_min]
+        groups = self._duplicate_groups(shown)
+        out = []
+        for a in shown:
+            members = groups.get(a.id)
+            if members is None:
+                continue
+            if len(members) == 1:
+                out.append(WorldObject(id=a.id, class_pmf=a.class_pmf.copy(), pos_ned=a.pos_ned.copy(),
+                                       cov_ned=a.cov_ned.copy(), n_detections=a.n_detections,
+                                       existence_probability=exist[a.id]))
+            else:
+                out.append(self._fused_object(members))
+        return out
+
+    def _duplicate_groups(self, anchors: list[Anchor]) -> dict[int, list[Anchor]]:
+        """{symbol of the kept anchor: [it, the anchors that are the same object]} for every
+        anchor of ``anchors``, greedily by detections (most first): an anchor joins the first
+        kept one it passes the duplicate test with (no chaining)."""
+        gate = self.cfg.duplicate_mahalanobis2
+        order = sorted(anchors, key=lambda a: (-a.n_detections, a.id))
+        groups: dict[int, list[Anchor]] = {}
+        for a in order:
+            if gate is not None:
+                for members in groups.values():
+                    k = members[0]
+                    if np.linalg.norm(a.pos_ned - k.pos_ned) > self.cfg.duplicate_max_separation_m:
+                        continue
+                    P12 = cross_covariance(k.consider_ned, a.consider_ned, 3)
+                    if track_distance2(k.pos_ned, k.cov_ned, a.pos_ned, a.cov_ned, P12) <= gate:
+                        members.append(a)
+                        break
+                else:
+                    groups[a.id] = [a]
+            else:
+                groups[a.id] = [a]
+        return groups
+
+    def _fused_object(self, members: list[Anchor]) -> WorldObject:
+        """One :class:`WorldObject` of duplicate anchors (the first, with most detections, kept)."""
+        k = members[0]
+        x, P = k.pos_ned, k.cov_ned
+        pmf = k.class_pmf.copy()
+        for a in members[1:]:
+            P12 = cross_covariance(k.consider_ned, a.consider_ned, 3)
+            x, P = fuse_tracks(x, P, a.pos_ned, a.cov_ned, P12)
+            pmf = class_update(pmf, a.class_pmf)
+        ids = {a.id for a in members}
+        p_any = sum(math.exp(float(lw)) for lw, hyp in zip(self._log_w, self._hyps)
+                    if any(self._anchors[v].id in ids for v in hyp))
+        return WorldObject(id=k.id, class_pmf=pmf, pos_ned=x, cov_ned=P,
+                           n_detections=sum(a.n_detections for a in members), existence_probability=p_any)
 
     def to_json(self) -> dict:
         """JSON-ready world model (write with ``json.dump``)."""

@@ -335,3 +335,19 @@ def test_world_model_ellipses_hold_the_shared_navigation_error(consider):
         assert lo <= np.mean(nees) <= hi, (np.mean(nees), lo, hi)
     else:
         assert np.mean(nees) > 3 * hi, np.mean(nees)
+
+
+def test_two_well_measured_objects_a_few_decimetres_apart_are_not_joined_as_duplicates():
+    """The duplicate test joins anchors only where their estimates are one object's: two
+    objects 0.3 m apart, each seen every scan with 2 cm noise, stay two (their difference is
+    hundreds of sigmas)."""
+    rng = np.random.default_rng(0)
+    a, b = np.array([0.0, 10.0, 4.0]), np.array([0.0, 10.3, 4.0])
+    pmha = PMHA(WorldModelConfig(), region_ned=REGION)
+    for k in range(20):
+        zs = [_z(k, p + rng.normal(0.0, 0.02, 3), var=0.0004) for p in (a, b)]
+        pmha.update(float(k), zs, lambda x: np.ones(len(x)))
+    objects = pmha.world_model()
+    assert len(objects) == 2
+    est = sorted(o.pos_ned[1] for o in objects)
+    assert est[0] == pytest.approx(10.0, abs=0.03) and est[1] == pytest.approx(10.3, abs=0.03)

@@ -127,11 +127,19 @@ def test_an_anchor_near_a_report_of_the_scan_pays_for_its_miss_so_one_object_has
     assert len(objects) == 1
     assert np.linalg.norm(objects[0].pos_ned - truth) < 0.05
     # the same reports into a PMHA blind to the scan's own evidence split the object in two
+    # anchors in its best world; the reported world model's duplicate test joins them again
     blind = PMHA(WorldModelConfig(), region_ned=REGION)
     for r in reports:
         det = r.to_localized(ORIGIN, EPOCH_S, CLASSES)
         blind.update(det.t_s, [det], unseen)
-    assert len(blind.world_model()) == 2
+    assert len(blind.hypotheses[0].anchors) == 2
+    assert len(blind.world_model()) == 1
+    assert np.linalg.norm(blind.world_model()[0].pos_ned - truth) < 0.05
+    no_join = PMHA(WorldModelConfig(duplicate_mahalanobis2=None), region_ned=REGION)
+    for r in reports:
+        det = r.to_localized(ORIGIN, EPOCH_S, CLASSES)
+        no_join.update(det.t_s, [det], unseen)
+    assert len(no_join.world_model()) == 2
 
 
 def test_near_reports_marks_points_within_the_gate_of_a_report():
