@@ -27,6 +27,9 @@ SHAPES = (
     {"shape": "box", "size_m": [0.8, 0.5, 0.4], "rpy_deg": [0.0, 0.0, 40.0]},
     {"shape": "tyre", "radius_m": 0.45, "tube_radius_m": 0.15},
 )
+#: one-sigma spread of the leading edge's distance before an object's centre against the
+#: localisation's 0.5 m range offset, over SHAPES (the inspection planner's reference bias)
+REFERENCE_BIAS_SIGMA_M = 0.3
 AREA_N_M = (-7.0, 7.0)  # inside the legs at N = 8 .. -8
 AREA_E_M = (3.0, 29.0)  # inside the legs' E 0 .. 32
 
@@ -76,6 +79,9 @@ def main() -> None:
                                          float(seabed["depth_m"]), center)
         c = args.current_mps / math.sqrt(2.0)  # from the south-west, across the east-west legs
         scn["world"]["current"] = {"velocity_ned_mps": [round(c, 4), round(c, 4), 0.0]}
+        # objects of several sizes (radii 0.15-0.5 m) against the one 0.5 m range offset: when the
+        # inspection planner is switched on, its look model carries that leading-edge bias
+        scn["autonomy"]["guidance"]["inspection"] = {"reference_bias_sigma_m": REFERENCE_BIAS_SIGMA_M}
         path = out / f"mixed{n}.yaml"
         path.write_text(yaml.safe_dump(scn, sort_keys=False, default_flow_style=None))
         load_scenario(str(path))  # validates

@@ -141,6 +141,10 @@ class InspectionConfig(StrictModel):
     aspect_sigma_m: PositiveFloat = Field(
         0.3, le=10.0, description="where-on-the-object error of one aspect (look model): cssn_lawnmower's world "
         "after one coverage pass is off by 0.24-0.36 m")
+    reference_bias_sigma_m: NonNegFloat = Field(
+        0.0, le=10.0, description="look model: the box's reference point (its leading edge) lies this far (one "
+        "sigma; an object's radius) before the object's centre along every line of sight, the same for all "
+        "looks at it, so looks from opposite sides cancel it; 0: no such bias (legs may be flown either way)")
     aspect_bin_deg: float = Field(30.0, ge=5.0, le=180.0, description="looks closer in bearing count as one aspect")
     max_legs_per_object: int = Field(2, ge=1, le=100, description="inspection legs per object at most")
     area_margin_m: NonNegFloat = Field(2.0, le=100.0, description="legs stay inside the survey area grown by this")

@@ -108,7 +108,8 @@ def planner_params(cfg: InspectionConfig, survey: SurveyConfig, *, range_sigma_m
         class_entropy_bits=cfg.class_entropy_bits, confident_existence=cfg.confident_existence,
         leg_start_range_m=start_m, leg_end_range_m=end_m, altitude_m=survey.altitude_m,
         range_sigma_m=range_sigma_m, altitude_sigma_m=altitude_sigma_m, azimuth_sigma_rad=azimuth_sigma_rad,
-        aspect_sigma_m=cfg.aspect_sigma_m, aspect_bin_deg=cfg.aspect_bin_deg,
+        aspect_sigma_m=cfg.aspect_sigma_m, reference_bias_sigma_m=cfg.reference_bias_sigma_m,
+        aspect_bin_deg=cfg.aspect_bin_deg,
         max_legs_per_object=cfg.max_legs_per_object, area_margin_m=cfg.area_margin_m)
 
 

@@ -118,6 +118,7 @@ class PlannerParams:
     altitude_sigma_m: float = 0.1
     azimuth_sigma_rad: float = 0.015
     aspect_sigma_m: float = 0.3
+    reference_bias_sigma_m: float = 0.0
     aspect_bin_deg: float = 30.0
     n_headings: int = 24
     max_legs_per_object: int = 2
@@ -201,17 +202,38 @@ def look_information(params: PlannerParams, bearing_rad: ArrayLike, ground_range
             + v[..., :, None] * v[..., None, :] / var_across[..., None, None])
 
 
-def look_covariance(params: PlannerParams, record: LookRecord) -> FloatArray:
-    """(2, 2) look covariance of an object's recorded looks (large when it has none), m^2
-    (kept on the record until its next look)."""
-    if record._cov is not None:
-        return record._cov
+def look_terms(params: PlannerParams, record: LookRecord) -> tuple[FloatArray, FloatArray]:
+    """An object's looks as (information (2, 2), bias information (2,)): ``sum_k I_k`` (plus a
+    1e-4 m^-2 floor) and ``sum_k I_k u_k``, with ``I_k`` each aspect's
+    :func:`look_information` and ``u_k`` its line of sight (unit NE, from the sonar)."""
     info = np.eye(2) * 1e-4
+    bias = np.zeros(2)
     if record.aspects:
         b = np.array([v[0] for v in record.aspects])
         g = np.array([v[1] for v in record.aspects])
-        info = info + look_information(params, b, g).sum(axis=0)
-    record._cov = np.linalg.inv(info)
+        info_k = look_information(params, b, g)
+        info = info + info_k.sum(axis=0)
+        bias = np.einsum("kij,kj->i", info_k, np.stack([np.cos(b), np.sin(b)], axis=-1))
+    return info, bias
+
+
+def covariance_from_terms(params: PlannerParams, info: ArrayLike, bias: ArrayLike) -> FloatArray:
+    """(..., 2, 2) look covariance from :func:`look_terms` (stacked along leading axes): the
+    fused estimate ``P sum_k I_k z_k`` with ``P = (sum_k I_k)^-1`` moves by ``m = P sum_k I_k u_k``
+    per metre of the reference-point bias (the leading edge lies a radius before the centre
+    along every line of sight), so ``P + reference_bias_sigma_m^2 m m^T``: looks from opposite
+    sides cancel it, looks from one side keep it whole."""
+    P = np.linalg.inv(np.asarray(info, dtype=float))
+    m = np.einsum("...ij,...j->...i", P, np.asarray(bias, dtype=float))
+    return P + params.reference_bias_sigma_m ** 2 * m[..., :, None] * m[..., None, :]
+
+
+def look_covariance(params: PlannerParams, record: LookRecord) -> FloatArray:
+    """(2, 2) look covariance of an object's recorded looks (large when it has none), m^2
+    (:func:`covariance_from_terms`; kept on the record until its next look)."""
+    if record._cov is not None:
+        return record._cov
+    record._cov = covariance_from_terms(params, *look_terms(params, record))
     return record._cov
 
 
@@ -395,18 +417,20 @@ class InspectionPlanner:
         p = self.params
         if not objects:
             return []
-        covs = np.array([look_covariance(p, self.looks.get(o.id, LookRecord())) for o in objects])  # (m, 2, 2)
-        info = np.linalg.inv(covs)
+        records = [self.looks.get(o.id, LookRecord()) for o in objects]
+        covs = np.array([look_covariance(p, r) for r in records])  # (m, 2, 2)
+        terms = [look_terms(p, r) for r in records]
+        info = np.array([t[0] for t in terms])  # (m, 2, 2)
+        bias = np.array([t[1] for t in terms])  # (m, 2)
         g_mean = 0.5 * (p.leg_start_range_m + p.leg_end_range_m)
         heads = self._headings
-        post_info = info[:, None] + look_information(p, heads, np.full(len(heads), g_mean))[None]  # (m, h, 2, 2)
-        a, b, d = post_info[..., 0, 0], post_info[..., 0, 1], post_info[..., 1, 1]
-        det = a * d - b * b
-        # eigenvalues of the inverse: 1 / eigenvalues of the information; the largest is 1 / the smallest
-        lam_min_info = 0.5 * (a + d) - np.sqrt(0.25 * (a - d) ** 2 + b * b)
-        lam = 1.0 / np.maximum(lam_min_info, 1e-12 * np.maximum(det, 1e-300))
+        u = np.stack([np.cos(heads), np.sin(heads)], axis=1)  # (h, 2): the new look's line of sight
+        new_info = look_information(p, heads, np.full(len(heads), g_mean))  # (h, 2, 2)
+        post = covariance_from_terms(p, info[:, None] + new_info[None],
+                                     bias[:, None] + np.einsum("hij,hj->hi", new_info, u)[None])  # (m, h, 2, 2)
+        a, b, d = post[..., 0, 0], post[..., 0, 1], post[..., 1, 1]
+        lam = 0.5 * (a + d) + np.sqrt(0.25 * (a - d) ** 2 + b * b)  # the largest eigenvalue
         obj_ne = np.array([np.asarray(o.pos_ned, dtype=float)[:2] for o in objects])  # (m, 2)
-        u = np.stack([np.cos(heads), np.sin(heads)], axis=1)  # (h, 2)
         starts = obj_ne[:, None] - p.leg_start_range_m * u[None]
         ends = obj_ne[:, None] - p.leg_end_range_m * u[None]
         inside = self.area.contains(starts, p.area_margin_m) & self.area.contains(ends, p.area_margin_m)
@@ -424,7 +448,11 @@ class InspectionPlanner:
         return out
 
     def _flipped(self, leg: InspectionLeg) -> InspectionLeg | None:
+        """The same leg flown the other way, when that gives the same information (no
+        reference-point bias in the look model) and stays in the area; else None."""
         p = self.params
+        if p.reference_bias_sigma_m > 0.0:
+            return None
         h = leg.heading_rad + math.pi
         u = np.array([math.cos(h), math.sin(h)])
         o = np.asarray(leg.object_ne_m)
@@ -470,5 +498,5 @@ def brute_force_order(start_ne_m: ArrayLike, legs_start_ne_m: ArrayLike, legs_en
 
 
 __all__ = ["InspectionLeg", "InspectionPlanner", "LookRecord", "PlannerParams", "SurveyArea", "brute_force_order",
-           "class_entropy_bits", "look_covariance", "look_information", "semi_major_2sigma_m", "tour_order",
+           "class_entropy_bits", "covariance_from_terms", "look_covariance", "look_terms", "look_information", "semi_major_2sigma_m", "tour_order",
            "tour_length_m"]

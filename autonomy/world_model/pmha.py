@@ -108,6 +108,8 @@ class WorldObject:
     cov_ned: FloatArray  # (3, 3)
     n_detections: int
     existence_probability: float  # total probability of the hypotheses holding this symbol
+    #: symbols of duplicate anchors joined into this object (empty: none); see PMHA.world_model
+    merged_ids: tuple[int, ...] = ()
 
     @property
     def class_name(self) -> str:
@@ -122,6 +124,7 @@ class WorldObject:
             "cov_ned": [[float(v) for v in row] for row in self.cov_ned],
             "n_detections": self.n_detections,
             "existence_probability": self.existence_probability,
+            "merged_ids": list(self.merged_ids),
         }
 
 
@@ -557,7 +560,8 @@ class PMHA:
         p_any = sum(math.exp(float(lw)) for lw, hyp in zip(self._log_w, self._hyps)
                     if any(self._anchors[v].id in ids for v in hyp))
         return WorldObject(id=k.id, class_pmf=pmf, pos_ned=x, cov_ned=P,
-                           n_detections=sum(a.n_detections for a in members), existence_probability=p_any)
+                           n_detections=sum(a.n_detections for a in members), existence_probability=p_any,
+                           merged_ids=tuple(a.id for a in members[1:]))
 
     def to_json(self) -> dict:
         """JSON-ready world model (write with ``json.dump``)."""

@@ -129,11 +129,13 @@ class InspectionFeature(MissionFeature):
     def add_metrics(self, metrics: dict[str, Any], log: Any) -> None:
         g, cfg = self.guidance, self.ctx.scenario.autonomy.guidance.inspection
         final = {o.id: o for o in self._final_objects()}
+        # a leg's object may have been joined into another as its duplicate: it lives on there
+        joined = {m: o for o in final.values() for m in o.merged_ids}
         true_pos = np.array([t.pos_ned for t in self.ctx.scenario.world.targets], dtype=float).reshape(-1, 3)
         per_object = []
         false_legs = 0
         for leg in self.legs:
-            obj = final.get(leg["object_id"])
+            obj = final.get(leg["object_id"], joined.get(leg["object_id"]))
             near = (obj is not None and len(true_pos)
                     and float(np.min(np.linalg.norm(true_pos[:, :2] - np.asarray(obj.pos_ned)[:2], axis=1))) <= FALSE_RADIUS_M)
             leg["object_ends_false"] = not near

@@ -12,8 +12,8 @@ import pytest
 from autonomy.guidance.config import InspectionConfig, SurveyConfig
 from autonomy.guidance.inspection import coverage_spacing_m, leg_ranges_m, plan_coverage
 from autonomy.guidance.inspection_planner import (
-    InspectionPlanner, LookRecord, PlannerParams, SurveyArea, brute_force_order, look_covariance,
-    look_information, semi_major_2sigma_m, tour_length_m, tour_order)
+    InspectionPlanner, LookRecord, PlannerParams, SurveyArea, brute_force_order, covariance_from_terms,
+    look_covariance, look_information, look_terms, semi_major_2sigma_m, tour_length_m, tour_order)
 
 
 @dataclass(frozen=True)
@@ -112,6 +112,61 @@ def test_two_objects_needing_opposite_aspects_get_crossing_headings():
     assert abs(axis_deg(legs[0].heading_rad) - 90.0) <= 15.0  # a: look east-west
     ax_b = axis_deg(legs[1].heading_rad)
     assert min(ax_b, 180.0 - ax_b) <= 15.0  # b: look north-south
+
+
+def test_reference_bias_covariance_matches_monte_carlo_fusion_of_biased_looks():
+    """Looks z_k = x + rho u_k + n_k (n_k ~ N(0, I_k^-1), rho ~ N(0, sigma^2) the same for all
+    looks at the object: the leading edge a radius before the centre along each line of sight),
+    fused with information weights as the world model does: their error covariance is the look
+    model's."""
+    p = PlannerParams(reference_bias_sigma_m=0.3)
+    rec = LookRecord()
+    for bearing_deg, g in ((90.0, 12.0), (150.0, 6.0), (200.0, 8.0)):
+        rec.add(math.radians(bearing_deg), g, math.radians(30.0))
+    b = np.array([a[0] for a in rec.aspects])
+    g = np.array([a[1] for a in rec.aspects])
+    I_k = look_information(p, b, g)
+    u = np.stack([np.cos(b), np.sin(b)], axis=1)
+    rng = np.random.default_rng(0)
+    n = 100_000
+    rho = rng.normal(0.0, 0.3, n)
+    noise = np.stack([rng.multivariate_normal(np.zeros(2), np.linalg.inv(I), n) for I in I_k], axis=1)  # (n, k, 2)
+    z = rho[:, None, None] * u[None] + noise
+    P = np.linalg.inv(I_k.sum(axis=0))
+    fused = np.einsum("ij,nj->ni", P, np.einsum("kij,nkj->ni", I_k, z))
+    # (the model's 1e-4 m^-2 information floor is negligible against these looks')
+    np.testing.assert_allclose(np.cov(fused.T), look_covariance(p, rec), atol=0.01 * np.trace(P))
+
+
+def test_opposite_looks_cancel_the_reference_bias_and_one_sided_looks_keep_it():
+    p = PlannerParams(reference_bias_sigma_m=0.3)
+    p0 = PlannerParams(reference_bias_sigma_m=0.0)
+    opposite, same_side = LookRecord(), LookRecord()
+    opposite.add(0.0, 8.0, math.radians(30.0))
+    opposite.add(math.pi, 8.0, math.radians(30.0))
+    same_side.add(0.0, 8.0, math.radians(30.0))
+    same_side.add(0.0, 8.0, math.radians(30.0), frames=10)
+    np.testing.assert_allclose(look_covariance(p, opposite), look_covariance(p0, opposite), atol=1e-12)
+    info, bias = look_terms(p, same_side)
+    bump = covariance_from_terms(p, info, bias) - covariance_from_terms(p0, info, bias)
+    np.testing.assert_allclose(bump, np.diag([0.09, 0.0]), atol=1e-5)  # the whole bias, along the north look (1e-4 floor)
+
+
+def test_with_a_reference_bias_the_next_leg_looks_from_the_other_side():
+    """An object seen looking east: with no bias model the best new look crosses the old one
+    (north or south); with the leading-edge bias the planner sends the vehicle round to look
+    westwards at it, against the bias (and does not flip the leg back to the nearer side)."""
+    obj = Obj(0, np.array([0.0, 0.0, 10.0]))
+    plain, biased = planner(), planner(reference_bias_sigma_m=0.3)
+    for pl in (plain, biased):
+        look_from(pl, obj, 90.0, 10.0)
+    leg = plain.plan([obj], (0.0, -15.0))[0]
+    assert abs(axis_deg(leg.heading_rad) - 0.0) <= 15.0 or abs(axis_deg(leg.heading_rad) - 180.0) <= 15.0
+    leg_b = biased.plan([obj], (0.0, -15.0))[0]
+    # E-optimal balances crossing the old look and opposing it: a heading with a westward part
+    assert math.sin(leg_b.heading_rad) < -0.4
+    assert leg_b.start_ne_m[1] > 0.0  # it starts east of the object, the far side from the vehicle
+    assert leg_b.predicted_2sigma_m < leg_b.now_2sigma_m
 
 
 def test_a_false_alarm_is_never_visited():

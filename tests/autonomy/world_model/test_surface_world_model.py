@@ -134,6 +134,10 @@ def test_an_anchor_near_a_report_of_the_scan_pays_for_its_miss_so_one_object_has
         blind.update(det.t_s, [det], unseen)
     assert len(blind.hypotheses[0].anchors) == 2
     assert len(blind.world_model()) == 1
+    joined = blind.world_model()[0]
+    assert joined.n_detections == sum(a.n_detections for a in blind.hypotheses[0].anchors)
+    assert {joined.id, *joined.merged_ids} == {a.id for a in blind.hypotheses[0].anchors}
+    assert joined.to_dict()["merged_ids"] == list(joined.merged_ids)
     assert np.linalg.norm(blind.world_model()[0].pos_ned - truth) < 0.05
     no_join = PMHA(WorldModelConfig(duplicate_mahalanobis2=None), region_ned=REGION)
     for r in reports:
