@@ -26,7 +26,14 @@ altitude ``h`` (slant range ``r``) has an along-line-of-sight error of ``(r/g) s
 lands adds an aspect-dependent error (``aspect_sigma_m`` along, ``aspect_sigma_m / 2``
 across) that repeated frames from one aspect do not average out. Each aspect bin
 (``aspect_bin_deg``) contributes its best (shortest-range) look's information
-``u u^T / s_along^2 + v v^T / s_across^2``; the look covariance is the inverse of their sum.
+``u u^T / s_along^2 + v v^T / s_across^2``; the look covariance is the inverse of their sum,
+plus the reference-point bias: the box's reference point (its leading edge, moved by the
+localisation's range offset) misses the object's centre by the same unknown distance
+(``reference_bias_sigma_m``, one sigma) along every line of sight, so the fused estimate moves
+by ``m = P sum_k I_k u_k`` per metre of it and the covariance gains
+``reference_bias_sigma_m^2 m m^T``: looks from opposite sides cancel it, looks from one side
+keep it whole. With it on, a leg is flown in its own direction (the opposite one is another
+look).
 A new look's heading is the one that most shrinks that covariance's largest eigenvalue
 (E-optimal, [Pukelsheim1993]): it crosses the previous ellipse ([P000] eq. 6: the error grows with range and
 with the elevation ambiguity; a new azimuth shrinks the ellipse across the previous one).
@@ -35,7 +42,7 @@ Order: an open tour from the vehicle through the legs, exact (Held-Karp dynamic 
 [HeldKarp1962]) up to ``exact_tour_max`` legs, else nearest neighbour improved by 2-opt
 ([Croes1958]); each leg's direction
 (its heading or the opposite one, same information) is the one whose start is nearer the
-previous leg's end. Legs whose start or end leaves the survey area grown by
+previous leg's end (unless the reference bias is modelled). Legs whose start or end leaves the survey area grown by
 ``area_margin_m`` are not used (the next-best heading is).
 """
 
