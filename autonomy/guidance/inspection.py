@@ -332,6 +332,7 @@ class InspectionGuidance:
         t_s = float(nav.t_s)
         self._t_s = t_s
         self._pos = np.asarray(nav.pos_ned, dtype=float)[:2].copy()
+        self.planner.set_navigation_covariance(nav.cov_pos_ned)
         self._yaw = float(nav.rpy_rad[2])
         if self.phase != "done" and t_s >= self.cfg.time_budget_s:
             self._finish(t_s, "budget")

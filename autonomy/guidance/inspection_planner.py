@@ -14,7 +14,10 @@ test                        meaning
 ==========================  ==================================================================
 confirmed                   existence >= ``confirm_existence`` and detections >=
                             ``confirm_detections``; an unconfirmed object is never visited
-uncertain position          world-model 2-sigma horizontal semi-major > ``position_2sigma_m``
+uncertain position          world-model 2-sigma horizontal semi-major > ``position_2sigma_m``,
+                            its navigation part taken out (the vehicle's horizontal position
+                            covariance now, :meth:`InspectionPlanner.set_navigation_covariance`:
+                            every look shares it, so no leg can shrink it)
 uncertain look geometry     the looks' predicted 2-sigma semi-major > ``look_2sigma_m``
 uncertain class             class entropy > ``class_entropy_bits``
 uncertain existence         existence < ``confident_existence``
@@ -351,11 +354,13 @@ class InspectionPlanner:
         self.area = area
         self.looks: dict[int, LookRecord] = {}
         self.legs_flown: dict[int, int] = {}
+        self.nav_cov_ne_m2 = np.zeros((2, 2))
         self._n_det: dict[int, int] = {}
         self._bin_rad = math.radians(params.aspect_bin_deg)
         self._headings = np.arange(params.n_headings) * (2.0 * math.pi / params.n_headings)
 
     def reset(self) -> None:
+        self.nav_cov_ne_m2 = np.zeros((2, 2))
         self.looks.clear()
         self.legs_flown.clear()
         self._n_det.clear()
@@ -373,6 +378,18 @@ class InspectionPlanner:
                                                               self._bin_rad, o.n_detections - n_old)
             self._n_det[o.id] = int(o.n_detections)
 
+    def set_navigation_covariance(self, cov_ne_m2: ArrayLike) -> None:
+        """The vehicle's horizontal position covariance now ((2, 2) m^2, north-east; from the
+        navigation estimate): the part of every world-model ellipse that looks cannot shrink."""
+        self.nav_cov_ne_m2 = np.asarray(cov_ne_m2, dtype=float)[:2, :2].copy()
+
+    def reducible_2sigma_m(self, obj) -> float:
+        """2-sigma semi-major of the world-model ellipse less the navigation covariance
+        (eigenvalues clipped at 0), m: what further looks can shrink."""
+        c = np.asarray(obj.cov_ned, dtype=float)[:2, :2] - self.nav_cov_ne_m2
+        w = np.linalg.eigvalsh(0.5 * (c + c.T))
+        return 2.0 * math.sqrt(max(float(w[-1]), 0.0))
+
     def leg_flown(self, object_id: int) -> None:
         """Count a finished inspection leg of ``object_id`` (at most ``max_legs_per_object``)."""
         self.legs_flown[object_id] = self.legs_flown.get(object_id, 0) + 1
@@ -389,7 +406,7 @@ class InspectionPlanner:
         """Why a confirmed object is not yet confident (empty: confident)."""
         p = self.params
         out = []
-        if semi_major_2sigma_m(np.asarray(obj.cov_ned)[:2, :2]) > p.position_2sigma_m:
+        if self.reducible_2sigma_m(obj) > p.position_2sigma_m:
             out.append("position")
         if self.look_2sigma_m(obj) > p.look_2sigma_m:
             out.append("look geometry")

@@ -263,3 +263,20 @@ def test_leg_ranges_from_the_beam_put_the_object_a_quarter_beam_either_side_of_t
     assert leg_ranges_m(InspectionConfig(), 2.0, 0.2, 0.3) == (12.0, 5.0)
     with pytest.raises(ValueError, match="from_beam"):
         leg_ranges_m(cfg, 2.0, math.radians(3.0), math.radians(20.0))  # the far edge looks above the horizon
+
+
+def test_the_navigation_part_of_an_ellipse_does_not_call_for_a_leg():
+    """A world-model ellipse of 2-sigma 1.2 m (above position_2sigma_m = 1.0) is uncertain in
+    position while the navigation is exact; when 0.5 m of its 0.6 m sigma is the vehicle's own
+    navigation error now (shared by every look), what looks can shrink is 2 sqrt(0.36 - 0.25)
+    = 0.66 m, and position is no reason for a leg."""
+    p = planner()
+    obj = Obj(0, np.array([0.0, 0.0, 10.0]), cov_ned=np.diag([0.36, 0.36, 0.01]))
+    for bearing in (0.0, 90.0, 180.0, 270.0):
+        look_from(p, obj, bearing, 6.0)
+    assert p.reasons(obj) == ["position"]
+    p.set_navigation_covariance(np.diag([0.25, 0.25, 0.04]))
+    assert p.reducible_2sigma_m(obj) == pytest.approx(2.0 * math.sqrt(0.11))
+    assert p.reasons(obj) == []
+    p.reset()
+    assert p.reducible_2sigma_m(obj) == pytest.approx(1.2)
