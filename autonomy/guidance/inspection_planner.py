@@ -14,6 +14,9 @@ test                        meaning
 ==========================  ==================================================================
 confirmed                   existence >= ``confirm_existence`` and detections >=
                             ``confirm_detections``; an unconfirmed object is never visited
+in the area                 inside the survey area grown by ``area_margin_m``; objects beyond
+                            it (a basin wall's echoes) are not the survey's to inspect, nor
+                            wait for
 uncertain position          world-model 2-sigma horizontal semi-major > ``position_2sigma_m``,
                             its navigation part taken out (the vehicle's horizontal position
                             covariance now, :meth:`InspectionPlanner.set_navigation_covariance`:
@@ -399,6 +402,10 @@ class InspectionPlanner:
         p = self.params
         return obj.existence_probability >= p.confirm_existence and obj.n_detections >= p.confirm_detections
 
+    def in_area(self, obj) -> bool:
+        """Whether the object lies in the survey area grown by ``area_margin_m``."""
+        return bool(self.area.contains(np.asarray(obj.pos_ned, dtype=float)[:2], self.params.area_margin_m))
+
     def look_2sigma_m(self, obj) -> float:
         return semi_major_2sigma_m(look_covariance(self.params, self.looks.get(obj.id, LookRecord())))
 
@@ -423,12 +430,12 @@ class InspectionPlanner:
         """Confirmed, not confident objects with legs left, in the world model's order
         (``refine``: confident ones too, to use a time budget that is left)."""
         p = self.params
-        return [o for o in objects if self.confirmed(o) and (refine or not self.confident(o))
+        return [o for o in objects if self.confirmed(o) and self.in_area(o) and (refine or not self.confident(o))
                 and self.legs_flown.get(o.id, 0) < p.max_legs_per_object]
 
     def map_confident(self, objects: Sequence) -> bool:
-        """Every confirmed object is confident."""
-        return all(self.confident(o) for o in objects if self.confirmed(o))
+        """Every confirmed object in the area is confident."""
+        return all(self.confident(o) for o in objects if self.confirmed(o) and self.in_area(o))
 
     # -- planning -----------------------------------------------------------------------
     def best_leg(self, obj) -> InspectionLeg | None:

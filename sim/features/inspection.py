@@ -144,7 +144,7 @@ class InspectionFeature(MissionFeature):
             record = g.planner.looks.get(oid)
             per_object.append(dict(
                 id=oid, class_name=obj.class_name, detections=int(obj.n_detections),
-                confirmed=g.planner.confirmed(obj), confident=g.planner.confident(obj),
+                confirmed=g.planner.confirmed(obj), in_area=g.planner.in_area(obj), confident=g.planner.confident(obj),
                 not_confident_because=g.planner.reasons(obj) if g.planner.confirmed(obj) else [],
                 inspection_legs=sum(1 for leg in self.legs if leg["object_id"] == oid),
                 aspects=0 if record is None else len(record.aspects),
@@ -224,13 +224,13 @@ class InspectionFeature(MissionFeature):
         if not ins:
             return []
         objs = ins["objects"]
-        n_conf = sum(1 for o in objs if o["confirmed"])
-        n_ok = sum(1 for o in objs if o["confirmed"] and o["confident"])
+        n_conf = sum(1 for o in objs if o["confirmed"] and o.get("in_area", True))
+        n_ok = sum(1 for o in objs if o["confirmed"] and o.get("in_area", True) and o["confident"])
         breaks = f", {ins['break_offs']} break-off(s)" if ins.get("break_offs") else ""
         return [f"inspection ({ins['mode']}): {ins['coverage_legs']} coverage leg(s){breaks}; {ins['legs_sent']} "
                 f"inspection leg(s) sent, {ins['legs_started']} started, {ins['legs_completed']} completed, "
                 f"{ins['legs_ended_early']} ended early (object confident on the way), {ins['legs_at_false_objects']} "
-                f"aimed at false objects; {n_ok}/{n_conf} confirmed objects confident, confident map at "
+                f"aimed at false objects; {n_ok}/{n_conf} confirmed objects in the area confident, confident map at "
                 f"{_fmt(ins['time_to_confident_map_s'], '.0f', ' s')}; ended: {ins['end_reason']}"]
 
 

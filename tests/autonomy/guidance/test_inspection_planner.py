@@ -280,3 +280,14 @@ def test_the_navigation_part_of_an_ellipse_does_not_call_for_a_leg():
     assert p.reasons(obj) == []
     p.reset()
     assert p.reducible_2sigma_m(obj) == pytest.approx(1.2)
+
+
+def test_an_object_beyond_the_survey_area_is_neither_inspected_nor_waited_for():
+    """A confirmed, uncertain object 5 m outside the area (a basin wall's echo) gets no leg and
+    does not keep the map from being confident; moved inside, it gets one."""
+    p = planner()
+    outside = Obj(0, np.array([0.0, 25.0, 10.0]), class_pmf=np.array([0.5, 0.5]))  # E 25 > 20 + 2
+    assert p.confirmed(outside) and not p.in_area(outside) and not p.confident(outside)
+    assert p.plan([outside], (0.0, 0.0)) == [] and p.map_confident([outside])
+    inside = Obj(0, np.array([0.0, 15.0, 10.0]), class_pmf=np.array([0.5, 0.5]))
+    assert [leg.object_id for leg in p.plan([inside], (0.0, 0.0))] == [0] and not p.map_confident([inside])
