@@ -108,6 +108,21 @@ def run_one(args: tuple[str, int, str, float | None, tuple[str, ...], str]) -> d
     return out
 
 
+RUN_KEYS = ("layout", "seed", "variant", "mission_time_s")
+
+
+def _read_runs(path: Path, flag: str) -> list[dict] | str:
+    """The runs of a study's ``--json`` file, or a one-line reason it is not one."""
+    try:
+        rows = json.loads(path.read_text())
+    except (OSError, ValueError) as exc:
+        return f"{flag}: cannot read {exc}"
+    if not isinstance(rows, list) or not rows or not all(isinstance(r, dict) and all(k in r for k in RUN_KEYS)
+                                                         for r in rows):
+        return f"{flag} {path}: not a file of runs written by this script's --json (a non-empty list of runs)"
+    return rows
+
+
 def _table(rows: list[dict]) -> list[str]:
     """Per layout and navigation source: one row per variant, summed or averaged over seeds."""
     lines = []
@@ -190,12 +205,25 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--tabulate", type=Path, nargs="+", metavar="JSON",
                     help="run nothing: print the tables (and --png) of earlier --json files")
     a = ap.parse_args(argv)
-    if a.tabulate:
-        try:
-            rows = [r for f in a.tabulate for r in json.loads(f.read_text())]
-        except (OSError, ValueError) as exc:
-            print(f"--tabulate: cannot read {exc}", file=sys.stderr)
+    for flag, path in (("--json", a.json), ("--png", a.png)):
+        if path is not None and not path.resolve().parent.is_dir():
+            print(f"{flag} {path}: its folder does not exist", file=sys.stderr)
             return 2
+        if path is not None and path.is_dir():
+            print(f"{flag} {path}: is a folder; give a file name", file=sys.stderr)
+            return 2
+    if a.no_inspect and not a.equal_time:
+        print("--no-inspect: only with --equal-time (it skips the finish-when-confident runs of that study)",
+              file=sys.stderr)
+        return 2
+    if a.tabulate:
+        rows = []
+        for f in a.tabulate:
+            read = _read_runs(f, "--tabulate")
+            if isinstance(read, str):
+                print(read, file=sys.stderr)
+                return 2
+            rows += read
         print("\n".join(_table(rows)))
         if a.png:
             plot(rows, a.png)
@@ -219,13 +247,22 @@ def main(argv: list[str] | None = None) -> int:
             # the inspection runs' overrides, checked before any mission flies
             load_scenario(LAYOUTS.get(layout, layout), ["autonomy.guidance.inspection.enabled=true", *a.set])
         except (FileNotFoundError, ScenarioError, ValueError) as exc:
-            print(f"--layout {layout} / --set: {exc}".splitlines()[0], file=sys.stderr)
+            print(f"--layout {layout} / --set: {exc} (layouts: {', '.join(LAYOUTS)} or a scenario)".splitlines()[0],
+                  file=sys.stderr)
             return 2
     rows: list[dict] = []
     extra = tuple(a.set)
     if a.lawnmower_json:
-        rows = [r for r in json.loads(a.lawnmower_json.read_text()) if r["variant"] == "lawnmower"
+        read = _read_runs(a.lawnmower_json, "--lawnmower-json")
+        if isinstance(read, str):
+            print(read, file=sys.stderr)
+            return 2
+        rows = [r for r in read if r["variant"] == "lawnmower"
                 and r.get("nav_source") == a.nav and r["layout"] in layouts and r["seed"] in seeds]
+        missing = sorted({(lay, s) for lay in layouts for s in seeds} - {(r["layout"], r["seed"]) for r in rows})
+        if missing:
+            print(f"--lawnmower-json {a.lawnmower_json}: no lawnmower run (nav {a.nav}) for "
+                  f"{', '.join(f'{lay} seed {s}' for lay, s in missing)}; flying those", file=sys.stderr)
     with ProcessPoolExecutor(max_workers=a.jobs) as pool:
         have = {(r["layout"], r["seed"]) for r in rows}
         first = [(lay, s, "lawnmower", None, (), a.nav) for lay in layouts for s in seeds if (lay, s) not in have]

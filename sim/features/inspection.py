@@ -167,11 +167,13 @@ class InspectionFeature(MissionFeature):
             legs=[{k: v for k, v in leg.items() if k not in ("cov_before_ned", "pos_before_ned")} for leg in self.legs],
             events=[dict(t_s=round(e.t_s, 2), event=e.event, object_id=e.object_id, detail=e.detail) for e in g.events],
             note=("time_to_confident_map_s: mission time at which the planner first judged every confirmed object "
-                  "confident (null: never). A leg is sent when the planner aims the vehicle at an object, started when "
-                  "its first waypoint is reached, completed at its end, ended early when its object turns confident "
-                  "(the looks on the way sufficed) or unconfirmed. legs_at_false_objects: legs aimed at objects that "
-                  f"end up false (not in the final world model, or more than {FALSE_RADIUS_M} m from every true "
-                  "object). Two uncertainties: look_2sigma_m is the planner's look-geometry model (aspects and ranges "
+                  "in the area confident (null: never). A leg is sent when the planner aims the vehicle at an object, "
+                  "started when its first waypoint is reached, completed at its end, ended early when its object turns "
+                  "confident (the looks on the way sufficed, possibly before the leg started) or unconfirmed. "
+                  "legs_at_false_objects: legs aimed at objects that end up false (not in the final world model, nor "
+                  f"joined as a duplicate into an object of it (its merged_ids), or more than {FALSE_RADIUS_M} m from "
+                  "every true object). in_area: the object lies in the survey area grown by area_margin_m (objects "
+                  "beyond it are neither inspected nor waited for). Two uncertainties: look_2sigma_m is the planner's look-geometry model (aspects and ranges "
                   "of the looks; the legs shrink it and it decides confidence); wm_2sigma_m is the world model's "
                   "covariance, which also holds the navigation error shared by all looks and so grows with the "
                   "mission's navigation uncertainty even as looks are added. aspects: bearings (30 deg apart) the "

@@ -219,3 +219,26 @@ def test_a_split_by_scene_keeps_near_copies_together(tmp_path):
         assert not train_scenes & rest_scenes and len(split["train"]) <= 5
     with pytest.raises(ValueError, match="--split-by 'time'"):
         split_folder(tank, 2, 0, tmp_path / "bad", by="time")
+
+
+@pytest.mark.parametrize("argv,culprits", [
+    (["--tabulate", "{runs}", "{missing}/x.json"], ("--tabulate: cannot read",)),
+    (["--tabulate", "{notruns}"], ("--tabulate", "not a file of runs")),
+    (["--tabulate", "{empty}"], ("--tabulate", "not a file of runs")),
+    (["--layout", "cssn", "--lawnmower-json", "{missing}/x.json"], ("--lawnmower-json: cannot read",)),
+    (["--layout", "cssn", "--json", "{missing}/x.json"], ("--json", "does not exist")),
+    (["--layout", "cssn", "--json", "{dir}"], ("--json", "is a folder")),
+    (["--tabulate", "{runs}", "--png", "{missing}/x.png"], ("--png", "does not exist")),
+    (["--no-inspect", "--layout", "cssn"], ("--no-inspect", "--equal-time")),
+    (["--layout", "mixed4"], ("mixed4", "layouts: cssn, mixed3, mixed8, mixed12")),
+    (["--seeds", "4-"], ("--seeds",)),
+])
+def test_inspection_study_refuses(argv, culprits, capsys, tmp_path):
+    """Every refusal comes before any mission flies, so no study's results are lost at its end."""
+    run = {"layout": "cssn", "seed": 0, "variant": "lawnmower", "mission_time_s": 415.0}
+    (tmp_path / "runs.json").write_text(json.dumps([run]))
+    (tmp_path / "metrics.json").write_text(json.dumps({"inspection": {}}))
+    (tmp_path / "empty.json").write_text("[]")
+    argv = [a.format(runs=tmp_path / "runs.json", notruns=tmp_path / "metrics.json", empty=tmp_path / "empty.json",
+                     missing=tmp_path / "nope", dir=tmp_path) for a in argv]
+    script_refusal(load_script("inspection_study"), argv, capsys, *culprits)
