@@ -48,8 +48,8 @@ Order: an open tour from the vehicle through the legs, exact (Held-Karp dynamic 
 [HeldKarp1962]) up to ``exact_tour_max`` legs, else nearest neighbour improved by 2-opt
 ([Croes1958]); each leg's direction
 (its heading or the opposite one, same information) is the one whose start is nearer the
-previous leg's end (unless the reference bias is modelled). Legs whose start or end leaves the survey area grown by
-``area_margin_m`` are not used (the next-best heading is).
+previous leg's end (unless the reference bias is modelled). Legs whose start or end leaves the
+survey area grown by ``area_margin_m`` are not used (the next-best heading is).
 """
 
 from __future__ import annotations
@@ -448,11 +448,10 @@ class InspectionPlanner:
         p = self.params
         if not objects:
             return []
-        records = [self.looks.get(o.id, LookRecord()) for o in objects]
-        covs = np.array([look_covariance(p, r) for r in records])  # (m, 2, 2)
-        terms = [look_terms(p, r) for r in records]
+        terms = [look_terms(p, self.looks.get(o.id, LookRecord())) for o in objects]
         info = np.array([t[0] for t in terms])  # (m, 2, 2)
         bias = np.array([t[1] for t in terms])  # (m, 2)
+        covs = covariance_from_terms(p, info, bias)  # (m, 2, 2): each object's look covariance now
         g_mean = 0.5 * (p.leg_start_range_m + p.leg_end_range_m)
         heads = self._headings
         u = np.stack([np.cos(heads), np.sin(heads)], axis=1)  # (h, 2): the new look's line of sight
@@ -529,5 +528,5 @@ def brute_force_order(start_ne_m: ArrayLike, legs_start_ne_m: ArrayLike, legs_en
 
 
 __all__ = ["InspectionLeg", "InspectionPlanner", "LookRecord", "PlannerParams", "SurveyArea", "brute_force_order",
-           "class_entropy_bits", "covariance_from_terms", "look_covariance", "look_terms", "look_information", "semi_major_2sigma_m", "tour_order",
-           "tour_length_m"]
+           "class_entropy_bits", "covariance_from_terms", "look_covariance", "look_information", "look_terms",
+           "semi_major_2sigma_m", "tour_order", "tour_length_m"]

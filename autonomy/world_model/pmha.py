@@ -529,20 +529,18 @@ class PMHA:
         anchor of ``anchors``, greedily by detections (most first): an anchor joins the first
         kept one it passes the duplicate test with (no chaining)."""
         gate = self.cfg.duplicate_mahalanobis2
-        order = sorted(anchors, key=lambda a: (-a.n_detections, a.id))
+        if gate is None:
+            return {a.id: [a] for a in anchors}
         groups: dict[int, list[Anchor]] = {}
-        for a in order:
-            if gate is not None:
-                for members in groups.values():
-                    k = members[0]
-                    if np.linalg.norm(a.pos_ned - k.pos_ned) > self.cfg.duplicate_max_separation_m:
-                        continue
-                    P12 = cross_covariance(k.consider_ned, a.consider_ned, 3)
-                    if track_distance2(k.pos_ned, k.cov_ned, a.pos_ned, a.cov_ned, P12) <= gate:
-                        members.append(a)
-                        break
-                else:
-                    groups[a.id] = [a]
+        for a in sorted(anchors, key=lambda a: (-a.n_detections, a.id)):
+            for members in groups.values():
+                k = members[0]
+                if np.linalg.norm(a.pos_ned - k.pos_ned) > self.cfg.duplicate_max_separation_m:
+                    continue
+                P12 = cross_covariance(k.consider_ned, a.consider_ned, 3)
+                if track_distance2(k.pos_ned, k.cov_ned, a.pos_ned, a.cov_ned, P12) <= gate:
+                    members.append(a)
+                    break
             else:
                 groups[a.id] = [a]
         return groups

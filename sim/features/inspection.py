@@ -144,7 +144,8 @@ class InspectionFeature(MissionFeature):
             record = g.planner.looks.get(oid)
             per_object.append(dict(
                 id=oid, class_name=obj.class_name, detections=int(obj.n_detections),
-                confirmed=g.planner.confirmed(obj), in_area=g.planner.in_area(obj), confident=g.planner.confident(obj),
+                confirmed=g.planner.confirmed(obj), in_area=g.planner.in_area(obj),
+                confident=g.planner.confident(obj),
                 not_confident_because=g.planner.reasons(obj) if g.planner.confirmed(obj) else [],
                 inspection_legs=sum(1 for leg in self.legs if leg["object_id"] == oid),
                 aspects=0 if record is None else len(record.aspects),
@@ -173,8 +174,8 @@ class InspectionFeature(MissionFeature):
                   "legs_at_false_objects: legs aimed at objects that end up false (not in the final world model, nor "
                   f"joined as a duplicate into an object of it (its merged_ids), or more than {FALSE_RADIUS_M} m from "
                   "every true object). in_area: the object lies in the survey area grown by area_margin_m (objects "
-                  "beyond it are neither inspected nor waited for). Two uncertainties: look_2sigma_m is the planner's look-geometry model (aspects and ranges "
-                  "of the looks; the legs shrink it and it decides confidence); wm_2sigma_m is the world model's "
+                  "beyond it are neither inspected nor waited for). Two uncertainties: look_2sigma_m is the "
+                  "planner's look-geometry model (aspects and ranges of the looks; the legs shrink it and it decides confidence); wm_2sigma_m is the world model's "
                   "covariance, which also holds the navigation error shared by all looks and so grows with the "
                   "mission's navigation uncertainty even as looks are added. aspects: bearings (30 deg apart) the "
                   "object was detected from; closest_look_m: shortest ground range of a detection"))
