@@ -70,8 +70,9 @@ class WorldModelConfig(StrictModel):
     duplicate_mahalanobis2: PositiveFloat | None = Field(
         11.34, description="objects of the world model whose track-to-track squared Mahalanobis distance "
         "(their shared errors cancelled) passes this gate and whose centres are within "
-        "duplicate_max_separation_m are reported as one object, fused (Bar-Shalom-Campo); 11.34 = 99 % of "
-        "one object's pairs (3 dof); None: never",
+        "duplicate_max_separation_m are reported as one object, fused (Bar-Shalom-Campo), and an object's "
+        "existence counts the worlds holding any anchor that passes it with the object; 11.34 = 99 % of "
+        "one object's pairs (3 dof); None: never (existence: the symbol's own worlds)",
     )
     duplicate_max_separation_m: PositiveFloat = Field(
         0.5, description="objects closer than this are one echo to a forward-looking sonar's detector, "
