@@ -19,7 +19,9 @@ Layouts: ``cssn`` (cssn_lawnmower's world), ``mixed3``, ``mixed8``, ``mixed12``
 from __future__ import annotations
 
 import argparse
+import difflib
 import json
+import os
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
@@ -35,16 +37,22 @@ MATCH_RADIUS_M = 2.0
 
 
 def _seeds(text: str) -> list[int]:
-    """``0-4`` or ``0,2,5`` -> the seeds; ValueError when malformed or empty."""
+    """``0-4`` or ``0,2,5`` -> the seeds; ValueError (its message says what is wrong) when
+    malformed, empty or a range runs backwards."""
     out: list[int] = []
     for part in text.split(","):
-        if "-" in part:
-            a, b = part.split("-")
-            out += list(range(int(a), int(b) + 1))
-        else:
-            out.append(int(part))
+        try:
+            if "-" in part:
+                a, b = (int(v) for v in part.split("-"))
+                if b < a:
+                    raise ValueError(f"the range {part} runs backwards; write {b}-{a}")
+                out += list(range(a, b + 1))
+            else:
+                out.append(int(part))
+        except ValueError as exc:
+            raise ValueError(str(exc) if "backwards" in str(exc) else "expected e.g. 0-4 or 0,2,5") from None
     if not out:
-        raise ValueError(text)
+        raise ValueError("expected e.g. 0-4 or 0,2,5")
     return out
 
 
@@ -115,8 +123,10 @@ def _read_runs(path: Path, flag: str) -> list[dict] | str:
     """The runs of a study's ``--json`` file, or a one-line reason it is not one."""
     try:
         rows = json.loads(path.read_text())
-    except (OSError, ValueError) as exc:
-        return f"{flag}: cannot read {exc}"
+    except OSError as exc:
+        return f"{flag} {path}: cannot read it ({exc.strerror or exc})"
+    except ValueError:
+        return f"{flag} {path}: not JSON; give a file written by this script's --json"
     if not isinstance(rows, list) or not rows or not all(isinstance(r, dict) and all(k in r for k in RUN_KEYS)
                                                          for r in rows):
         return f"{flag} {path}: not a file of runs written by this script's --json (a non-empty list of runs)"
@@ -231,24 +241,32 @@ def main(argv: list[str] | None = None) -> int:
     layouts = a.layout or list(LAYOUTS)
     try:
         seeds = _seeds(a.seeds)
-    except ValueError:
-        print(f"--seeds: expected e.g. 0-4 or 0,2,5, got {a.seeds!r}", file=sys.stderr)
+    except ValueError as exc:
+        print(f"--seeds {a.seeds!r}: {exc}", file=sys.stderr)
         return 2
-    if a.jobs < 1:
-        print(f"--jobs: must be >= 1, got {a.jobs}", file=sys.stderr)
+    cores = os.cpu_count() or 1
+    if not 1 <= a.jobs <= cores:
+        print(f"--jobs: 1 to {cores} (the cores here), got {a.jobs}", file=sys.stderr)
         return 2
     from scenarios import load_scenario
-    from scenarios.load import ScenarioError, resolve_path
+    from scenarios.load import ScenarioError, resolve_path, scenarios_dir
 
     for layout in layouts:
-        try:
-            if layout not in LAYOUTS:
+        if layout not in LAYOUTS:
+            try:
                 resolve_path(layout)
-            # the inspection runs' overrides, checked before any mission flies
+            except (FileNotFoundError, ScenarioError):
+                shipped = sorted(f.stem for f in scenarios_dir().glob("*.yaml"))
+                close = difflib.get_close_matches(layout, [*LAYOUTS, *shipped], n=1)
+                hint = f"; did you mean {close[0]}?" if close else ""
+                print(f"--layout {layout}: neither a layout of this study ({', '.join(LAYOUTS)}) nor a shipped "
+                      f"scenario or scenario file{hint}", file=sys.stderr)
+                return 2
+        try:  # the inspection runs' overrides, checked before any mission flies
             load_scenario(LAYOUTS.get(layout, layout), ["autonomy.guidance.inspection.enabled=true", *a.set])
         except (FileNotFoundError, ScenarioError, ValueError) as exc:
-            print(f"--layout {layout} / --set: {exc} (layouts: {', '.join(LAYOUTS)} or a scenario)".splitlines()[0],
-                  file=sys.stderr)
+            where = f"--layout {layout} with --set" if a.set else f"--layout {layout}"
+            print(f"{where}: {str(exc).splitlines()[0]}", file=sys.stderr)
             return 2
     rows: list[dict] = []
     extra = tuple(a.set)

@@ -57,6 +57,11 @@ class InspectionFeature(MissionFeature):
             return None
         return cls(ctx)
 
+    def planned_length_s(self) -> float | None:
+        # the coverage pass is only the start: the mission may inspect until its time budget
+        scn = self.ctx.scenario
+        return float(min(scn.autonomy.guidance.inspection.time_budget_s, scn.duration_s))
+
     # -- the loop ------------------------------------------------------------------------
     def reset(self, ports: LoopPorts) -> None:
         self._ports = ports

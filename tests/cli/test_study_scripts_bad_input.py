@@ -222,16 +222,20 @@ def test_a_split_by_scene_keeps_near_copies_together(tmp_path):
 
 
 @pytest.mark.parametrize("argv,culprits", [
-    (["--tabulate", "{runs}", "{missing}/x.json"], ("--tabulate: cannot read",)),
+    (["--tabulate", "{runs}", "{missing}/x.json"], ("--tabulate", "x.json: cannot read it")),
     (["--tabulate", "{notruns}"], ("--tabulate", "not a file of runs")),
     (["--tabulate", "{empty}"], ("--tabulate", "not a file of runs")),
-    (["--layout", "cssn", "--lawnmower-json", "{missing}/x.json"], ("--lawnmower-json: cannot read",)),
+    (["--layout", "cssn", "--lawnmower-json", "{missing}/x.json"], ("--lawnmower-json", "x.json: cannot read it")),
     (["--layout", "cssn", "--json", "{missing}/x.json"], ("--json", "does not exist")),
     (["--layout", "cssn", "--json", "{dir}"], ("--json", "is a folder")),
     (["--tabulate", "{runs}", "--png", "{missing}/x.png"], ("--png", "does not exist")),
     (["--no-inspect", "--layout", "cssn"], ("--no-inspect", "--equal-time")),
-    (["--layout", "mixed4"], ("mixed4", "layouts: cssn, mixed3, mixed8, mixed12")),
+    (["--layout", "mixed4"], ("mixed4", "layout of this study (cssn, mixed3, mixed8, mixed12)", "did you mean")),
     (["--seeds", "4-"], ("--seeds",)),
+    (["--seeds", "5-2"], ("--seeds", "runs backwards", "2-5")),
+    (["--jobs", "0"], ("--jobs", "the cores here")),
+    (["--jobs", "100000"], ("--jobs", "the cores here")),
+    (["--tabulate", "{notjson}"], ("--tabulate", "not JSON")),
 ])
 def test_inspection_study_refuses(argv, culprits, capsys, tmp_path):
     """Every refusal comes before any mission flies, so no study's results are lost at its end."""
@@ -239,6 +243,7 @@ def test_inspection_study_refuses(argv, culprits, capsys, tmp_path):
     (tmp_path / "runs.json").write_text(json.dumps([run]))
     (tmp_path / "metrics.json").write_text(json.dumps({"inspection": {}}))
     (tmp_path / "empty.json").write_text("[]")
+    (tmp_path / "study.log").write_text("cssn seed 0 lawnmower: 415 s\n")
     argv = [a.format(runs=tmp_path / "runs.json", notruns=tmp_path / "metrics.json", empty=tmp_path / "empty.json",
-                     missing=tmp_path / "nope", dir=tmp_path) for a in argv]
+                     notjson=tmp_path / "study.log", missing=tmp_path / "nope", dir=tmp_path) for a in argv]
     script_refusal(load_script("inspection_study"), argv, capsys, *culprits)
