@@ -179,6 +179,9 @@ def plot(rows: list[dict], path: Path) -> None:
     panels = [(layout, nav) for nav in navs for layout in layouts]
     style = {"lawnmower": ("tab:blue", "s"), "inspect": ("tab:red", "o"), "equal_time": ("tab:purple", "^")}
     for ax, (layout, nav) in zip(axes, panels):
+        if not any(r["layout"] == layout and r.get("nav_source", "estimate") == nav for r in rows):
+            ax.set_axis_off()  # this layout was not flown with this pose
+            continue
         for variant, (color, marker) in style.items():
             rs = [r for r in rows if r["layout"] == layout and r.get("nav_source", "estimate") == nav
                   and r["variant"] == variant and r["mean_error_m"] is not None]
@@ -191,7 +194,11 @@ def plot(rows: list[dict], path: Path) -> None:
         ax.grid(alpha=0.3)
     for i in range(len(navs)):
         grid[i, 0].set_ylabel("mean target position error (m)", fontsize=8)
-    axes[0].legend(fontsize=7)
+    seen: dict[str, object] = {}
+    for ax in axes:  # one legend for every variant drawn in any panel
+        for h, lab in zip(*ax.get_legend_handles_labels()):
+            seen.setdefault(lab, h)
+    axes[0].legend(list(seen.values()), list(seen), fontsize=7)
     fig.savefig(path, dpi=110)
 
 
