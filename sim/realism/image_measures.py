@@ -50,6 +50,7 @@ MEASURES: tuple[Measure, ...] = (
     Measure("grey_p10", "normalised grey p10 (background patches)"),
     Measure("grey_p90", "normalised grey p90 (background patches)"),
     Measure("low_freq_share", "patch energy share below 1/8 cycle/px (floor texture)"),
+    Measure("bright_dim_corr", "row correlation, bright over dim bg patches (per range band)"),
     Measure("arc_rows", "range rows that are thin arcs", "%"),
     Measure("streak_beams", "beams that are radial streaks", "%"),
     Measure("dark_far_near", "dark level (p10 grey) far / near"),
@@ -91,6 +92,7 @@ class FrameSetMeasures:
     acf_range: list = field(default_factory=list)
     acf_beam: dict = field(default_factory=lambda: {0: [], 1: [], 2: []})
     bg_patches: list = field(default_factory=list)
+    bg_patch_band: list = field(default_factory=list)  # range band of each background patch's centre
     obj_patches: list = field(default_factory=list)
     arc_rows: list = field(default_factory=list)
     streak_beams: list = field(default_factory=list)
@@ -176,6 +178,7 @@ class FrameSetMeasures:
             if labelled[y:y + PATCH_PX, x:x + PATCH_PX].mean() > 0.02:
                 continue
             self.bg_patches.append(img[y:y + PATCH_PX, x:x + PATCH_PX].copy())
+            self.bg_patch_band.append(int(self._band[y + PATCH_PX // 2, x + PATCH_PX // 2]))
             got += 1
         n_lab, lab, stats, cents = cv2.connectedComponentsWithStats(((mask > 0) & (mask != WALL_ID)).astype(np.uint8))
         h, w = img.shape
@@ -229,8 +232,10 @@ class FrameSetMeasures:
             out["bg_skewness"] = float(np.mean([_skew(v) for v in norm]))
             out["grey_p10"], out["grey_p90"] = (float(v) for v in np.percentile(norm, [10, 90]))
             out["low_freq_share"] = float(np.mean([_low_freq_share(p) for p in P[keep]]))
+            out["bright_dim_corr"] = _bright_dim_corr(P, np.asarray(self.bg_patch_band))
         else:
-            out.update(bg_skewness=np.nan, grey_p10=np.nan, grey_p90=np.nan, low_freq_share=np.nan)
+            out.update(bg_skewness=np.nan, grey_p10=np.nan, grey_p90=np.nan, low_freq_share=np.nan,
+                       bright_dim_corr=np.nan)
         out["arc_rows"] = 100.0 * float(np.mean(self.arc_rows)) if self.arc_rows else np.nan
         out["streak_beams"] = 100.0 * float(np.mean(self.streak_beams)) if self.streak_beams else np.nan
         if self.dark:
@@ -298,6 +303,33 @@ def _skew(v: NDArray) -> float:
     d = v - v.mean()
     s = d.std()
     return float((d ** 3).mean() / s ** 3) if s > 0 else 0.0
+
+
+def _row_corr(patch: NDArray) -> float:
+    """Correlation of a patch's neighbouring rows (lag 1 down the image: along range near the
+    fan's centre line), about the patch mean."""
+    d = patch.astype(np.float64) - patch.mean()
+    v = (d * d).mean()
+    return float((d[1:] * d[:-1]).mean() / v) if v > 0 else np.nan
+
+
+def _bright_dim_corr(patches: NDArray, bands: NDArray, min_per_band: int = 8) -> float:
+    """Median over range bands of (median row-to-row correlation of the band's brighter half of
+    background patches) / (that of its dimmer half), split at the band's median patch mean: 1
+    when how correlated the floor looks does not depend on how bright it is; NaN without a band
+    of ``min_per_band`` patches."""
+    means = patches.reshape(len(patches), -1).mean(axis=1)
+    corr = np.array([_row_corr(p) for p in patches])
+    ratios = []
+    for b in np.unique(bands):
+        k = (bands == b) & np.isfinite(corr)
+        if k.sum() < min_per_band:
+            continue
+        bright = means[k] > np.median(means[k])
+        lo, hi = np.median(corr[k][~bright]), np.median(corr[k][bright])
+        if lo > 0:
+            ratios.append(hi / lo)
+    return float(np.median(ratios)) if ratios else np.nan
 
 
 def _low_freq_share(patch: NDArray) -> float:

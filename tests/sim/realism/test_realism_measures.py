@@ -203,3 +203,27 @@ def test_the_shells_formation_renders_beside_the_tank_estimate(tmp_path: Path, c
     assert list(data["simulated"]) == ["before", "after", "shells"]
     shells = data["options"]["formation_settings"]["shells"]["formation"]
     assert shells["object_back_wall_ratio"] == 0.5 and shells["object_specular_share"] == 0.6
+
+
+def test_bright_over_dim_correlation_sees_where_the_floor_is_smooth():
+    """Frames drawn at two brightnesses: with one speckle correlation in both, the brighter
+    patches of a range band are as correlated as the dimmer ones (about 1); when the brighter
+    frames are smoother, the ratio is well above 1."""
+    rng = np.random.default_rng(3)
+    masks = np.zeros((GEOM.height_px, GEOM.width_px), np.uint8)
+    yy, xx = np.mgrid[0:GEOM.height_px, 0:GEOM.width_px]
+    r, a = GEOM.pixel_to_polar(xx, yy)
+    inside = GEOM.inside(r, a)
+
+    def frame(level: float, corr_px: float) -> np.ndarray:
+        img = cv2.GaussianBlur(rng.exponential(1.0, inside.shape).astype(np.float32), (0, 0), corr_px)
+        img = 1.0 + (img - img.mean()) / img.std() * 0.5  # unit mean, the same contrast at any correlation
+        return np.where(inside, np.clip(level * img, 1, 255), 0).astype(np.uint8)
+
+    same, mixed = FrameSetMeasures(GEOM, 128), FrameSetMeasures(GEOM, 128)
+    for k in range(16):
+        bright = k % 2 == 0
+        same.add(frame(90.0 if bright else 40.0, 1.2), masks, rng, n_bg_patches=6)
+        mixed.add(frame(90.0 if bright else 40.0, 2.5 if bright else 0.7), masks, rng, n_bg_patches=6)
+    assert same.summary()["bright_dim_corr"] == pytest.approx(1.0, abs=0.1)
+    assert mixed.summary()["bright_dim_corr"] > 1.5
