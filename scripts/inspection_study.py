@@ -39,20 +39,20 @@ MATCH_RADIUS_M = 2.0
 def _seeds(text: str) -> list[int]:
     """``0-4`` or ``0,2,5`` -> the seeds; ValueError (its message says what is wrong) when
     malformed, empty or a range runs backwards."""
+    malformed = "expected e.g. 0-4 or 0,2,5"
     out: list[int] = []
     for part in text.split(","):
         try:
-            if "-" in part:
-                a, b = (int(v) for v in part.split("-"))
-                if b < a:
-                    raise ValueError(f"the range {part} runs backwards; write {b}-{a}")
-                out += list(range(a, b + 1))
-            else:
-                out.append(int(part))
-        except ValueError as exc:
-            raise ValueError(str(exc) if "backwards" in str(exc) else "expected e.g. 0-4 or 0,2,5") from None
+            ends = [int(v) for v in part.split("-")] if "-" in part else [int(part)] * 2
+        except ValueError:
+            raise ValueError(malformed) from None
+        if len(ends) != 2:
+            raise ValueError(malformed)
+        if ends[1] < ends[0]:
+            raise ValueError(f"the range {part} runs backwards; write {ends[1]}-{ends[0]}")
+        out += list(range(ends[0], ends[1] + 1))
     if not out:
-        raise ValueError("expected e.g. 0-4 or 0,2,5")
+        raise ValueError(malformed)
     return out
 
 

@@ -107,7 +107,7 @@ class WorldObject:
     pos_ned: FloatArray  # (3,)
     cov_ned: FloatArray  # (3, 3)
     n_detections: int
-    existence_probability: float  # total probability of the hypotheses holding this symbol
+    existence_probability: float  # total probability of the hypotheses holding this object (any symbol of it)
     #: symbols of duplicate anchors joined into this object (empty: none); see PMHA.world_model
     merged_ids: tuple[int, ...] = ()
 
@@ -524,12 +524,13 @@ class PMHA:
             members = groups.get(a.id)
             if members is None:
                 continue
+            p_exist = min(exist.get(a.id, 0.0), 1.0)
             if len(members) == 1:
                 out.append(WorldObject(id=a.id, class_pmf=a.class_pmf.copy(), pos_ned=a.pos_ned.copy(),
                                        cov_ned=a.cov_ned.copy(), n_detections=a.n_detections,
-                                       existence_probability=min(exist.get(a.id, 0.0), 1.0)))
+                                       existence_probability=p_exist))
             else:
-                out.append(self._fused_object(members, min(exist.get(a.id, 0.0), 1.0)))
+                out.append(self._fused_object(members, p_exist))
         return out
 
     def _same_objects(self, groups: dict[int, list[Anchor]]) -> tuple[dict[int, int], dict[int, int]]:
@@ -539,46 +540,39 @@ class PMHA:
         the test off, each shown symbol is itself and nothing else is mapped."""
         of_symbol = {a.id: kept for kept, members in groups.items() for a in members}
         of_version: dict[int, int] = {}
-        gate = self.cfg.duplicate_mahalanobis2
-        if gate is None or not groups:
+        others = [b for b in self._anchors.values() if b.id not in of_symbol]
+        if self.cfg.duplicate_mahalanobis2 is None or not groups or not others:
             return of_symbol, of_version
         kept = [members[0] for members in groups.values()]
-        K = np.array([k.pos_ned for k in kept])
-        others = [b for b in self._anchors.values() if b.id not in of_symbol]
-        if not others:
-            return of_symbol, of_version
-        D = np.linalg.norm(np.array([b.pos_ned for b in others])[:, None, :] - K[None], axis=2)
-        for i, j0 in zip(*np.nonzero(D <= self.cfg.duplicate_max_separation_m)):
+        D = np.linalg.norm(np.array([b.pos_ned for b in others])[:, None, :]
+                           - np.array([k.pos_ned for k in kept])[None], axis=2)
+        for i in np.flatnonzero((D <= self.cfg.duplicate_max_separation_m).any(axis=1)):
             b = others[int(i)]
-            if b.version in of_version:
-                continue
             for j in np.argsort(D[i], kind="stable"):
-                if D[i, j] > self.cfg.duplicate_max_separation_m:
+                if self._is_same_object(kept[int(j)], b):
+                    of_version[b.version] = kept[int(j)].id
                     break
-                k = kept[int(j)]
-                P12 = cross_covariance(k.consider_ned, b.consider_ned, 3)
-                if track_distance2(k.pos_ned, k.cov_ned, b.pos_ned, b.cov_ned, P12) <= gate:
-                    of_version[b.version] = k.id
-                    break
-            else:
-                of_version[b.version] = -1  # tested: the same object as none of them
-        return of_symbol, {v: i for v, i in of_version.items() if i >= 0}
+        return of_symbol, of_version
+
+    def _is_same_object(self, k: Anchor, a: Anchor) -> bool:
+        """The duplicate test: centres within ``duplicate_max_separation_m`` and the
+        track-to-track squared Mahalanobis distance (their shared errors cancelled) within
+        ``duplicate_mahalanobis2`` (which must not be None)."""
+        if np.linalg.norm(a.pos_ned - k.pos_ned) > self.cfg.duplicate_max_separation_m:
+            return False
+        P12 = cross_covariance(k.consider_ned, a.consider_ned, 3)
+        return track_distance2(k.pos_ned, k.cov_ned, a.pos_ned, a.cov_ned, P12) <= self.cfg.duplicate_mahalanobis2
 
     def _duplicate_groups(self, anchors: list[Anchor]) -> dict[int, list[Anchor]]:
         """{symbol of the kept anchor: [it, the anchors that are the same object]} for every
         anchor of ``anchors``, greedily by detections (most first): an anchor joins the first
         kept one it passes the duplicate test with (no chaining)."""
-        gate = self.cfg.duplicate_mahalanobis2
-        if gate is None:
+        if self.cfg.duplicate_mahalanobis2 is None:
             return {a.id: [a] for a in anchors}
         groups: dict[int, list[Anchor]] = {}
         for a in sorted(anchors, key=lambda a: (-a.n_detections, a.id)):
             for members in groups.values():
-                k = members[0]
-                if np.linalg.norm(a.pos_ned - k.pos_ned) > self.cfg.duplicate_max_separation_m:
-                    continue
-                P12 = cross_covariance(k.consider_ned, a.consider_ned, 3)
-                if track_distance2(k.pos_ned, k.cov_ned, a.pos_ned, a.cov_ned, P12) <= gate:
+                if self._is_same_object(members[0], a):
                     members.append(a)
                     break
             else:

@@ -306,11 +306,11 @@ def _skew(v: NDArray) -> float:
 
 
 def _row_corr(patch: NDArray) -> float:
-    """Correlation of a patch's neighbouring rows (lag 1 down the image: along range near the
-    fan's centre line), about the patch mean."""
+    """Lag-1 autocorrelation of a patch down its rows (along range near the fan's centre line),
+    about the patch mean (:func:`_acf`); NaN for a flat patch."""
     d = patch.astype(np.float64) - patch.mean()
-    v = (d * d).mean()
-    return float((d[1:] * d[:-1]).mean() / v) if v > 0 else np.nan
+    acf = _acf(d, np.ones(d.shape, dtype=bool), axis=0, max_lag=1)
+    return float(acf[1]) if acf[0] > 0 else np.nan
 
 
 def _bright_dim_corr(patches: NDArray, bands: NDArray, min_per_band: int = 8) -> float:
