@@ -57,12 +57,14 @@ def _cpu_s() -> float:
     return sum(x.ru_utime + x.ru_stime for x in r)
 
 
-def _train(name: str, data: list[Path], val: Path, out: Path, args, init: Path | None, epochs: int) -> dict:
+def _train(name: str, data: list[Path], val: Path, out: Path, args, init: Path | None, epochs: int,
+           augment: str = "basic") -> dict:
     """Train (or resume, or skip when done) one model; its record: ONNX, checkpoint, CPU s."""
     onnx, ckpt, done = out / f"{name}.onnx", out / f"{name}.ckpt", out / f"{name}.done.json"
     if done.is_file():
         rec = json.loads(done.read_text())
-        if rec.get("epochs") == epochs and rec.get("init_from") == (None if init is None else str(init)):
+        if (rec.get("epochs") == epochs and rec.get("init_from") == (None if init is None else str(init))
+                and rec.get("augment", "basic") == augment):
             return rec
         print(f"sim_to_real: {name} was trained with other settings ({rec.get('epochs')} epochs); training again",
               flush=True)
@@ -72,7 +74,7 @@ def _train(name: str, data: list[Path], val: Path, out: Path, args, init: Path |
             "--overwrite", "--arch", "s8", "--input", "native", "--crop", args.crop, "--width", str(args.width),
             "--light-heads", "--epochs", str(epochs), "--batch-size", str(args.batch_size), "--lr", str(args.lr),
             "--max-minutes", "100000", "--threads", "1", "--seed", str(args.seed), "--checkpoint", str(ckpt),
-            "--checkpoint-minutes", "5"]
+            "--checkpoint-minutes", "5", "--augment", augment]
     if ckpt.is_file():
         argv.append("--resume")
     elif init is not None:
@@ -82,7 +84,7 @@ def _train(name: str, data: list[Path], val: Path, out: Path, args, init: Path |
     if code != 0:
         raise SystemExit(f"sim_to_real: training {name} failed (exit {code})")
     rec = {"onnx": str(onnx), "checkpoint": str(ckpt), "cpu_s": _cpu_s() - t0, "epochs": epochs,
-           "data": [str(d) for d in data], "init_from": None if init is None else str(init)}
+           "data": [str(d) for d in data], "init_from": None if init is None else str(init), "augment": augment}
     done.write_text(json.dumps(rec, indent=1))
     return rec
 
@@ -267,7 +269,7 @@ def run(args) -> dict:
             generate_dataset(folder, n, seed=seed, workers=args.workers, progress=not args.quiet,
                              **generation_args(spec))
     train: dict[str, dict] = {}
-    train["synthetic"] = _train("synthetic", [syn], syn_val, out, args, None, args.epochs)
+    train["synthetic"] = _train("synthetic", [syn], syn_val, out, args, None, args.epochs, args.augment)
     rows = [{"model": "synthetic", "on": "all real frames", "split": None,
              "score": _score(Path(train["synthetic"]["onnx"]), real)}]
     for k in range(args.splits):
@@ -290,7 +292,7 @@ def run(args) -> dict:
     classes = list(real_folder.target_classes)
     results = {"real": str(real.resolve()), "spec": spec.name, "synthetic_frames": args.synthetic_frames,
                "few": args.few, "most": args.most, "seed": args.seed, "splits": args.splits,
-               "finetune_steps": args.finetune_steps, "split_by": args.split_by, "smoke": bool(args.smoke),
+               "finetune_steps": args.finetune_steps, "augment": args.augment, "split_by": args.split_by, "smoke": bool(args.smoke),
                "classes": classes, "rows": rows, "training": train, "wall_s": time.perf_counter() - t,
                "confusion_synthetic_only": _confusion(Path(train["synthetic"]["onnx"]), real_folder)}
     (out / "sim_to_real.json").write_text(json.dumps(results, indent=1))
@@ -328,6 +330,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--batch-size", type=int, default=16, help="training batch size (default 16)")
     ap.add_argument("--lr", type=float, default=0.004, help="learning rate (default 0.004)")
     ap.add_argument("--crop", default="224x224", help="training crop HxW (multiples of 16) or none")
+    ap.add_argument("--augment", choices=("basic", "sonar"), default="basic",
+                    help="augmentation of the synthetic-only training (train-atr --augment): sonar adds a random "
+                         "image formation per crop; the real-frame runs use basic")
     ap.add_argument("--seed", type=int, default=0,
                     help="root seed: synthetic frames, splits, training (default 0)")
     ap.add_argument("--workers", type=int, default=1, help="dataset worker processes")

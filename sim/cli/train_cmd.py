@@ -11,7 +11,7 @@ from sim.cli.args import non_negative_int, positive_float, positive_int, size_hw
 from sim.cli.errors import CliError
 from sim.dataset.errors import fls_fan_hw, require_dataset
 from sim.training import TORCH_HINT
-from sim.training.train import ARCH_NAMES, DEFAULT_INPUT_HW, CheckpointError, TrainParams, train_atr
+from sim.training.train import ARCH_NAMES, AUGMENTATIONS, DEFAULT_INPUT_HW, CheckpointError, TrainParams, train_atr
 
 
 def _check_model_out(path: str, overwrite: bool) -> Path:
@@ -82,7 +82,7 @@ def _cmd_train(args: argparse.Namespace) -> int:
     params = TrainParams(input_hw=input_hw, crop_hw=args.crop, width=args.width, epochs=args.epochs,
                          batch_size=args.batch_size, lr=args.lr, max_minutes=args.max_minutes,
                          threads=args.threads, seed=args.seed, size_loss_weight=args.size_loss_weight,
-                         light_heads=args.light_heads, arch=args.arch, input_transform=transform,
+                         light_heads=args.light_heads, arch=args.arch, input_transform=transform, augment=args.augment,
                          classes=tuple(c.strip() for c in args.classes.split(",")) if args.classes else None)
 
     try:
@@ -151,6 +151,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=non_negative_int, default=0)
     p.add_argument("--size-loss-weight", type=positive_float, default=TrainParams.size_loss_weight)
     p.add_argument("--light-heads", action="store_true", help="depthwise-separable heads (faster inference)")
+    p.add_argument("--augment", choices=AUGMENTATIONS, default=TrainParams.augment,
+                   help="basic: flips, gain and gamma; sonar: also a random image formation per crop (speckle, "
+                        "blur, noise, contrast) for detectors trained on synthetic frames meant for real ones")
     p.add_argument("--classes", default=None,
                    help="comma-separated class names, each with labelled objects in the data (default: all in data)")
     p.add_argument("--val-data", default=None, metavar="DIR",

@@ -40,10 +40,21 @@ class TrainParams:
     arch: str = "s4"
     #: how a fan becomes the input: ``resize`` (INTER_AREA) or ``pad`` (native resolution)
     input_transform: str = "resize"
+    #: training-image augmentation, a key of :data:`AUGMENTATIONS`
+    augment: str = "basic"
+
+
+#: ``--augment`` choices: ``basic`` flips and draws gain and gamma; ``sonar`` adds, before
+#: them, a random image formation (:func:`_sonar_formation`) so a network trained on synthetic
+#: frames does not learn one renderer's speckle and resolution (domain randomisation,
+#: [Tobin2017]).
+AUGMENTATIONS = ("basic", "sonar")
 
 
 #: Parameters a resumed run may change (the others define the run and must match).
 RESUMABLE_CHANGES = ("threads",)
+#: Parameters added after the checkpoint format was fixed: a checkpoint without one ran with its default.
+ADDED_PARAMS = ("augment",)
 #: Checkpoint file format tag.
 CHECKPOINT_FORMAT = "auvsim-train-atr-checkpoint-1"
 
@@ -94,8 +105,55 @@ def _crop_batch(images: np.ndarray, boxes: list, class_ids: list, ignore: list, 
     return np.stack(crops), out_b, out_c, out_i
 
 
-def _augment(torch, imgs, boxes_list, rng: np.random.Generator, width: int):
-    """Random horizontal flip (the fan is symmetric about its centre column) and gain/gamma."""
+#: ``sonar`` augmentation ranges, drawn per crop (uniform): the share of crops it touches,
+#: the Gaussian blur sigma along each image axis (px), the multiplicative log-normal speckle's
+#: sigma, the additive noise sigma (grey / 255) and the contrast factor about the crop mean.
+SONAR_FORMATION = {"probability": 0.8, "blur_sigma_px": (0.0, 1.5), "speckle_sigma": (0.0, 0.5),
+                   "noise_sigma": (0.0, 0.04), "contrast": (0.7, 1.4)}
+
+
+def _gaussian_taps(torch, sigma: float, radius: int = 4):
+    """Normalised 1-D Gaussian taps of ``sigma`` px on ``2 radius + 1`` points (a delta for 0)."""
+    x = np.arange(-radius, radius + 1, dtype=np.float64)
+    k = np.exp(-0.5 * (x / sigma) ** 2) if sigma > 1e-3 else (x == 0).astype(np.float64)
+    return torch.from_numpy((k / k.sum()).astype(np.float32))
+
+
+def _sonar_formation(torch, imgs, rng: np.random.Generator):
+    """A random image formation for each crop of ``imgs`` ((B, 1, H, W) float in [0, 1]):
+    multiplicative log-normal speckle (mean 1), then a separable Gaussian blur along each axis
+    (so the speckle is correlated over a random length, as a longer pulse and wider beams give),
+    additive noise, and a contrast change about the crop's mean. Ranges in
+    :data:`SONAR_FORMATION`; a crop is left alone with probability ``1 - probability``. Boxes
+    do not move. Draws from ``rng`` (parameters) and torch's generator (noise fields), both in
+    the checkpoint, so a resumed run draws the same."""
+    f = SONAR_FORMATION
+    out = imgs.clone()
+    for i in range(imgs.shape[0]):
+        if rng.random() >= f["probability"]:
+            continue
+        sy, sx = rng.uniform(*f["blur_sigma_px"], size=2)
+        s_speckle, s_noise = rng.uniform(*f["speckle_sigma"]), rng.uniform(*f["noise_sigma"])
+        contrast = rng.uniform(*f["contrast"])
+        x = out[i:i + 1]
+        if s_speckle > 0:
+            x = x * torch.exp(s_speckle * torch.randn_like(x) - 0.5 * s_speckle ** 2)
+        ky, kx = _gaussian_taps(torch, sy), _gaussian_taps(torch, sx)
+        r = ky.numel() // 2
+        x = torch.nn.functional.pad(x, (r, r, r, r), mode="replicate")
+        x = torch.nn.functional.conv2d(x, ky.view(1, 1, -1, 1))
+        x = torch.nn.functional.conv2d(x, kx.view(1, 1, 1, -1))
+        x = x + s_noise * torch.randn_like(x)
+        m = x.mean()
+        out[i:i + 1] = ((x - m) * contrast + m).clamp(0, 1)
+    return out
+
+
+def _augment(torch, imgs, boxes_list, rng: np.random.Generator, width: int, kind: str = "basic"):
+    """Random horizontal flip (the fan is symmetric about its centre column) and gain/gamma;
+    ``kind`` ``sonar`` first draws a random image formation (:func:`_sonar_formation`)."""
+    if kind == "sonar":
+        imgs = _sonar_formation(torch, imgs, rng)
     b = imgs.shape[0]
     flip = rng.random(b) < 0.5
     if flip.any():
@@ -217,7 +275,8 @@ def _load_checkpoint(torch, path: Path, params: TrainParams, data_dirs: list[Pat
     """Read a checkpoint and check it belongs to this run (parameters and data)."""
     state = _read_checkpoint(torch, path, "--checkpoint")
     saved = state["params"]
-    now = asdict(params)
+    now, default = asdict(params), asdict(TrainParams())
+    saved = {k: saved.get(k, default[k]) if k in ADDED_PARAMS else saved.get(k) for k in now}
     diff = [f"{k} {saved.get(k)!r} -> {now[k]!r}" for k in now
             if k not in RESUMABLE_CHANGES and json.dumps(saved.get(k), default=list) != json.dumps(now[k], default=list)]
     if diff:
@@ -304,6 +363,9 @@ def train_atr(data_dir: str | Path | list, out_path: str | Path, params: TrainPa
                                                                 else [val_data])]
     from sim.dataset.coco_io import ANNOTATIONS_FILE
     from sim.dataset.labelled_folder import folder_layout
+
+    if params.augment not in AUGMENTATIONS:
+        raise ValueError(f"augment {params.augment!r}: expected one of {', '.join(AUGMENTATIONS)}")
 
     for d in data_dirs + (val_dirs or []):
         if not d.is_dir() or folder_layout(d) is None:
@@ -396,7 +458,7 @@ def train_atr(data_dir: str | Path | list, out_path: str | Path, params: TrainPa
             crops, boxes, cls_b, ign_b = _crop_batch(arrays.images, arrays.boxes, arrays.class_ids, arrays.ignore,
                                                      idx, crop, rng, params.object_crop_fraction)
             imgs = torch.from_numpy(crops.astype(np.float32) / 255.0)[:, None]
-            imgs, boxes = _augment(torch, imgs, boxes, rng, crop[1])
+            imgs, boxes = _augment(torch, imgs, boxes, rng, crop[1], params.augment)
             tg = [encode_targets(boxes[k], cls_b[k], ign_b[k], len(arrays.class_names), grid, stride)
                   for k in range(len(idx))]
             heat_t = torch.from_numpy(np.stack([t.heat for t in tg]))

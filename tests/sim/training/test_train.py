@@ -115,3 +115,21 @@ def test_stride8_model_at_native_resolution_pads_the_fan(tiny_dataset, tmp_path)
         np.testing.assert_array_equal(bound[k], plain[k])
     boxes, _, _ = det.detect_boxes(fan)
     assert boxes.shape[0] == 5 and (boxes[:, :2] > -50).all() and (boxes[:, 2:] < 950).all()
+
+
+def test_a_checkpoint_from_before_augment_was_a_parameter_resumes_as_basic(tiny_dataset, tmp_path):
+    import torch
+
+    params = TrainParams(input_hw=(96, 176), width=8, epochs=2, batch_size=2, threads=1, max_minutes=1e6)
+    ckpt = tmp_path / "old.ckpt"
+    train_atr(tiny_dataset, tmp_path / "a.onnx", params, log=lambda *_: None, checkpoint=ckpt, stop_after_minutes=1e-9)
+    state = torch.load(ckpt, weights_only=False)
+    del state["params"]["augment"]  # as written before the parameter existed
+    torch.save(state, ckpt)
+    done = train_atr(tiny_dataset, tmp_path / "a.onnx", params, log=lambda *_: None, checkpoint=ckpt, resume=True)
+    assert done["finished"]
+    from sim.training.train import CheckpointError
+
+    with pytest.raises(CheckpointError, match="augment 'basic' -> 'sonar'"):
+        train_atr(tiny_dataset, tmp_path / "b.onnx", TrainParams(**{**params.__dict__, "augment": "sonar"}),
+                  log=lambda *_: None, checkpoint=ckpt, resume=True)
