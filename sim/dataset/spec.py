@@ -33,6 +33,7 @@ import re
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
+import numpy as np
 import yaml
 from pydantic import Field, ValidationError, model_validator
 
@@ -64,11 +65,31 @@ class SonarSpec(StrictModel):
     elevation_rays: int | None = Field(None, ge=1, le=256, description="None: the sonar config's default")
     azimuth_columns: int | None = Field(None, ge=8, le=4096, description="None: the preset's beams")
     settings: dict[str, Any] = Field(default_factory=dict, description="further FlsConfig keys")
+    randomize: dict[str, tuple[float, float]] = Field(
+        default_factory=dict, description="FlsConfig keys (formation.KEY for the image formation's) drawn per "
+                                          "scene, uniformly in [low, high] (integers for integer keys)")
 
-    def fls_fields(self) -> dict[str, Any]:
-        """The :class:`FlsConfig` fields the spec sets (besides the scenes' tilt and window)."""
+    def fls_fields(self, drawn: dict[str, float] | None = None) -> dict[str, Any]:
+        """The :class:`FlsConfig` fields the spec sets (besides the scenes' tilt and window),
+        with ``drawn`` (values of :attr:`randomize`'s keys, :meth:`draw`) in place of
+        ``settings``' where given."""
         own = {k: getattr(self, k) for k in ("elevation_rays", "azimuth_columns") if getattr(self, k) is not None}
-        return {"preset": self.preset, **own, **self.settings}
+        out = {"preset": self.preset, **own, **self.settings}
+        for key, value in (drawn or {}).items():
+            head, _, sub = key.partition(".")
+            if sub:
+                out[head] = {**out.get(head, {}), sub: value}
+            else:
+                out[key] = value
+        return out
+
+    def draw(self, rng: np.random.Generator) -> dict[str, float]:
+        """One scene's values of :attr:`randomize`, in its key order: uniform in each range,
+        integers (inclusive) for integer keys. Empty (no draw) without ``randomize``."""
+        out: dict[str, float] = {}
+        for key, (lo, hi) in self.randomize.items():
+            out[key] = int(rng.integers(int(lo), int(hi) + 1)) if _is_int_key(key) else float(rng.uniform(lo, hi))
+        return out
 
     @model_validator(mode="after")
     def _settings_are_fls_keys(self) -> "SonarSpec":
@@ -89,7 +110,34 @@ class SonarSpec(StrictModel):
             resolve_geometry(cfg)
         except ValueError as exc:
             raise ValueError(str(exc).replace("sensors.fls.", "sonar.")) from None
+        for key, (lo, hi) in self.randomize.items():
+            head, _, sub = key.partition(".")
+            known = FlsConfig.model_fields if not sub else (SonarFormationConfig.model_fields if head == "formation"
+                                                            else {})
+            name = sub or head
+            if name not in known or key in SONAR_OWN_KEYS or key in ("tilt_deg", "range_window_m", "formation"):
+                close = difflib.get_close_matches(name, [k for k in known], n=1, cutoff=0.6)
+                hint = f"; did you mean {'formation.' if sub else ''}{close[0]}?" if close else ""
+                raise ValueError(f"randomize.{key}: not a numeric forward-looking sonar setting (KEY, or "
+                                 f"formation.KEY for the image formation){hint}")
+            _ordered(f"randomize.{key}", (lo, hi))
+            if _is_int_key(key) and (lo != int(lo) or hi != int(hi)):
+                raise ValueError(f"randomize.{key}: an integer setting; give whole-number bounds, got {[lo, hi]}")
+            for bound in (lo, hi):
+                value = int(bound) if _is_int_key(key) else float(bound)
+                try:
+                    FlsConfig(**self.fls_fields({key: value}))
+                except ValidationError as exc:
+                    err = exc.errors(include_url=False)[0]
+                    raise ValueError(f"randomize.{key}: bound {bound}: {err['msg']}") from None
         return self
+
+
+def _is_int_key(key: str) -> bool:
+    """Whether a ``randomize`` key names an integer setting."""
+    head, _, sub = key.partition(".")
+    field = (SonarFormationConfig.model_fields[sub] if sub else FlsConfig.model_fields[head])
+    return field.annotation is int or field.annotation == (int | None)
 
 
 def _unknown_key_message(loc: tuple) -> str:
@@ -262,6 +310,9 @@ class DatasetSpec(StrictModel):
         if self.scene.kind == "seabed" and set(self.formats) != {"coco", "yolo"}:
             raise ValueError(f"formats: seabed datasets write coco and yolo (watertank box files are for tank "
                              f"scenes), got {list(self.formats)}")
+        if self.scene.kind == "seabed" and self.sonar.randomize:
+            raise ValueError("sonar.randomize: seabed scenes randomise gain, noise and speckle themselves "
+                             "(scene.ranges); randomize is for tank scenes")
         if self.scene.kind == "seabed" and self.sonar.settings:
             raise ValueError("sonar.settings: seabed scenes randomise gain, noise and speckle themselves "
                              "(scene.ranges); leave settings out")

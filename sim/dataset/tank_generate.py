@@ -4,7 +4,9 @@ spec's fan pixel grid: the per-scene job of :func:`sim.dataset.generate.generate
 Scene ``k`` of a dataset with root seed ``s`` is drawn from ``component_rng(s,
 "dataset/tank/scene/k")`` (:func:`sim.dataset.tank_scenes.draw_scene`) and rendered with the
 spec's sonar (speckle and noise from ``component_rng(s, "dataset/tank/fls/k")``, the small pose
-changes between a scene's frames from ``component_rng(s, "dataset/tank/pose/k")``), resampled
+changes between a scene's frames from ``component_rng(s, "dataset/tank/pose/k")``; the values
+of the spec's ``sonar.randomize`` keys from ``component_rng(s, "dataset/tank/randomize/k")``,
+recorded in each image's ``sonar.randomized``), resampled
 onto the grid (:func:`sim.dataset.tank_scenes.render_tank_frames`): frames depend on (seed,
 scene index) alone. Each object seen becomes a COCO annotation with its instance mask (RLE),
 box and area; one of fewer than ``labels.min_area_px`` pixels is ``iscrowd``. With the
@@ -76,7 +78,8 @@ def render_tank_scene(seed: int, index: int, settings: TankSettings, frame_ids: 
                       for c in sc.catalogue)
     scene = draw_scene(index, component_rng(seed, f"dataset/tank/scene/{index}"), tank, catalogue)
     geom = spec.image.geometry()
-    over = {k: v for k, v in spec.sonar.fls_fields().items() if k != "preset"}
+    drawn = spec.sonar.draw(component_rng(seed, f"dataset/tank/randomize/{index}"))
+    over = {k: v for k, v in spec.sonar.fls_fields(drawn).items() if k != "preset"}
     frames = render_tank_frames([scene], geom, seed=seed, frames_per_scene=len(frame_ids), fls_overrides=over,
                                 tank=tank, preset=spec.sonar.preset,
                                 rng=component_rng(seed, f"dataset/tank/fls/{index}"),
@@ -92,7 +95,8 @@ def render_tank_scene(seed: int, index: int, settings: TankSettings, frame_ids: 
             "t_s": 0.0,
             "fan_geometry": fan_geometry_record(geom),
             "sonar": {"preset": spec.sonar.preset, "height_m": scene.height_m, "tilt_deg": scene.tilt_deg,
-                      "yaw_deg": scene.yaw_deg, "gain_offset_db": scene.gain_offset_db},
+                      "yaw_deg": scene.yaw_deg, "gain_offset_db": scene.gain_offset_db,
+                      **({"randomized": drawn} if drawn else {})},
         })
         class_mask = np.zeros(frame.image.shape, np.uint8)
         boxes = []

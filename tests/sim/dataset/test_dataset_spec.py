@@ -70,6 +70,18 @@ def test_shipped_specs_load_and_the_survey_ones_are_the_presets():
     (lambda t: t.replace("name: tiny_tank", "name: [tiny_tank"), ["not a readable YAML file", "line"]),
     (lambda t: "- just a list\n", ["a YAML mapping"]),
     (lambda t: t.replace("shape: tyre}", "shape: tyre, size_scale: [0.01, 2]}"), ["catalogue.1.size_scale", "0.05"]),
+    (lambda t: t.replace("settings: {gain_db: 12.0}", "settings: {gain_db: 12.0}\n  randomize: {gain: [0, 6]}"),
+     ["sonar.randomize.gain", "did you mean gain_db?"]),
+    (lambda t: t.replace("settings: {gain_db: 12.0}", "settings: {gain_db: 12.0}\n  randomize: "
+                         "{formation.object_back_wall_ratio: [0.2, 1.5]}"),
+     ["sonar.randomize.formation.object_back_wall_ratio", "bound 1.5", "less than or equal to 1"]),
+    (lambda t: t.replace("settings: {gain_db: 12.0}", "settings: {gain_db: 12.0}\n  randomize: "
+                         "{formation.object_back_wall_repeats: [1, 2.5]}"),
+     ["randomize.formation.object_back_wall_repeats", "whole-number bounds"]),
+    (lambda t: t.replace("settings: {gain_db: 12.0}", "settings: {gain_db: 12.0}\n  randomize: {gain_db: [6, 0]}"),
+     ["randomize.gain_db", "lower bound"]),
+    (lambda t: t.replace("settings: {gain_db: 12.0}", "settings: {gain_db: 12.0}\n  randomize: {tilt_deg: [5, 9]}"),
+     ["randomize.tilt_deg", "not a numeric"]),
 ])
 def test_a_bad_spec_is_refused_in_one_line_naming_the_key(tmp_path, edit, culprits):
     path = tmp_path / "spec.yaml"
@@ -132,6 +144,36 @@ def test_a_tank_spec_renders_labelled_frames_the_same_for_the_same_seed(tmp_path
     assert got == want
     mask = np.array(__import__("cv2").imread(str(wt / "masks" / "000001.png"), 0))
     assert set(np.unique(mask)) <= {0, 1, 2, 3} and (mask == 3).any()
+
+
+def test_a_tank_spec_draws_its_randomized_settings_per_scene(tmp_path):
+    import cv2
+
+    from sim.dataset.generate import generate_dataset
+
+    spec_path = tmp_path / "tank.yaml"
+    spec_path.write_text(TANK_SPEC.replace("settings: {gain_db: 12.0}", "settings: {gain_db: 12.0}\n  randomize: "
+                                           "{gain_db: [0.0, 24.0], formation.object_back_wall_repeats: [1, 3]}"))
+    spec = load_spec(spec_path)
+    d = generate_dataset(tmp_path / "r", 6, seed=5, workers=1, progress=False, **generation_args(spec)).parent
+    coco = json.loads((d / "annotations.json").read_text())
+    drawn = [im["sonar"]["randomized"] for im in coco["images"]]
+    assert all(0.0 <= r["gain_db"] <= 24.0 for r in drawn)
+    assert all(r["formation.object_back_wall_repeats"] in (1, 2, 3) for r in drawn)
+    assert len({r["gain_db"] for r in drawn}) == 6  # one draw per scene
+    # the same scenes without randomize (gain 12 dB): each frame is brighter exactly when its
+    # drawn gain is above 12 dB (scenes, speckle and poses come from other generators)
+    spec_path.write_text(TANK_SPEC)
+    plain_spec = load_spec(spec_path)
+    assert plain_spec.sonar.draw(np.random.default_rng(0)) == {}  # nothing drawn, frames as before
+    p = generate_dataset(tmp_path / "p", 6, seed=5, workers=1, progress=False, **generation_args(plain_spec)).parent
+    assert "randomized" not in json.loads((p / "annotations.json").read_text())["images"][0]["sonar"]
+
+    def grey(folder, im):
+        return float(np.mean(cv2.imread(str(folder / im["file_name"]), 0)))
+
+    for im, r in zip(coco["images"], drawn):
+        assert (grey(d, im) > grey(p, im)) == (r["gain_db"] > 12.0), (r, grey(d, im), grey(p, im))
 
 
 def test_cli_spec_refusals(tmp_path, capsys):
