@@ -152,7 +152,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--size-loss-weight", type=positive_float, default=TrainParams.size_loss_weight)
     p.add_argument("--light-heads", action="store_true", help="depthwise-separable heads (faster inference)")
     p.add_argument("--augment", choices=AUGMENTATIONS, default=TrainParams.augment,
-                   help="basic: flips, gain and gamma; sonar: also a random image formation per crop (speckle, "
+                   help="basic (default): flips, gain and gamma; sonar: also a random image formation per crop (speckle, "
                         "blur, noise, contrast) for detectors trained on synthetic frames meant for real ones")
     p.add_argument("--classes", default=None,
                    help="comma-separated class names, each with labelled objects in the data (default: all in data)")

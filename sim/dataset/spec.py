@@ -35,7 +35,7 @@ from typing import Annotated, Any, Literal
 
 import numpy as np
 import yaml
-from pydantic import Field, ValidationError, model_validator
+from pydantic import Field, ValidationError, field_validator, model_validator
 
 from autonomy.sonar_geometry import FanGeometry
 from scenarios.config.base import StrictModel
@@ -68,6 +68,11 @@ class SonarSpec(StrictModel):
     randomize: dict[str, tuple[float, float]] = Field(
         default_factory=dict, description="FlsConfig keys (formation.KEY for the image formation's) drawn per "
                                           "scene, uniformly in [low, high] (integers for integer keys)")
+
+    @field_validator("randomize", mode="before")
+    @classmethod
+    def _randomize_as_written(cls, value: Any) -> Any:
+        return _randomize_pairs(value)
 
     def fls_fields(self, drawn: dict[str, float] | None = None) -> dict[str, Any]:
         """The :class:`FlsConfig` fields the spec sets (besides the scenes' tilt and window),
@@ -111,26 +116,70 @@ class SonarSpec(StrictModel):
         except ValueError as exc:
             raise ValueError(str(exc).replace("sensors.fls.", "sonar.")) from None
         for key, (lo, hi) in self.randomize.items():
-            head, _, sub = key.partition(".")
-            known = FlsConfig.model_fields if not sub else (SonarFormationConfig.model_fields if head == "formation"
-                                                            else {})
-            name = sub or head
-            if name not in known or key in SONAR_OWN_KEYS or key in ("tilt_deg", "range_window_m", "formation"):
-                close = difflib.get_close_matches(name, [k for k in known], n=1, cutoff=0.6)
-                hint = f"; did you mean {'formation.' if sub else ''}{close[0]}?" if close else ""
-                raise ValueError(f"randomize.{key}: not a numeric forward-looking sonar setting (KEY, or "
-                                 f"formation.KEY for the image formation){hint}")
-            _ordered(f"randomize.{key}", (lo, hi))
-            if _is_int_key(key) and (lo != int(lo) or hi != int(hi)):
-                raise ValueError(f"randomize.{key}: an integer setting; give whole-number bounds, got {[lo, hi]}")
-            for bound in (lo, hi):
-                value = int(bound) if _is_int_key(key) else float(bound)
-                try:
-                    FlsConfig(**self.fls_fields({key: value}))
-                except ValidationError as exc:
-                    err = exc.errors(include_url=False)[0]
-                    raise ValueError(f"randomize.{key}: bound {bound}: {err['msg']}") from None
+            _check_randomized_key(self, key, lo, hi)
         return self
+
+
+#: Sonar keys a tank frame's renderer or the spec sets itself, never drawn per scene.
+NOT_RANDOMIZED = SONAR_OWN_KEYS + ("tilt_deg", "range_window_m", "range_min_m", "range_max_m", "rate_hz",
+                                   "latency_s", "mount_site", "kind", "formation")
+_NUMERIC = (float, int, float | None, int | None)
+
+
+def _randomize_pairs(value: Any) -> Any:
+    """``sonar.randomize`` as written, checked before typing: a mapping of ``KEY: [low, high]``
+    (numbers, not booleans); ``formation: {KEY: [low, high]}`` is read as ``formation.KEY``."""
+    if not isinstance(value, dict):
+        raise ValueError(f"a mapping of setting: [low, high], got {type(value).__name__}")
+    out: dict[str, Any] = {}
+    for key, pair in value.items():
+        if key == "formation" and isinstance(pair, dict):
+            out.update({f"formation.{k}": v for k, v in pair.items()})
+        else:
+            out[str(key)] = pair
+    for key, pair in out.items():
+        if (not isinstance(pair, (list, tuple)) or len(pair) != 2
+                or any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in pair)):
+            raise ValueError(f"{key}: a [low, high] pair of numbers, got {pair!r}")
+    return out
+
+
+def _check_randomized_key(sonar: "SonarSpec", key: str, lo: float, hi: float) -> None:
+    """Refuse (one line) a ``randomize`` key that is not a numeric sonar setting drawn per
+    scene, or bounds that are not one (each bound is built into an :class:`FlsConfig`)."""
+    head, _, sub = key.partition(".")
+    name = sub or head
+    fields = SonarFormationConfig.model_fields if sub else FlsConfig.model_fields
+    if sub and head != "formation":
+        fields = {}
+    if key in NOT_RANDOMIZED:
+        why = ("give its keys one by one, formation.KEY: [low, high]" if key == "formation" else
+               "drawn per scene by scene.tilt_deg" if key == "tilt_deg" else
+               "set by the image grid (image.near_m, image.far_m)" if key.startswith("range_") else
+               f"set once for all frames by sonar.{key}" if key in SONAR_OWN_KEYS else
+               "no effect on a still tank frame")
+        raise ValueError(f"randomize.{key}: not drawn per scene: {why}")
+    if name not in fields:
+        names = [f"formation.{k}" for k in SonarFormationConfig.model_fields] + [
+            k for k in FlsConfig.model_fields if k not in NOT_RANDOMIZED]
+        close = difflib.get_close_matches(key, names, n=1, cutoff=0.6) or difflib.get_close_matches(
+            f"formation.{name}", names, n=1, cutoff=0.8)
+        hint = f"; did you mean {close[0]}?" if close else ""
+        raise ValueError(f"randomize.{key}: not a forward-looking sonar setting (KEY, or formation.KEY for the "
+                         f"image formation; the keys are listed in docs/cli.md){hint}")
+    if fields[name].annotation not in _NUMERIC:
+        raise ValueError(f"randomize.{key}: not a numeric setting (a switch or a choice); set it under "
+                         "sonar.settings instead")
+    _ordered(f"randomize.{key}", (lo, hi))
+    if _is_int_key(key) and (lo != int(lo) or hi != int(hi)):
+        raise ValueError(f"randomize.{key}: an integer setting; give whole-number bounds, got {[lo, hi]}")
+    for bound in (lo, hi):
+        value = int(bound) if _is_int_key(key) else float(bound)
+        try:
+            FlsConfig(**sonar.fls_fields({key: value}))
+        except ValidationError as exc:
+            err = exc.errors(include_url=False)[0]
+            raise ValueError(f"randomize.{key}: bound {bound}: {err['msg']}") from None
 
 
 def _is_int_key(key: str) -> bool:

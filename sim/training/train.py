@@ -407,7 +407,7 @@ def train_atr(data_dir: str | Path | list, out_path: str | Path, params: TrainPa
     steps_per_epoch = max(1, int(np.ceil(n_img / params.batch_size)))
     total_steps = params.epochs * steps_per_epoch
     log(f"train-atr: {n_img} images, crops {crop}, classes {arrays.class_names}, {n_params} parameters, "
-        f"input {h}x{w}, load {time.perf_counter() - t0:.1f} s")
+        f"input {h}x{w}, augment {params.augment}, load {time.perf_counter() - t0:.1f} s")
     budget_s = 60.0 * params.max_minutes
     history: list[dict] = []
     epoch, step, s_start, elapsed0 = 1, 0, 0, 0.0

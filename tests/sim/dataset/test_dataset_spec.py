@@ -81,7 +81,17 @@ def test_shipped_specs_load_and_the_survey_ones_are_the_presets():
     (lambda t: t.replace("settings: {gain_db: 12.0}", "settings: {gain_db: 12.0}\n  randomize: {gain_db: [6, 0]}"),
      ["randomize.gain_db", "lower bound"]),
     (lambda t: t.replace("settings: {gain_db: 12.0}", "settings: {gain_db: 12.0}\n  randomize: {tilt_deg: [5, 9]}"),
-     ["randomize.tilt_deg", "not a numeric"]),
+     ["randomize.tilt_deg", "scene.tilt_deg"]),
+    (lambda t: t.replace("settings: {gain_db: 12.0}", "settings: {gain_db: 12.0}\n  randomize: {rate_hz: [1, 5]}"),
+     ["randomize.rate_hz", "no effect"]),
+    (lambda t: t.replace("settings: {gain_db: 12.0}", "settings: {gain_db: 12.0}\n  randomize: "
+                         "{formation.beam_correlated_speckle: [0, 1]}"),
+     ["randomize.formation.beam_correlated_speckle", "not a numeric setting"]),
+    (lambda t: t.replace("settings: {gain_db: 12.0}", "settings: {gain_db: 12.0}\n  randomize: {gain_db: [true, 20]}"),
+     ["randomize.gain_db", "a [low, high] pair of numbers"]),
+    (lambda t: t.replace("settings: {gain_db: 12.0}", "settings: {gain_db: 12.0}\n  randomize: "
+                         "{pulse_length_m: [0.01, 0.02]}"),
+     ["randomize.pulse_length_m", "did you mean formation.pulse_length_m?"]),
 ])
 def test_a_bad_spec_is_refused_in_one_line_naming_the_key(tmp_path, edit, culprits):
     path = tmp_path / "spec.yaml"
@@ -217,3 +227,14 @@ def test_the_watertank_spec_draws_the_real_objects_at_their_pixel_sizes(tmp_path
     assert len(lying) == 8
     ratios = {c: syn[c] / real[c] for c in lying}
     assert all(0.75 <= r <= 1.25 for r in ratios.values()), ratios
+
+
+def test_randomize_reads_a_nested_formation_block_as_its_dotted_keys(tmp_path):
+    path = tmp_path / "spec.yaml"
+    path.write_text(TANK_SPEC.replace("settings: {gain_db: 12.0}", "settings: {gain_db: 12.0}\n  randomize: "
+                                      "{formation: {texture_sigma: [0.2, 1.0]}, gain_db: [10, 14]}"))
+    spec = load_spec(path)
+    assert spec.sonar.randomize == {"formation.texture_sigma": (0.2, 1.0), "gain_db": (10.0, 14.0)}
+    drawn = spec.sonar.draw(np.random.default_rng(0))
+    fields = spec.sonar.fls_fields(drawn)
+    assert fields["formation"]["texture_sigma"] == drawn["formation.texture_sigma"] and fields["gain_db"] == drawn["gain_db"]
