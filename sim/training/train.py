@@ -426,8 +426,12 @@ def train_atr(data_dir: str | Path | list, out_path: str | Path, params: TrainPa
         # an epoch-boundary checkpoint has no order yet: the next epoch draws its own
         order = None if state["order"] is None else np.asarray(state["order"])
         sums, history = np.asarray(state["sums"]), state["history"]
-        log(f"train-atr: resumed {ckpt_path} at epoch {epoch}, step {step} of {total_steps} "
-            f"({elapsed0 / 60:.1f} min trained)")
+        if epoch > params.epochs:
+            log(f"train-atr: {ckpt_path} holds a finished run ({step} steps, {elapsed0 / 60:.1f} min trained); "
+                "nothing to train, its model is exported again")
+        else:
+            log(f"train-atr: resumed {ckpt_path} at epoch {epoch}, step {step} of {total_steps} "
+                f"({elapsed0 / 60:.1f} min trained)")
     t_session = time.perf_counter()
     session_deadline = None if stop_after_minutes is None else t_session + 60.0 * stop_after_minutes
     last_save = t_session

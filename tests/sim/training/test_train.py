@@ -128,6 +128,9 @@ def test_a_checkpoint_from_before_augment_was_a_parameter_resumes_as_basic(tiny_
     torch.save(state, ckpt)
     done = train_atr(tiny_dataset, tmp_path / "a.onnx", params, log=lambda *_: None, checkpoint=ckpt, resume=True)
     assert done["finished"]
+    lines: list[str] = []  # resuming a finished run trains nothing and says so
+    again = train_atr(tiny_dataset, tmp_path / "a.onnx", params, log=lines.append, checkpoint=ckpt, resume=True)
+    assert again["steps"] == done["steps"] and any("holds a finished run" in x for x in lines), lines
     from sim.training.train import CheckpointError
 
     with pytest.raises(CheckpointError, match="augment 'basic' -> 'sonar'"):
