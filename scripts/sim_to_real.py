@@ -48,6 +48,7 @@ from sim.dataset.generate import generate_dataset, generation_args
 from sim.dataset.labelled_folder import LabelledFolder, load_labelled_folder
 from sim.dataset.spec import load_spec
 from sim.dataset.split import split_folder
+from sim.training.train import AUGMENTATIONS
 
 MODELS = ("synthetic", "real_few", "real_most", "synthetic+real_few", "synthetic+real_most")
 
@@ -330,7 +331,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--batch-size", type=int, default=16, help="training batch size (default 16)")
     ap.add_argument("--lr", type=float, default=0.004, help="learning rate (default 0.004)")
     ap.add_argument("--crop", default="224x224", help="training crop HxW (multiples of 16) or none")
-    ap.add_argument("--augment", choices=("basic", "sonar"), default="basic",
+    ap.add_argument("--augment", choices=AUGMENTATIONS, default="basic",
                     help="augmentation of the synthetic-only training (train-atr --augment): sonar adds a random "
                          "image formation per crop; the real-frame runs use basic")
     ap.add_argument("--seed", type=int, default=0,

@@ -147,11 +147,6 @@ def _randomize_pairs(value: Any) -> Any:
 def _check_randomized_key(sonar: "SonarSpec", key: str, lo: float, hi: float) -> None:
     """Refuse (one line) a ``randomize`` key that is not a numeric sonar setting drawn per
     scene, or bounds that are not one (each bound is built into an :class:`FlsConfig`)."""
-    head, _, sub = key.partition(".")
-    name = sub or head
-    fields = SonarFormationConfig.model_fields if sub else FlsConfig.model_fields
-    if sub and head != "formation":
-        fields = {}
     if key in NOT_RANDOMIZED:
         why = ("give its keys one by one, formation.KEY: [low, high]" if key == "formation" else
                "drawn per scene by scene.tilt_deg" if key == "tilt_deg" else
@@ -159,7 +154,9 @@ def _check_randomized_key(sonar: "SonarSpec", key: str, lo: float, hi: float) ->
                f"set once for all frames by sonar.{key}" if key in SONAR_OWN_KEYS else
                "no effect on a still tank frame")
         raise ValueError(f"randomize.{key}: not drawn per scene: {why}")
-    if name not in fields:
+    field = _randomized_field(key)
+    if field is None:
+        name = key.partition(".")[2] or key
         names = [f"formation.{k}" for k in SonarFormationConfig.model_fields] + [
             k for k in FlsConfig.model_fields if k not in NOT_RANDOMIZED]
         close = difflib.get_close_matches(key, names, n=1, cutoff=0.6) or difflib.get_close_matches(
@@ -167,7 +164,7 @@ def _check_randomized_key(sonar: "SonarSpec", key: str, lo: float, hi: float) ->
         hint = f"; did you mean {close[0]}?" if close else ""
         raise ValueError(f"randomize.{key}: not a forward-looking sonar setting (KEY, or formation.KEY for the "
                          f"image formation; the keys are listed in docs/cli.md){hint}")
-    if fields[name].annotation not in _NUMERIC:
+    if field.annotation not in _NUMERIC:
         raise ValueError(f"randomize.{key}: not a numeric setting (a switch or a choice); set it under "
                          "sonar.settings instead")
     _ordered(f"randomize.{key}", (lo, hi))
@@ -182,11 +179,18 @@ def _check_randomized_key(sonar: "SonarSpec", key: str, lo: float, hi: float) ->
             raise ValueError(f"randomize.{key}: bound {bound}: {err['msg']}") from None
 
 
+def _randomized_field(key: str):
+    """The pydantic field a ``randomize`` key names (``KEY`` of :class:`FlsConfig`,
+    ``formation.KEY`` of :class:`SonarFormationConfig`), or None."""
+    head, _, sub = key.partition(".")
+    if not sub:
+        return FlsConfig.model_fields.get(head)
+    return SonarFormationConfig.model_fields.get(sub) if head == "formation" else None
+
+
 def _is_int_key(key: str) -> bool:
     """Whether a ``randomize`` key names an integer setting."""
-    head, _, sub = key.partition(".")
-    field = (SonarFormationConfig.model_fields[sub] if sub else FlsConfig.model_fields[head])
-    return field.annotation is int or field.annotation == (int | None)
+    return _randomized_field(key).annotation in (int, int | None)
 
 
 def _unknown_key_message(loc: tuple) -> str:
